@@ -1,0 +1,77 @@
+"""The exception hierarchy of p3d: one root, each class carrying its exit code.
+
+The library raises these; ``p3d_cli.cli.main`` is the one place that turns them into a
+message of the form ``p3d: error: <where>: <what>; <how to fix>`` and an exit status.
+
+Exit statuses (documented in the README and ``p3d --help``):
+
+- 0: success.
+- 1: the inputs were read but a result failed a requirement (``p3d check`` found a
+  defect, ``--strict`` met a warning).
+- 2: usage error or input that cannot be used (missing, unreadable or corrupt file,
+  bad option value, invalid scene).
+- 3: internal error (a bug in p3d; please report it).
+"""
+
+from __future__ import annotations
+
+
+class P3DError(Exception):
+    """Root of every error p3d raises on purpose.
+
+    Parameters
+    ----------
+    where : str
+        The place the problem is: a file path, ``scene.yaml: bodies.arm.mass``, an option.
+    what : str
+        What is wrong, in words.
+    hint : str, optional
+        How to fix it.
+    """
+
+    exit_code = 2
+
+    def __init__(self, where: str, what: str, hint: str = "") -> None:
+        self.where = where
+        self.what = what
+        self.hint = hint
+        super().__init__(self.message)
+
+    @property
+    def message(self) -> str:
+        text = f"{self.where}: {self.what}" if self.where else self.what
+        return f"{text}; {self.hint}" if self.hint else text
+
+
+class InputError(P3DError):
+    """An input (file, stream, spec) cannot be read or makes no sense."""
+
+
+class FormatError(InputError):
+    """A file's bytes do not follow its format (truncated, corrupt, lying header)."""
+
+
+class UnknownFormatError(InputError):
+    """p3d cannot tell, or does not read, the file's format."""
+
+
+class UsageError(P3DError):
+    """An option or argument value is invalid."""
+
+
+class SpecError(UsageError):
+    """A primitive shape spec (``box:1,2,3``) is malformed or breaks a scale rule."""
+
+
+class SceneError(InputError):
+    """A constraint scene file is invalid."""
+
+
+class MissingExtraError(P3DError):
+    """An optional backend is needed but not installed."""
+
+
+class CheckFailedError(P3DError):
+    """A result failed a requirement (``--strict``, ``p3d check``)."""
+
+    exit_code = 1

@@ -1,0 +1,96 @@
+"""Reading meshes: one module per format, one ``LOADERS`` dict keyed by format.
+
+Every loader has the signature ``load(raw: RawInput) -> MeshSource`` and returns plain
+arrays: no trimesh or meshio object crosses this package's boundary. The format comes from
+the content where the bytes say it (``ply``, ``OFF``, a binary STL's size), else from the
+extension; ``--format`` overrides both.
+"""
+
+from __future__ import annotations
+
+import os
+
+from p3d_cli.errors import UnknownFormatError
+from p3d_cli.io import meshio_backend, obj, off, ply, stl
+from p3d_cli.io.raw import RawInput, open_input
+from p3d_cli.io.source import MeshSource
+
+#: Format name -> loader. ``meshio`` covers every other format meshio reads.
+LOADERS = {
+    "stl": stl.load,
+    "obj": obj.load,
+    "ply": ply.load,
+    "off": off.load,
+    "meshio": meshio_backend.load,
+}
+
+_EXTENSIONS = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off"}
+
+__all__ = ["LOADERS", "MeshSource", "RawInput", "load_mesh", "detect_format", "is_mesh_path"]
+
+
+def is_mesh_path(path: str) -> bool:
+    """True when the file name has an extension p3d reads (used to search directories)."""
+    ext = os.path.splitext(path)[1].lower()
+    return ext in _EXTENSIONS or meshio_backend.knows_extension(ext)
+
+
+def detect_format(raw: RawInput, override: str | None = None) -> str:
+    """The format to read ``raw`` with: ``override``, else the content's, else the extension's.
+
+    Raises
+    ------
+    UnknownFormatError
+        Nothing identifies the format.
+    """
+    if override:
+        name = override.lower()
+        if name in LOADERS and name != "meshio":
+            return name
+        if meshio_backend.knows_format(name):
+            return "meshio:" + name
+        known = ", ".join(sorted(set(LOADERS) - {"meshio"}))
+        raise UnknownFormatError("--format", f"unknown format {override!r}",
+                                 f"use one of {known}, or a format name meshio knows")
+    head = raw.head(512)
+    stripped = head.lstrip()
+    if stripped.startswith(b"ply"):
+        return "ply"
+    if stripped[:4] in (b"OFF\n", b"OFF\r", b"OFF ", b"COFF", b"NOFF") or stripped.startswith(b"OFF\t"):
+        return "off"
+    ext = os.path.splitext(raw.path or "")[1].lower()
+    if ext in _EXTENSIONS:
+        return _EXTENSIONS[ext]
+    if stl.looks_like_stl(raw):
+        return "stl"
+    if ext and meshio_backend.knows_extension(ext):
+        return "meshio:" + meshio_backend.format_for_extension(ext)
+    if obj.looks_like_obj(head):
+        return "obj"
+    what = f"cannot tell the format of {'this extension' if ext else 'an input without an extension'}"
+    raise UnknownFormatError(raw.where, what,
+                             "give --format (stl, obj, ply, off, or a meshio format name)")
+
+
+def load_mesh(source: str, fmt: str | None = None, stdin=None) -> MeshSource:
+    """Open and read one mesh.
+
+    Parameters
+    ----------
+    source : str
+        A path, or ``-`` for standard input.
+    fmt : str, optional
+        Format override (``stl``, ``obj``, ``ply``, ``off`` or a meshio format name).
+    stdin : binary stream, optional
+        What ``-`` reads; default ``sys.stdin.buffer``.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable, empty, corrupt or unknown input (each with where, what and a hint).
+    """
+    raw = open_input(source, stdin)
+    name = detect_format(raw, fmt)
+    if name.startswith("meshio:"):
+        return meshio_backend.load(raw, name.split(":", 1)[1])
+    return LOADERS[name](raw)

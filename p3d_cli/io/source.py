@@ -1,0 +1,75 @@
+"""What every loader returns: ``MeshSource``, triangles (or tetrahedra) as plain arrays."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+import numpy as np
+
+#: Triangles handed to the integrals per block: large enough for numpy to run at full speed,
+#: small enough that a streamed file never holds more than a few tens of MB in float64.
+BLOCK = 1 << 16
+
+
+@dataclass(frozen=True)
+class MeshSource:
+    """A loaded input, as triangles in blocks or as tetrahedra.
+
+    Attributes
+    ----------
+    format : str
+        ``stl-binary``, ``stl-ascii``, ``obj``, ``ply``, ``off`` or ``meshio:<name>``.
+    face_count : int
+        Number of triangles (polygons already split into fans) or tetrahedra.
+    coordinate_dtype : str
+        Precision of the coordinates as stored: ``float32`` or ``float64``.
+    read_blocks : callable
+        Returns an iterator over ``(k, 3, 3)`` arrays (float32 or float64) of triangle corners,
+        in file order. Calling it again reads again (streams may read once only).
+    tetrahedra : (n, 4, 3) float64 or None
+        For volume meshes: the tetrahedra, whose integrals are used directly.
+    warnings : tuple of str
+        Things the loader noticed that the user should hear about (trailing bytes, ...).
+    """
+
+    format: str
+    face_count: int
+    coordinate_dtype: str
+    read_blocks: Callable[[], Iterator[np.ndarray]]
+    tetrahedra: np.ndarray | None = None
+    warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    def triangles(self) -> np.ndarray:
+        """All triangles in one ``(n, 3, 3)`` array (for callers that need them at once)."""
+        blocks = list(self.read_blocks())
+        if not blocks:
+            return np.zeros((0, 3, 3))
+        return np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
+
+
+def indexed_source(fmt: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,
+                   warnings=()) -> MeshSource:
+    """A ``MeshSource`` over an indexed mesh, yielding ``vertices[faces]`` block by block.
+
+    Parameters
+    ----------
+    vertices : (m, 3) float32 or float64
+    faces : (n, 3) integer, already validated to lie in ``[0, m)``
+    """
+
+    def read_blocks() -> Iterator[np.ndarray]:
+        for start in range(0, len(faces), BLOCK):
+            yield vertices[faces[start:start + BLOCK]]
+
+    return MeshSource(fmt, int(len(faces)), dtype, read_blocks, None, tuple(warnings))
+
+
+def array_source(fmt: str, triangles: np.ndarray, dtype: str, warnings=()) -> MeshSource:
+    """A ``MeshSource`` over an in-memory ``(n, 3, 3)`` triangle array."""
+
+    def read_blocks() -> Iterator[np.ndarray]:
+        for start in range(0, len(triangles), BLOCK):
+            yield triangles[start:start + BLOCK]
+
+    return MeshSource(fmt, int(len(triangles)), dtype, read_blocks, None, tuple(warnings))

@@ -1,0 +1,107 @@
+"""Mass properties (mass, centre of mass, inertia tensors, principal frame) from ``Moments``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from p3d_cli.errors import UsageError
+from p3d_cli.results import MassProperties, Moments
+
+
+def inertia_from_second_moments(second: np.ndarray) -> np.ndarray:
+    """Positive inertia tensor ``I = tr(S) E - S`` from second moments ``S = ∫ r rᵀ dm``.
+
+    Parameters
+    ----------
+    second : (3, 3) float64
+
+    Returns
+    -------
+    (3, 3) float64
+        ``Ixx = ∫ (y² + z²) dm``, ``Ixy = -∫ x y dm`` (FACTS.md, "Inertia sign").
+    """
+    return np.trace(second) * np.eye(3) - second
+
+
+def shifted_inertia(inertia_com: np.ndarray, mass: float, center: np.ndarray, point) -> np.ndarray:
+    """Inertia about ``point`` from inertia about the centre of mass (parallel-axis theorem).
+
+    ``I_p = I_c + m (|d|² E - d dᵀ)`` with ``d = c - p``.
+    """
+    d = np.asarray(center, dtype=np.float64) - np.asarray(point, dtype=np.float64)
+    return inertia_com + mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+
+
+def principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Principal moments (ascending) and a right-handed frame of principal axes.
+
+    Parameters
+    ----------
+    inertia : (3, 3) float64, symmetric
+
+    Returns
+    -------
+    moments : (3,) float64
+        Eigenvalues in ascending order.
+    axes : (3, 3) float64
+        Row ``i`` is the unit axis of ``moments[i]``. Sign rule: rows 0 and 1 have their
+        largest-magnitude component positive (the first such component on a tie); row 2 is
+        ``row0 × row1``, so the rows form a proper rotation. Where moments coincide, the axes
+        inside that eigenspace are whatever ``numpy.linalg.eigh`` returns, made deterministic by
+        the same sign rule.
+    """
+    sym = 0.5 * (inertia + inertia.T)
+    values, vectors = np.linalg.eigh(sym)
+    axes = vectors.T.copy()
+    for i in (0, 1):
+        k = int(np.argmax(np.abs(axes[i])))
+        if axes[i, k] < 0:
+            axes[i] = -axes[i]
+    axes[2] = np.cross(axes[0], axes[1])
+    axes[2] /= np.linalg.norm(axes[2])
+    return values, axes
+
+
+def mass_properties(moments: Moments, *, density: float | None = None, mass: float | None = None,
+                    about=None) -> MassProperties:
+    """Mass properties of a uniform solid from its volume moments.
+
+    Parameters
+    ----------
+    moments : Moments
+    density : float, optional
+        Mass per unit volume; default 1. Exclusive with ``mass``.
+    mass : float, optional
+        Total mass; the density becomes ``mass / |volume|`` (an inward-wound mesh keeps its
+        negative sign in ``mass``, ``inertia`` and everything derived from them).
+    about : (3,) array_like, optional
+        A point for ``inertia_about``.
+
+    Raises
+    ------
+    UsageError
+        Both ``density`` and ``mass`` given, or ``mass`` given for a solid with no volume.
+    """
+    if density is not None and mass is not None:
+        raise UsageError("--mass/--density", "both given", "give one: the other is derived from the volume")
+    if mass is not None:
+        if moments.volume == 0.0:
+            raise UsageError("--mass", "the input encloses no volume, so no density follows from a mass",
+                             "give --density instead")
+        density = mass / abs(moments.volume)
+    if density is None:
+        density = 1.0
+    total = density * moments.volume
+    about_point = None if about is None else np.asarray(about, dtype=np.float64).reshape(3)
+    if moments.is_empty:
+        return MassProperties(moments.volume, density, total, None, None, None, None, None, None,
+                              about_point, None)
+    second = density * moments.central
+    inertia = inertia_from_second_moments(second)
+    inertia_origin = shifted_inertia(inertia, total, moments.center, np.zeros(3))
+    principal, axes = principal_frame(inertia)
+    inertia_about = None
+    if about_point is not None:
+        inertia_about = shifted_inertia(inertia, total, moments.center, about_point)
+    return MassProperties(moments.volume, density, total, moments.center.copy(), inertia,
+                          inertia_origin, principal, axes, second, about_point, inertia_about)

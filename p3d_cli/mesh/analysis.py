@@ -1,0 +1,104 @@
+"""One pass over a mesh's triangle blocks: bounds, moments and the closed test together.
+
+The integrals need no vertex merging or repair, so none is done: each block is checked for
+finite coordinates, widened to float64, summed about a local origin, hashed for the closed
+test and dropped. A streamed binary STL is therefore never held in memory whole.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.errors import FormatError, InputError
+from p3d_cli.io.source import MeshSource
+from p3d_cli.mesh.closed import closed_exact, corner_hashes, directed_edge_keys, keys_pair_up
+from p3d_cli.mesh.integrals import MomentSums, local_origin, tetrahedron_moments
+from p3d_cli.results import Bounds, Moments
+
+
+@dataclass(frozen=True)
+class MeshAnalysis:
+    """What one pass over a mesh found.
+
+    Attributes
+    ----------
+    moments : Moments
+    bounds : Bounds
+    closed : bool or None
+        None for volume meshes, where it does not apply.
+    face_count : int
+    """
+
+    moments: Moments
+    bounds: Bounds
+    closed: bool | None
+    face_count: int
+
+
+def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis:
+    """Integrate and inspect a loaded mesh.
+
+    Parameters
+    ----------
+    source : MeshSource
+    where : str
+        The input's name, for error messages.
+    closed : bool
+        Whether to run the closed test (it costs one sort of the edges).
+
+    Raises
+    ------
+    InputError
+        No faces, or a NaN or infinite coordinate (with the index of the first such face).
+    """
+    if source.tetrahedra is not None:
+        return _analyze_tetrahedra(source, where)
+    if source.face_count == 0:
+        raise InputError(where, "the mesh has no faces", "export it again with its faces")
+    sums = None
+    lo = hi = None
+    keys = np.empty(3 * source.face_count, dtype=np.uint64) if closed else None
+    filled = seen = 0
+    for block in source.read_blocks():
+        if not np.isfinite(block).all():
+            bad = int(np.flatnonzero(~np.isfinite(block).reshape(len(block), -1).all(axis=1))[0])
+            raise InputError(where, f"face {seen + bad} has a NaN or infinite coordinate",
+                             "repair or re-export the mesh")
+        if sums is None:
+            sums = MomentSums(local_origin(block))
+            lo, hi = block.reshape(-1, 3).min(axis=0), block.reshape(-1, 3).max(axis=0)
+        else:
+            flat = block.reshape(-1, 3)
+            lo, hi = np.minimum(lo, flat.min(axis=0)), np.maximum(hi, flat.max(axis=0))
+        sums.add_triangles(block)
+        if keys is not None:
+            block_keys = directed_edge_keys(corner_hashes(block))
+            keys[filled:filled + block_keys.size] = block_keys
+            filled += block_keys.size
+        seen += len(block)
+    if seen != source.face_count:
+        raise FormatError(where, f"expected {source.face_count} faces but read {seen}",
+                          "the file is truncated or corrupt; export it again")
+    is_closed = None
+    if keys is not None:
+        is_closed = keys_pair_up(keys[:filled])
+        if not is_closed and filled:
+            # A 64-bit hash collision can only make a closed mesh look open: confirm exactly.
+            is_closed = closed_exact(source.triangles())
+    bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
+    return MeshAnalysis(sums.moments(), bounds, is_closed, seen)
+
+
+def _analyze_tetrahedra(source: MeshSource, where: str) -> MeshAnalysis:
+    tets = source.tetrahedra
+    if len(tets) == 0:
+        raise InputError(where, "the volume mesh has no tetrahedra", "export it again")
+    if not np.isfinite(tets).all():
+        bad = int(np.flatnonzero(~np.isfinite(tets).reshape(len(tets), -1).all(axis=1))[0])
+        raise InputError(where, f"tetrahedron {bad} has a NaN or infinite coordinate", "repair the mesh")
+    flat = tets.reshape(-1, 3)
+    bounds = Bounds(flat.min(axis=0).astype(np.float64), flat.max(axis=0).astype(np.float64))
+    moments: Moments = tetrahedron_moments(tets, origin=local_origin(tets))
+    return MeshAnalysis(moments, bounds, None, len(tets))

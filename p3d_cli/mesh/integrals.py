@@ -1,0 +1,219 @@
+"""Volume integrals of closed triangle meshes and tetrahedral meshes (design note section 1.3).
+
+Every triangle ``(a, b, c)`` spans, with a local origin ``o``, the signed tetrahedron
+``(o, a, b, c)``; by the divergence theorem the sum of these tetrahedra's integrals is the
+solid's integral, whatever ``o`` is, for a closed consistently wound mesh (FACTS.md). For a
+tetrahedron with vertices ``p0 = 0, p1, p2, p3`` and ``D = det[p1 p2 p3]`` (Tonon 2004, the
+standard simplex integrals):
+
+- ``∫ dV = D / 6``
+- ``∫ x dV = D (p1 + p2 + p3) / 24``
+- ``∫ x xᵀ dV = D (p1 p1ᵀ + p2 p2ᵀ + p3 p3ᵀ + s sᵀ) / 120`` with ``s = p1 + p2 + p3``.
+
+These are algebraically the note's eq. 12-16 (with the eq. 12 typo fixed), summed per triangle.
+
+Precision: the local origin ``o`` is placed inside the part's bounding box, so the summed
+terms have the part's size, not its distance from the world origin, and the second moments are
+shifted to the centre of mass once at the end. A part translated by 1e8 then keeps the relative
+accuracy it has at the origin (FACTS.md, "Precision far from the origin"). Terms are summed
+pairwise within a block (``numpy.sum``) and the block totals with ``math.fsum``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from p3d_cli.results import MomentErrors, Moments
+
+#: Number of summed quantities: 6V, 24·first (3), 120·second (xx, yy, zz, xy, xz, yz).
+N_SUMS = 10
+_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+_UNIT_ROUNDOFF = np.finfo(np.float64).eps / 2
+
+
+def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> np.ndarray:
+    """Per-tetrahedron terms of the sums, for tetrahedra ``(0, p1, p2, p3)``.
+
+    Parameters
+    ----------
+    p1, p2, p3 : (3, n) float64
+        Vertex coordinates relative to the local origin, one row per axis.
+
+    Returns
+    -------
+    (10, n) float64
+        Rows: ``D``, ``D s`` (3 rows), ``D q_ij`` for ij in xx, yy, zz, xy, xz, yz, where
+        ``q_ij = p1_i p1_j + p2_i p2_j + p3_i p3_j + s_i s_j``.
+    """
+    x1, y1, z1 = p1
+    x2, y2, z2 = p2
+    x3, y3, z3 = p3
+    det = x1 * (y2 * z3 - z2 * y3) + y1 * (z2 * x3 - x2 * z3) + z1 * (x2 * y3 - y2 * x3)
+    s = p1 + p2 + p3
+    out = np.empty((N_SUMS, det.shape[0]))
+    out[0] = det
+    np.multiply(det, s, out=out[1:4])
+    for row, (i, j) in enumerate(_PAIRS, start=4):
+        q = p1[i] * p1[j]
+        q += p2[i] * p2[j]
+        q += p3[i] * p3[j]
+        q += s[i] * s[j]
+        np.multiply(q, det, out=out[row])
+    return out
+
+
+class MomentSums:
+    """Running sums of tetrahedron terms about a fixed local origin (internal accumulator).
+
+    Feed it blocks of triangles (``add_triangles``) or tetrahedra (``add_tetrahedra``), then
+    read the result with ``moments()``. Block totals are kept and summed with ``math.fsum``.
+    """
+
+    def __init__(self, origin: np.ndarray) -> None:
+        self.origin = np.asarray(origin, dtype=np.float64).reshape(3)
+        self._totals: list[np.ndarray] = []
+        self._abs_totals: list[np.ndarray] = []
+        self.count = 0
+        self._longest_block = 1
+
+    def add_triangles(self, triangles: np.ndarray) -> None:
+        """Add triangles ``(n, 3, 3)`` (any float dtype; widened to float64 before arithmetic)."""
+        local = _local_columns(triangles, self.origin)
+        self._add(tetra_terms(local[0], local[1], local[2]))
+
+    def add_tetrahedra(self, tetrahedra: np.ndarray) -> None:
+        """Add tetrahedra ``(n, 4, 3)``: each contributes its own signed volume integrals."""
+        local = _local_columns(tetrahedra, self.origin)
+        p0 = local[0]
+        # Shift each tetrahedron so that p0 is its origin, then move its integrals back:
+        # a tetra (p0, p1, p2, p3) equals tetra (0, p1-p0, p2-p0, p3-p0) translated by p0.
+        e1, e2, e3 = local[1] - p0, local[2] - p0, local[3] - p0
+        terms = tetra_terms(e1, e2, e3)
+        det, s = terms[0], e1 + e2 + e3
+        # About the shared origin: ∫x = D/24 (s + 4 p0); ∫x xᵀ = ∫(y+p0)(y+p0)ᵀ with y local.
+        first = det * (s + 4 * p0)
+        second = np.empty((6, det.shape[0]))
+        for row, (i, j) in enumerate(_PAIRS):
+            second[row] = (terms[4 + row] + 5 * det * (s[i] * p0[j] + s[j] * p0[i])
+                           + 20 * det * p0[i] * p0[j])
+        self._add(np.vstack([det[None], first, second]))
+
+    def _add(self, terms: np.ndarray) -> None:
+        n = terms.shape[1]
+        if n == 0:
+            return
+        self._totals.append(terms.sum(axis=1))
+        self._abs_totals.append(np.abs(terms).sum(axis=1))
+        self.count += n
+        self._longest_block = max(self._longest_block, n)
+
+    def totals(self) -> tuple[np.ndarray, np.ndarray]:
+        """Exactly rounded sums of the block totals, and the sums of absolute terms."""
+        if not self._totals:
+            return np.zeros(N_SUMS), np.zeros(N_SUMS)
+        blocks = np.array(self._totals)
+        total = np.array([math.fsum(blocks[:, k]) for k in range(N_SUMS)])
+        return total, np.array(self._abs_totals).sum(axis=0)
+
+    def moments(self) -> Moments:
+        """The solid's ``Moments``; volume 0 and no centre when the sum is within rounding of 0."""
+        total, abs_total = self.totals()
+        # A-priori rounding bound per summed quantity: each term is a product of at most 5
+        # rounded factors built with a handful of additions (~12 roundings), and pairwise
+        # summation of a block adds at most ~log2(n) + 8 roundings of the absolute sum.
+        rounding = (20 + math.log2(self._longest_block)) * _UNIT_ROUNDOFF
+        bound = rounding * abs_total
+        volume = total[0] / 6.0
+        volume_error = bound[0] / 6.0
+        if self.count == 0 or abs(total[0]) <= bound[0]:
+            return Moments(0.0, None, None, MomentErrors(volume_error, np.zeros(3), np.zeros((3, 3))))
+        first = total[1:4] / 24.0
+        second = np.empty((3, 3))
+        for row, (i, j) in enumerate(_PAIRS):
+            second[i, j] = second[j, i] = total[4 + row] / 120.0
+        offset = first / volume                      # centre relative to the local origin
+        central = second - volume * np.outer(offset, offset)
+        central = 0.5 * (central + central.T)
+        center = self.origin + offset
+        errors = _errors(volume, offset, bound, volume_error)
+        return Moments(volume, center, central, errors)
+
+
+def _errors(volume, offset, bound, volume_error) -> MomentErrors:
+    """Propagate the summation bounds through ``c = F/V`` and ``C = S - V c cᵀ`` (first order)."""
+    first_error = bound[1:4] / 24.0
+    rel_v = volume_error / abs(volume)
+    center_error = (first_error / abs(volume) + np.abs(offset) * rel_v) * 1.01
+    second_error = np.empty((3, 3))
+    for row, (i, j) in enumerate(_PAIRS):
+        second_error[i, j] = second_error[j, i] = bound[4 + row] / 120.0
+    a = np.abs(offset)
+    shift_error = (volume_error * np.outer(a, a)
+                   + abs(volume) * (np.outer(center_error, a) + np.outer(a, center_error)))
+    ulp_terms = 4 * _UNIT_ROUNDOFF * abs(volume) * np.outer(a, a)
+    central_error = (second_error + shift_error + ulp_terms) * 1.01
+    return MomentErrors(volume_error, center_error, central_error)
+
+
+def _local_columns(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """``points - origin`` in float64 as ``(k, 3, n)``: vertex slot, axis, element.
+
+    Float32 input is widened first (FACTS.md: widen before any arithmetic).
+    """
+    local = np.ascontiguousarray(np.asarray(points).transpose(1, 2, 0), dtype=np.float64)
+    local -= origin[None, :, None]
+    return local
+
+
+def triangle_moments(triangles: np.ndarray, origin=None, block: int = 65536) -> Moments:
+    """Moments of the solid bounded by ``triangles``.
+
+    Parameters
+    ----------
+    triangles : (n, 3, 3) float32 or float64
+        Corner coordinates; counter-clockwise seen from outside for a positive volume.
+    origin : (3,) array_like, optional
+        Local origin of the sums; default the centre of the triangles' bounding box.
+    block : int
+        Triangles per summed block.
+    """
+    triangles = np.asarray(triangles)
+    if origin is None:
+        origin = local_origin(triangles)
+    sums = MomentSums(origin)
+    for start in range(0, len(triangles), block):
+        sums.add_triangles(triangles[start:start + block])
+    return sums.moments()
+
+
+def tetrahedron_moments(tetrahedra: np.ndarray, origin=None, block: int = 65536) -> Moments:
+    """Moments of a tetrahedral volume mesh, each tetrahedron with its own signed volume.
+
+    Parameters
+    ----------
+    tetrahedra : (n, 4, 3) float64
+    """
+    tetrahedra = np.asarray(tetrahedra)
+    if origin is None:
+        origin = local_origin(tetrahedra)
+    sums = MomentSums(origin)
+    for start in range(0, len(tetrahedra), block):
+        sums.add_tetrahedra(tetrahedra[start:start + block])
+    return sums.moments()
+
+
+def local_origin(points: np.ndarray) -> np.ndarray:
+    """A local origin near the part: the centre of the points' bounding box.
+
+    For float32 input the centre is rounded to float32, so that ``p - origin`` is exact in
+    float64 for every float32 coordinate ``p`` of comparable magnitude.
+    """
+    flat = np.asarray(points).reshape(-1, 3)
+    if flat.shape[0] == 0:
+        return np.zeros(3)
+    center = 0.5 * (flat.min(axis=0).astype(np.float64) + flat.max(axis=0).astype(np.float64))
+    if flat.dtype == np.float32:
+        center = center.astype(np.float32).astype(np.float64)
+    return center

@@ -1,0 +1,179 @@
+"""Value types p3d returns: frozen dataclasses holding numpy arrays.
+
+Conventions, stated once for every output:
+
+- ``Moments`` are volume integrals (density-free): signed volume ``V = ∫ dV``, centre
+  ``c = ∫ x dV / V`` and central second moments ``C = ∫ (x - c)(x - c)ᵀ dV``. They are
+  the convention-free quantities that the design note's eq. 8-9 scale.
+- Inertia is the standard positive tensor ``I = ∫ (|r|² E - r rᵀ) dm``: ``Ixx = ∫ (y² + z²) dm``,
+  ``Ixy = -∫ x y dm`` (FACTS.md; the note's eq. 3 has the opposite sign).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """An axis-aligned box.
+
+    Attributes
+    ----------
+    min, max : (3,) float64
+    """
+
+    min: np.ndarray
+    max: np.ndarray
+
+    @property
+    def size(self) -> np.ndarray:
+        return self.max - self.min
+
+    @property
+    def center(self) -> np.ndarray:
+        return 0.5 * (self.min + self.max)
+
+    @property
+    def diagonal(self) -> float:
+        return float(np.linalg.norm(self.max - self.min))
+
+    def union(self, other: "Bounds") -> "Bounds":
+        return Bounds(np.minimum(self.min, other.min), np.maximum(self.max, other.max))
+
+
+@dataclass(frozen=True)
+class MomentErrors:
+    """A-priori bounds on the absolute rounding error of each ``Moments`` quantity.
+
+    Attributes
+    ----------
+    volume : float
+    center : (3,) float64
+    central : (3, 3) float64
+    """
+
+    volume: float
+    center: np.ndarray
+    central: np.ndarray
+
+
+@dataclass(frozen=True)
+class Moments:
+    """Volume integrals of a solid, about its own centre.
+
+    Attributes
+    ----------
+    volume : float
+        Signed volume; negative for an inward-wound closed mesh.
+    center : (3,) float64 or None
+        Centre of volume; None when the volume is zero (flat or empty shape).
+    central : (3, 3) float64 or None
+        ``∫ (x - c)(x - c)ᵀ dV``; None when the volume is zero.
+    errors : MomentErrors or None
+        Rounding-error bounds, where the method that produced the moments gives them.
+    """
+
+    volume: float
+    center: np.ndarray | None
+    central: np.ndarray | None
+    errors: MomentErrors | None = None
+
+    @property
+    def is_empty(self) -> bool:
+        return self.center is None
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Mass properties of a solid of uniform density.
+
+    Attributes
+    ----------
+    volume : float
+        Signed volume.
+    density : float
+    mass : float
+        ``density * volume``; negative when the volume is.
+    center_of_mass : (3,) float64 or None
+    inertia : (3, 3) float64 or None
+        About the centre of mass, standard positive convention.
+    inertia_origin : (3, 3) float64 or None
+        About the world origin.
+    about : (3,) float64 or None
+        The point of ``inertia_about``, when the user asked for one.
+    inertia_about : (3, 3) float64 or None
+    principal_moments : (3,) float64 or None
+        Eigenvalues of ``inertia``, ascending.
+    principal_axes : (3, 3) float64 or None
+        Row ``i`` is the unit axis of ``principal_moments[i]``; the rows form a right-handed
+        frame (``axes[2] = axes[0] × axes[1]``), and ``axes[0]``, ``axes[1]`` each have their
+        largest-magnitude component positive.
+    second_moments : (3, 3) float64 or None
+        ``∫ (x - c)(x - c)ᵀ dm`` about the centre of mass (``inertia = tr(S) E - S``).
+    """
+
+    volume: float
+    density: float
+    mass: float
+    center_of_mass: np.ndarray | None
+    inertia: np.ndarray | None
+    inertia_origin: np.ndarray | None
+    principal_moments: np.ndarray | None
+    principal_axes: np.ndarray | None
+    second_moments: np.ndarray | None
+    about: np.ndarray | None = None
+    inertia_about: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class MeshFacts:
+    """What p3d learned about an input besides its integrals.
+
+    Attributes
+    ----------
+    source : str
+        The path or spec as the user gave it (``-`` for standard input).
+    format : str
+        ``stl-binary``, ``stl-ascii``, ``obj``, ``ply``, ``off``, ``meshio:<name>``, ``primitive``.
+    faces : int
+        Triangle count (tetrahedra for a volume mesh, 0 for a primitive).
+    closed : bool or None
+        Every edge shared by exactly two faces in opposite directions, vertices matched by
+        exact coordinates; None where it does not apply (primitives, volume meshes).
+    bounds : Bounds or None
+    coordinate_dtype : str
+        ``float32`` or ``float64``: the precision of the coordinates as stored.
+    """
+
+    source: str
+    format: str
+    faces: int
+    closed: bool | None
+    bounds: Bounds | None
+    coordinate_dtype: str = "float64"
+
+
+@dataclass(frozen=True)
+class PropsResult:
+    """One input's answer to ``p3d props``.
+
+    Attributes
+    ----------
+    facts : MeshFacts
+    properties : MassProperties
+    method : str
+        ``exact`` (divergence theorem / closed form) or ``montecarlo``.
+    warnings : tuple of str
+    uncertainty : dict or None
+        Same keys as the estimates (``volume``, ``center_of_mass``, ``inertia``): standard
+        errors for Monte Carlo, rounding-error bounds for the exact method.
+    """
+
+    facts: MeshFacts
+    properties: MassProperties
+    method: str = "exact"
+    warnings: tuple[str, ...] = field(default_factory=tuple)
+    uncertainty: dict | None = None
