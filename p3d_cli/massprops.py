@@ -44,22 +44,48 @@ def principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     moments : (3,) float64
         Eigenvalues in ascending order.
     axes : (3, 3) float64
-        Row ``i`` is the unit axis of ``moments[i]``. Sign rule: rows 0 and 1 have their
-        largest-magnitude component positive (the first such component on a tie); row 2 is
-        ``row0 × row1``, so the rows form a proper rotation. Where moments coincide, the axes
-        inside that eigenspace are whatever ``numpy.linalg.eigh`` returns, made deterministic by
-        the same sign rule.
+        Row ``i`` is the unit axis of ``moments[i]``. Where moments coincide (to 1e-10 of the
+        largest), the axes inside that eigenspace are the world axes x, y, z projected onto it
+        and orthonormalised in that order, so a sphere or cube gets the world frame and a
+        cylinder about z gets x and y. Sign rule: rows 0 and 1 have their largest-magnitude
+        component positive (the first such component on a tie); row 2 is ``row0 × row1``, so
+        the rows form a proper rotation.
     """
     sym = 0.5 * (inertia + inertia.T)
     values, vectors = np.linalg.eigh(sym)
     axes = vectors.T.copy()
+    tol = 1e-10 * max(float(np.abs(values).max()), np.finfo(float).tiny)
+    start = 0
+    while start < 3:
+        stop = start + 1
+        while stop < 3 and values[stop] - values[start] <= tol:
+            stop += 1
+        if stop - start > 1:
+            axes[start:stop] = _world_basis_of(axes[start:stop])
+        start = stop
     for i in (0, 1):
         k = int(np.argmax(np.abs(axes[i])))
         if axes[i, k] < 0:
             axes[i] = -axes[i]
     axes[2] = np.cross(axes[0], axes[1])
     axes[2] /= np.linalg.norm(axes[2])
-    return values, axes
+    return values, axes + 0.0  # + 0.0 turns -0.0 into 0.0 for tidy output
+
+
+def _world_basis_of(span: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the row space of ``span`` built from the projected world axes."""
+    projector = span.T @ span
+    basis: list[np.ndarray] = []
+    for e in np.eye(3):
+        v = projector @ e
+        for b in basis:
+            v = v - np.dot(v, b) * b
+        norm = np.linalg.norm(v)
+        if norm > 1e-6:
+            basis.append(v / norm)
+        if len(basis) == len(span):
+            break
+    return np.array(basis)
 
 
 def mass_properties(moments: Moments, *, density: float | None = None, mass: float | None = None,

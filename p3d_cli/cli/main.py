@@ -1,0 +1,109 @@
+"""The ``p3d`` command group, and the one place where errors become messages and exit codes.
+
+Exit statuses:
+
+- 0: success.
+- 1: inputs were read, but a result failed a requirement (``p3d check`` found a defect,
+  ``--strict`` met a warning).
+- 2: usage error, or an input that cannot be used (missing, unreadable, corrupt, unknown format,
+  invalid scene).
+- 3: internal error: a bug in p3d (set ``P3D_DEBUG=1`` for the traceback, and please report it).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from p3d_cli import __version__
+from p3d_cli.cli.main_support import error_line
+from p3d_cli.errors import P3DError
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+
+HELP = f"""Exact mass properties, bounds and constraint solves for meshes and shapes.
+
+\b
+Inputs are mesh files (STL binary/ASCII, OBJ, PLY, OFF, and any format meshio reads),
+`-` for standard input, or primitive specs such as box:1,2,3 or sphere:0.5.
+
+\b
+Examples:
+  p3d props part.stl
+  p3d props part.stl --json
+  p3d props part.stl --field volume
+
+\b
+Exit statuses: 0 success; 1 a result failed a requirement (check, --strict);
+2 usage error or unusable input; 3 internal error (a bug: please report it).
+Errors are one line on stderr: p3d: error: <where>: <what>; <how to fix>.
+"""
+
+
+class P3DGroup(click.Group):
+    """A click group that turns every failure into one stderr line and a documented status."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        try:
+            status = super().main(args, prog_name or "p3d", complete_var, standalone_mode=False, **extra)
+        except click.exceptions.Exit as exc:
+            status = exc.exit_code
+        except click.Abort:
+            error_line("interrupted")
+            status = 130
+        except click.exceptions.NoArgsIsHelpError as exc:
+            click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
+            status = EXIT_OK
+        except click.ClickException as exc:
+            status = _usage_error(exc)
+        except P3DError as exc:
+            error_line(exc.message)
+            status = exc.exit_code
+        except BrokenPipeError:
+            # The reader of our output went away (p3d ... | head): not an error of ours.
+            _silence_stdout()
+            status = 0
+        except KeyboardInterrupt:
+            status = 130
+        except Exception as exc:  # noqa: BLE001 - the last guard: a bug still gets one line
+            if os.environ.get("P3D_DEBUG"):
+                raise
+            error_line(f"internal error: {type(exc).__name__}: {exc}; this is a bug in p3d, please "
+                       "report it (set P3D_DEBUG=1 to see the traceback)")
+            status = EXIT_INTERNAL
+        if not standalone_mode:
+            return status
+        sys.exit(status or 0)
+
+
+def _usage_error(exc: click.ClickException) -> int:
+    ctx = getattr(exc, "ctx", None)
+    command = ctx.command_path if ctx is not None else "p3d"
+    message = exc.format_message()
+    if isinstance(exc, click.UsageError):
+        error_line(f"{command}: {message}; see '{command} --help'")
+        return EXIT_USAGE
+    error_line(message)
+    return exc.exit_code
+
+
+def _silence_stdout() -> None:
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except OSError:
+        pass
+
+
+@click.group(cls=P3DGroup, help=HELP, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="p3d")
+def cli() -> None:
+    pass
+
+
+# One line per command; each command lives in its own module.
+from p3d_cli.cli.props import props  # noqa: E402
+
+cli.add_command(props)

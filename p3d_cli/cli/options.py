@@ -1,0 +1,77 @@
+"""Options shared by several commands, defined once."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+
+class Vector3(click.ParamType):
+    """``X,Y,Z``: three finite numbers separated by commas (a leading minus is fine)."""
+
+    name = "X,Y,Z"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        parts = str(value).split(",")
+        try:
+            numbers = tuple(float(p) for p in parts)
+        except ValueError:
+            numbers = ()
+        if len(numbers) != 3 or not all(math.isfinite(x) for x in numbers):
+            self.fail(f"expected three finite numbers X,Y,Z, got {value!r}", param, ctx)
+        return numbers
+
+
+class FiniteFloat(click.ParamType):
+    """A finite number, optionally required to be positive."""
+
+    name = "NUMBER"
+
+    def __init__(self, positive: bool = False) -> None:
+        self.positive = positive
+
+    def convert(self, value, param, ctx):
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"expected a number, got {value!r}", param, ctx)
+        if not math.isfinite(x):
+            self.fail(f"expected a finite number, got {value!r}", param, ctx)
+        if self.positive and x <= 0:
+            self.fail(f"must be positive, got {value!r}", param, ctx)
+        return x
+
+
+VECTOR3 = Vector3()
+
+
+def inputs_argument(f):
+    return click.argument("inputs", nargs=-1, metavar="INPUT...")(f)
+
+
+def format_option(f):
+    return click.option("--format", "fmt", metavar="NAME",
+                        help="Read every input as this format (stl, obj, ply, off, or a meshio "
+                             "format name) instead of guessing from content and extension.")(f)
+
+
+def json_option(f):
+    return click.option("--json", "as_json", is_flag=True,
+                        help="One JSON object per input, one per line (full float64 precision).")(f)
+
+
+def density_options(f):
+    f = click.option("--mass", type=FiniteFloat(positive=True), default=None,
+                     help="Total mass; the density is derived from the volume.")(f)
+    f = click.option("--density", type=FiniteFloat(positive=True), default=None,
+                     help="Mass per unit volume (default 1, in the mesh's units).")(f)
+    return f
+
+
+def strict_option(f):
+    return click.option("--strict", is_flag=True,
+                        help="Exit with status 1 when any result carries a warning "
+                             "(open, inward-wound, flat or coarse mesh).")(f)
