@@ -1,0 +1,109 @@
+"""Cylinder: radius r about the z axis, z in [-h, h] (the note's rule sx = sy = r, sz = h).
+
+Closed forms of the canonical cylinder (r = 1, z ∈ [-1, 1]): V = π·1²·2 = 2π, centre 0,
+``∫x² dV = 2 ∫₀^{2π}∫₀¹ ρ² cos²φ ρ dρ dφ = 2·π/4 = π/2`` (likewise y),
+``∫z² dV = π ∫₋₁¹ z² dz = 2π/3``, products zero by symmetry.
+
+Bounds (FACTS.md, "Rotated bounds"): the cylinder is the Minkowski sum of its axis segment
+``±h a`` and its central disc, so along world axis i the half-extent is
+``|a_i| h + r sqrt(1 - a_i²)`` with ``a = R e_z`` the world axis direction.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction as F
+
+import numpy as np
+
+from p3d_cli.moments import scale_moments
+from p3d_cli.results import Bounds, Moments
+from p3d_cli.shapes import polyhedron
+from p3d_cli.shapes.closed_form import canonical_moments
+from p3d_cli.shapes.sphere import check_segments
+
+#: Canonical constants, as rational multiples of π.
+VOLUME_PER_PI = F(2)
+CENTER = (F(0), F(0), F(0))
+CENTRAL_PER_PI = ((F(1, 2), F(0), F(0)), (F(0), F(1, 2), F(0)), (F(0), F(0), F(2, 3)))
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """The solid ``x² + y² ≤ r², |z| ≤ h``.
+
+    Attributes
+    ----------
+    r : float
+        Radius (positive).
+    h : float
+        Half-height (positive).
+    """
+
+    r: float = 1.0
+    h: float = 1.0
+
+    name = "cylinder"
+    polyhedral = False
+
+    @property
+    def scale(self) -> np.ndarray:
+        return np.array([self.r, self.r, self.h], dtype=np.float64)
+
+    def spec(self) -> str:
+        return f"cylinder:{self.r:g},{self.r:g},{self.h:g}"
+
+    def scaled(self, scale):
+        """A cylinder when sx = sy; otherwise the exact generalisation, an ``EllipticCylinder``."""
+        s = self.scale * np.asarray(scale, dtype=np.float64)
+        if s[0] == s[1]:
+            return Cylinder(float(s[0]), float(s[2]))
+        from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
+        return EllipticCylinder(*map(float, s))
+
+    def moments(self) -> Moments:
+        return scale_moments(canonical_moments(VOLUME_PER_PI, CENTER, CENTRAL_PER_PI, math.pi),
+                             self.scale)
+
+    def bounds(self, rotation=None, translation=None) -> Bounds:
+        """Exact: half-extent i is ``|a_i| h + r sqrt(1 - a_i²)``, ``a = R e_z``."""
+        a = np.array([0.0, 0.0, 1.0]) if rotation is None else np.asarray(rotation, dtype=np.float64)[:, 2]
+        # 1 - a_i² can round below zero when |a_i| = 1; the clip only removes that rounding.
+        half = np.abs(a) * self.h + self.r * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+        t = np.zeros(3) if translation is None else np.asarray(translation, dtype=np.float64)
+        return Bounds(t - half, t + half)
+
+    def inside(self, points) -> np.ndarray:
+        p = polyhedron.as_points(points)
+        return (p[:, 0] ** 2 + p[:, 1] ** 2 <= self.r * self.r) & (np.abs(p[:, 2]) <= self.h)
+
+    def tessellate(self, n: int) -> np.ndarray:
+        """An inscribed ``n``-gon prism (see ``unit_cylinder_triangles``), scaled."""
+        return unit_cylinder_triangles(n) * self.scale
+
+
+def unit_cylinder_triangles(n: int) -> np.ndarray:
+    """The regular ``n``-gon prism inscribed in the canonical cylinder.
+
+    Its volume is ``n sin(2π/n)`` against ``2π``: relative error ``(2π/n)²/6 + O(n⁻⁴)``.
+
+    Returns
+    -------
+    (4 n, 3, 3) float64
+        Sides as two triangles per segment, caps fanned from their centres; counter-clockwise
+        seen from outside.
+    """
+    n = check_segments(n)
+    phi = 2 * np.pi * np.arange(n) / n
+    ring = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    bottom = np.hstack([ring, np.full((n, 1), -1.0)])
+    top = np.hstack([ring, np.full((n, 1), 1.0)])
+    j, jn = np.arange(n), (np.arange(n) + 1) % n
+    cb = np.broadcast_to([0.0, 0.0, -1.0], (n, 3))
+    ct = np.broadcast_to([0.0, 0.0, 1.0], (n, 3))
+    sides_a = np.stack([bottom[j], bottom[jn], top[jn]], axis=1)
+    sides_b = np.stack([bottom[j], top[jn], top[j]], axis=1)
+    caps_top = np.stack([ct, top[j], top[jn]], axis=1)
+    caps_bottom = np.stack([cb, bottom[jn], bottom[j]], axis=1)
+    return np.concatenate([sides_a, sides_b, caps_top, caps_bottom])
