@@ -6,6 +6,7 @@ This is the function behind ``p3d props``; the CLI only parses options and forma
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,7 +22,7 @@ COARSE_FLOAT32 = 1e-6
 
 
 def mesh_props(source: str, *, fmt: str | None = None, density: float | None = None,
-               mass: float | None = None, about=None, stdin=None) -> PropsResult:
+               mass: float | None = None, about=None, stdin=None, placement=None) -> PropsResult:
     """Mass properties of a mesh file (or ``-`` for standard input).
 
     Parameters
@@ -34,6 +35,9 @@ def mesh_props(source: str, *, fmt: str | None = None, density: float | None = N
         Exclusive; default density 1.
     about : (3,) array_like, optional
         Extra reference point for the inertia.
+    placement : p3d_cli.placed.Placement, optional
+        Scale, rotate and move the solid: its moments are placed by eq. 9 and ``R C Rᵀ``
+        from the unplaced integrals, and ``facts.bounds`` become the placed solid's.
 
     Returns
     -------
@@ -45,12 +49,19 @@ def mesh_props(source: str, *, fmt: str | None = None, density: float | None = N
     """
     mesh = load_mesh(source, fmt, stdin=stdin)
     where = "<stdin>" if source == "-" else source
+    if placement is not None:
+        from p3d_cli.placed import watch_bounds
+        mesh, placed_bounds = watch_bounds(mesh, placement)
     found = analyze(mesh, where)
     facts = MeshFacts(source, mesh.format, found.face_count, found.closed, found.bounds,
                       mesh.coordinate_dtype)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
-    props = mass_properties(found.moments, density=density, mass=mass, about=about)
-    return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(found.moments, props))
+    moments = found.moments
+    if placement is not None:
+        moments = placement.moments(moments)
+        facts = dataclasses.replace(facts, bounds=placed_bounds())
+    props = mass_properties(moments, density=density, mass=mass, about=about)
+    return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
 
 
 def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[str]:

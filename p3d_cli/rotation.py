@@ -1,0 +1,140 @@
+"""Rotations: from an axis and an angle in degrees, from a quaternion, and composed.
+
+Convention (stated in ``p3d bounds --help`` and docs/shapes.md): rotations are active and
+about the world origin, ``x -> R x``. Repeated turns are each applied after the previous one
+about the world (fixed) axes, so ``--rotate z:90 --rotate x:90`` gives ``R = R_x R_z``; in
+general ``R = R_n ... R_2 R_1``. A turn by a positive angle is counter-clockwise looking down
+the axis towards the origin (right-hand rule). A quaternion ``w + xi + yj + zk`` is normalised
+first; ``q`` and ``-q`` give the same rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable
+
+import numpy as np
+
+from p3d_cli.errors import UsageError
+
+#: Named axes accepted by ``--rotate``.
+AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+def cos_sin_degrees(degrees: float) -> tuple[float, float]:
+    """``cos`` and ``sin`` of an angle in degrees, exact at multiples of 90°.
+
+    ``math.cos(math.radians(90))`` is 6e-17, not 0; reducing the angle to [-45°, 45°] about
+    the nearest quarter turn first makes quarter turns exact (so a box turned by 90° keeps
+    exact bounds) and keeps the rest accurate for large angles.
+    """
+    quarter = round(degrees / 90.0)
+    rest = math.radians(degrees - 90.0 * quarter)
+    c, s = math.cos(rest), math.sin(rest)
+    for _ in range(quarter % 4):
+        c, s = -s, c          # add 90°: cos(a+90) = -sin a, sin(a+90) = cos a
+    return c, s
+
+
+def rotation_from_axis_degrees(axis, degrees: float) -> np.ndarray:
+    """The rotation by ``degrees`` about ``axis`` (right-hand rule), ``(3, 3) float64``.
+
+    Parameters
+    ----------
+    axis : {"x", "y", "z"} or (3,) array_like
+        A named axis or a direction (normalised here).
+    degrees : float
+
+    Raises
+    ------
+    UsageError
+        Unknown axis name, zero or non-finite axis vector, non-finite angle.
+    """
+    if isinstance(axis, str):
+        if axis.lower() not in AXES:
+            raise UsageError("--rotate", f"unknown axis {axis!r}", "use x, y, z or a vector such as 1,1,0")
+        u = np.array(AXES[axis.lower()])
+    else:
+        u = np.asarray(axis, dtype=np.float64).reshape(3)
+    norm = float(np.linalg.norm(u))
+    if not math.isfinite(norm) or norm == 0.0:
+        raise UsageError("--rotate", f"axis {tuple(float(x) for x in u)} has no direction",
+                         "give a non-zero axis vector such as 1,1,0")
+    if not math.isfinite(degrees):
+        raise UsageError("--rotate", f"angle {degrees!r} is not finite", "give the angle in degrees")
+    u = u / norm
+    c, s = cos_sin_degrees(degrees)
+    # Rodrigues: R = c E + s [u]x + (1 - c) u uᵀ.
+    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+    return c * np.eye(3) + s * ux + (1.0 - c) * np.outer(u, u)
+
+
+def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:
+    """The rotation of the unit quaternion ``(w, x, y, z) / |q|``, ``(3, 3) float64``.
+
+    Raises
+    ------
+    UsageError
+        The quaternion is zero or not finite.
+    """
+    q = np.array([w, x, y, z], dtype=np.float64)
+    norm = float(np.linalg.norm(q))
+    if not math.isfinite(norm):
+        raise UsageError("--quat", f"{tuple(q.tolist())} is not finite", "give four finite numbers W,X,Y,Z")
+    if norm == 0.0:
+        raise UsageError("--quat", "the zero quaternion is no rotation",
+                         "give W,X,Y,Z not all zero (1,0,0,0 is the identity)")
+    w, x, y, z = q / norm
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def compose_rotations(rotations: Iterable[np.ndarray]) -> np.ndarray:
+    """``R_n ... R_2 R_1``: each rotation applied after the previous, about the world axes."""
+    total = np.eye(3)
+    for r in rotations:
+        total = np.asarray(r, dtype=np.float64) @ total
+    return total
+
+
+def parse_turn(text: str) -> np.ndarray:
+    """The rotation of one ``AXIS:DEGREES`` turn (``z:90``, ``1,1,0:-30``).
+
+    Raises
+    ------
+    UsageError
+        Not of that form.
+    """
+    hint = "write AXIS:DEGREES with AXIS x, y, z or a vector, e.g. z:90 or 1,1,0:45"
+    axis_text, sep, angle_text = str(text).rpartition(":")
+    if not sep or not axis_text.strip():
+        raise UsageError("--rotate", f"{text!r} has no axis", hint)
+    try:
+        degrees = float(angle_text)
+    except ValueError:
+        raise UsageError("--rotate", f"angle {angle_text!r} is not a number", hint) from None
+    axis_text = axis_text.strip()
+    if axis_text.lower() in AXES:
+        return rotation_from_axis_degrees(axis_text, degrees)
+    try:
+        axis = [float(p) for p in axis_text.split(",")]
+    except ValueError:
+        raise UsageError("--rotate", f"axis {axis_text!r} is neither x, y, z nor a vector", hint) from None
+    if len(axis) != 3:
+        raise UsageError("--rotate", f"axis {axis_text!r} needs three components", hint)
+    return rotation_from_axis_degrees(axis, degrees)
+
+
+def parse_quaternion(text: str) -> np.ndarray:
+    """The rotation of ``W,X,Y,Z`` text (normalised); ``UsageError`` when malformed."""
+    hint = "write --quat W,X,Y,Z (scalar first), e.g. --quat 0.7071,0,0,0.7071 for 90° about z"
+    try:
+        values = [float(p) for p in str(text).split(",")]
+    except ValueError:
+        raise UsageError("--quat", f"{text!r} is not four numbers", hint) from None
+    if len(values) != 4:
+        raise UsageError("--quat", f"{text!r} has {len(values)} numbers, not 4", hint)
+    return rotation_from_quaternion(*values)
