@@ -1,0 +1,34 @@
+"""The README cannot drift: its set-up commands and every `$ p3d ...` example are checked."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import subprocess
+import sys
+
+from conftest import REPO
+
+README = (REPO / "README.md").read_text()
+
+
+def test_readme_opens_with_the_two_setup_commands():
+    blocks = re.findall(r"```sh\n(.*?)\n```", README, re.S)
+    assert blocks[0].startswith("python3 -m venv") and "pip install . && p3d props sample_meshes/" in blocks[0]
+    assert "pip install '.[test]' && pytest" in blocks[1]
+    sample = blocks[0].rsplit("p3d props ", 1)[1].split()[0]
+    assert (REPO / sample).is_file()
+
+
+def test_readme_examples_run():
+    examples = re.findall(r"^\$ (p3d .*)$", README, re.M)
+    assert len(examples) >= 5
+    for line in examples:
+        words = shlex.split(line.split("<")[0])
+        stdin = None
+        if "<" in line:
+            stdin = open(REPO / line.split("<")[1].strip(), "rb")
+        done = subprocess.run([sys.executable, "-m", "p3d_cli", *words[1:]], cwd=REPO, stdin=stdin,
+                              capture_output=True, text=True, check=False)
+        assert done.returncode == 0, f"{line}\n{done.stderr}"
+        assert done.stdout.strip(), line
