@@ -1,0 +1,338 @@
+"""Monte Carlo mass properties: an estimate that needs nothing but an inside test.
+
+Points are drawn uniformly in the solid's axis-aligned bounding box ``B`` (numpy's
+``default_rng(seed)``, so one seed always gives the same numbers). With the inside indicator
+``I`` (0 or 1; 0.5 where an open mesh's rays disagree, see ``p3d_cli.mesh.winding``) and the
+box-normalised coordinates ``u = (x - b) / h`` (``b`` the box centre, ``h`` its half-size), the
+sample means ``m0 = ⟨I⟩``, ``m1 = ⟨I u⟩``, ``m2 = ⟨I u uᵀ⟩`` give
+
+- volume ``V = |B| m0``,
+- centre ``c = b + h ∘ m1 / m0``,
+- central second moments ``C_ij = h_i h_j |B| (m2 - m1 m1ᵀ / m0)_ij``,
+
+and the inertia ``I = ρ (tr(C) E - C)``. Each is a smooth function ``g`` of the mean vector
+``m`` (10 numbers), so its standard error follows from the delta method:
+``Var(g(m̄)) ≈ J Σ Jᵀ / N``, with ``Σ`` the sample covariance of the 10 summands and ``J``
+the Jacobian of ``g`` (taken by central differences; ``g`` is a rational function, smooth where
+``m0 > 0``). The tests check these stated errors against the spread over many seeds.
+
+Sampling is plain (independent, uniform): its error ``∝ 1/√N`` is slow but honest and needs
+no assumptions about the shape. Working in box-normalised coordinates keeps the sums well
+scaled whatever the part's size or distance from the origin.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from p3d_cli.errors import UsageError
+from p3d_cli.massprops import mass_properties
+from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
+
+#: Points drawn per chunk (the random stream is consumed chunk by chunk, so the chunk size is
+#: part of what "the same seed gives the same numbers" means: do not change it lightly).
+CHUNK = 1 << 17
+#: Default sample count and seed of ``p3d props --method montecarlo``.
+DEFAULT_SAMPLES = 100_000
+DEFAULT_SEED = 0
+#: Pilot run used by ``tolerance`` to learn the inside fraction, and the limits on N.
+PILOT_SAMPLES = 20_000
+MIN_SAMPLES = 1_000
+MAX_SAMPLES = 100_000_000
+
+_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Sample statistics of one Monte Carlo run (box-normalised coordinates).
+
+    Attributes
+    ----------
+    bounds : Bounds
+        The sampled box.
+    samples : int
+    seed : int
+    mean : (10,) float64
+        ``m0, m1 (3), m2 (xx, yy, zz, xy, xz, yz)``.
+    covariance : (10, 10) float64
+        Sample covariance of the summands (divide by ``samples`` for the mean's).
+    """
+
+    bounds: Bounds
+    samples: int
+    seed: int
+    mean: np.ndarray
+    covariance: np.ndarray
+
+    @property
+    def box_volume(self) -> float:
+        return float(np.prod(self.bounds.size))
+
+    def moments(self) -> Moments:
+        """The estimated ``Moments`` (volume is unsigned: the inside test ignores winding)."""
+        m = self.mean
+        half, centre = 0.5 * self.bounds.size, self.bounds.center
+        volume = self.box_volume * m[0]
+        if not m[0] > 0:
+            return Moments(0.0, None, None)
+        center = centre + half * m[1:4] / m[0]
+        central = _central(m, self.box_volume) * np.outer(half, half)
+        return Moments(float(volume), center, central)
+
+    def uncertainty(self, density: float | None = None, mass: float | None = None) -> dict:
+        """Standard errors of the reported quantities, keyed like the estimates.
+
+        Returns
+        -------
+        dict
+            ``volume`` (float), ``mass`` (float), ``center_of_mass`` (3,) and ``inertia``
+            (3, 3); the last two None when no sample fell inside.
+        """
+        m = self.mean
+        if not m[0] > 0:
+            return {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
+        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, density, mass)  # noqa: E731
+        jac = _jacobian(f, m, step=1e-6 * m[0])
+        cov = jac @ self.covariance @ jac.T / self.samples
+        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        return {"volume": float(se[0]), "mass": float(se[1]), "center_of_mass": se[2:5],
+                "inertia": se[5:14].reshape(3, 3)}
+
+
+def _central(m: np.ndarray, box_volume: float) -> np.ndarray:
+    """``|B| (m2 - m1 m1ᵀ / m0)`` as a (3, 3) matrix, in normalised coordinates."""
+    second = np.empty((3, 3))
+    for k, (i, j) in enumerate(_PAIRS):
+        second[i, j] = second[j, i] = m[4 + k]
+    m1 = m[1:4]
+    return box_volume * (second - np.outer(m1, m1) / m[0])
+
+
+def _reported(m, box_volume, half, density, mass) -> np.ndarray:
+    """``volume, mass, centre (3), inertia (9)`` from the mean vector (centre without the
+    constant box centre, which has no error)."""
+    volume = box_volume * m[0]
+    rho = 1.0 if density is None else density
+    if mass is not None:
+        rho = mass / abs(volume)
+    central = _central(m, box_volume) * np.outer(half, half)
+    inertia = rho * (np.trace(central) * np.eye(3) - central)
+    return np.concatenate([[volume, rho * volume], half * m[1:4] / m[0], inertia.reshape(-1)])
+
+
+def _jacobian(f: Callable, x: np.ndarray, step: float) -> np.ndarray:
+    """Central-difference Jacobian of ``f`` at ``x`` (error ~ step², far below what an error
+    estimate needs)."""
+    cols = []
+    for k in range(len(x)):
+        d = np.zeros_like(x)
+        d[k] = step
+        cols.append((f(x + d) - f(x - d)) / (2 * step))
+    return np.array(cols).T
+
+
+def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: int,
+           seed: int = DEFAULT_SEED) -> Estimate:
+    """Draw ``samples`` points uniformly in ``bounds`` and average the inside indicator.
+
+    Parameters
+    ----------
+    inside : callable
+        ``inside(points (k, 3) float64 world) -> (k,) bool or float`` indicator in [0, 1].
+    bounds : Bounds
+    samples : int
+    seed : int
+
+    Returns
+    -------
+    Estimate
+    """
+    samples = int(samples)
+    if samples < 2:
+        raise UsageError("--samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+    rng = np.random.default_rng(seed)
+    half, centre = 0.5 * bounds.size, bounds.center
+    total = np.zeros(10)
+    outer = np.zeros((10, 10))
+    done = 0
+    while done < samples:
+        k = min(CHUNK, samples - done)
+        u = rng.random((k, 3)) * 2.0 - 1.0
+        weight = np.asarray(inside(centre + half * u), dtype=np.float64)
+        f = np.empty((k, 10))
+        f[:, 0] = weight
+        f[:, 1:4] = weight[:, None] * u
+        for col, (i, j) in enumerate(_PAIRS, start=4):
+            f[:, col] = f[:, 1 + i] * u[:, j]
+        total += f.sum(axis=0)
+        outer += f.T @ f
+        done += k
+    mean = total / samples
+    covariance = (outer - samples * np.outer(mean, mean)) / (samples - 1)
+    return Estimate(bounds, samples, seed, mean, covariance)
+
+
+def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
+                          seed: int = DEFAULT_SEED) -> int:
+    """Samples needed for a relative standard error ``tolerance`` on the volume.
+
+    A pilot run (its own random stream, derived from ``seed``) estimates the inside fraction
+    ``p`` and the indicator's variance ``s²``; the volume's relative standard error is
+    ``s / (p √N)``, so ``N = s² / (p² tolerance²)``, clipped to [MIN_SAMPLES, MAX_SAMPLES].
+    """
+    if not (tolerance > 0 and math.isfinite(tolerance)):
+        raise UsageError("--tolerance", f"{tolerance!r} is not a positive relative error",
+                         "give e.g. --tolerance 1e-3 for 0.1 %")
+    pilot = sample(inside, bounds, PILOT_SAMPLES, seed=(int(seed), 1))
+    p, var = pilot.mean[0], pilot.covariance[0, 0]
+    if not p > 0:
+        return MAX_SAMPLES
+    need = var / (p * p * tolerance * tolerance)
+    return int(min(MAX_SAMPLES, max(MIN_SAMPLES, math.ceil(need))))
+
+
+def triangles_inside(triangles: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """An inside test for a triangle mesh (ray parity over a face grid)."""
+    from p3d_cli.mesh.winding import face_grid, inside
+
+    grid = face_grid(triangles)
+    return lambda points: inside(grid, points)
+
+
+def montecarlo_moments(inside: Callable, bounds: Bounds, *, samples: int | None = None,
+                       seed: int = DEFAULT_SEED, tolerance: float | None = None) -> Estimate:
+    """Run the estimate with ``samples`` points, or as many as ``tolerance`` needs."""
+    if tolerance is not None:
+        samples = samples_for_tolerance(inside, bounds, tolerance, seed)
+    elif samples is None:
+        samples = DEFAULT_SAMPLES
+    return sample(inside, bounds, samples, seed)
+
+
+def montecarlo_props(source: str, *, samples: int | None = None, seed: int | None = None,
+                     tolerance: float | None = None, fmt: str | None = None,
+                     density: float | None = None, mass: float | None = None, about=None,
+                     stdin=None, placement=None) -> PropsResult:
+    """Monte Carlo mass properties of a mesh file or a shape spec.
+
+    Parameters
+    ----------
+    source : str
+        Path, ``-`` or a shape spec (``sphere:2``).
+    samples : int, optional
+        Points to draw (default ``DEFAULT_SAMPLES``); ignored when ``tolerance`` is given.
+    seed : int, optional
+        Random seed (default ``DEFAULT_SEED``): the same seed gives the same numbers.
+    tolerance : float, optional
+        Target relative standard error of the volume; picks the sample count.
+    fmt, density, mass, about, stdin
+        As for ``p3d_cli.props.mesh_props``.
+    placement : p3d_cli.placed.Placement, optional
+        Scale, rotate and move the solid before sampling.
+
+    Returns
+    -------
+    PropsResult
+        ``method`` is ``"montecarlo"``; ``uncertainty`` holds standard errors.
+
+    Raises
+    ------
+    InputError, UsageError, SpecError
+    """
+    seed = DEFAULT_SEED if seed is None else int(seed)
+    from p3d_cli.placed import resolve_spec
+
+    shape = resolve_spec(source)
+    if shape is not None:
+        inside, bounds, facts, warnings = _shape_setup(shape, source, placement)
+    else:
+        inside, bounds, facts, warnings = _mesh_setup(source, fmt, stdin, placement)
+    if bounds is None or not (np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size))):
+        estimate = None
+        moments = Moments(0.0, None, None)
+    else:
+        estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance)
+        moments = estimate.moments()
+    if moments.is_empty:
+        warnings.append("no Monte Carlo sample fell inside the solid: centre of mass and inertia "
+                        "are undefined; use more samples or check the mesh")
+        if mass is not None:
+            raise UsageError("--mass", "the Monte Carlo estimate found no volume, so no density "
+                             "follows from a mass", "give --density, or more --samples")
+    props = mass_properties(moments, density=density, mass=mass, about=about)
+    if estimate is None:
+        uncertainty = {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
+    else:
+        uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
+    return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty)
+
+
+def _shape_setup(shape, source, placement):
+    from p3d_cli.placed import spec_warnings
+
+    warnings = spec_warnings(source)
+    if placement is None or placement.is_identity:
+        bounds = shape.bounds()
+        inside = shape.inside
+    else:
+        from p3d_cli.bounds import placed_shape
+        scaled = placed_shape(shape, placement.scale)
+        rot = np.eye(3) if placement.rotation is None else placement.rotation
+        shift = np.zeros(3) if placement.translation is None else placement.translation
+        bounds = scaled.bounds(placement.rotation, placement.translation)
+        # World point p = R q + t  <=>  q = Rᵀ (p - t); row vectors: q = (p - t) R.
+        inside = lambda p: scaled.inside((p - shift) @ rot)  # noqa: E731
+    facts = MeshFacts(source, "primitive", 0, None, bounds)
+    return inside, bounds, facts, warnings
+
+
+def _mesh_setup(source, fmt, stdin, placement):
+    from p3d_cli.io import load_mesh
+    from p3d_cli.mesh.analysis import analyze
+    from p3d_cli.props import mesh_warnings
+
+    mesh = load_mesh(source, fmt, stdin=stdin)
+    where = "<stdin>" if source == "-" else source
+    if mesh.tetrahedra is not None:
+        tets = np.asarray(mesh.tetrahedra)
+        # Every face of every tetrahedron: shared inner faces are crossed twice, which parity
+        # ignores, so the soup's inside is the volume mesh's inside.
+        triangles = tets[:, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]].reshape(-1, 3, 3)
+    else:
+        triangles = mesh.triangles()    # read once; the analysis below reuses the array
+        mesh = dataclasses.replace(mesh, read_blocks=lambda: iter([triangles]))
+    found = analyze(mesh, where)
+    facts = MeshFacts(source, mesh.format, found.face_count, found.closed, found.bounds,
+                      mesh.coordinate_dtype)
+    warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
+    if not found.moments.is_empty and found.moments.volume < 0:
+        warnings.append("Monte Carlo's inside test ignores the winding, so its volume and mass "
+                        "are positive (about |exact signed volume|)")
+    if facts.closed is False:
+        warnings.append("Monte Carlo on an open mesh: a point whose up and down rays disagree "
+                        "(the ray escapes through a hole) counts as half inside")
+    triangles = np.asarray(triangles, dtype=np.float64)
+    if placement is not None and not placement.is_identity:
+        flat = triangles.reshape(-1, 3)
+        if placement.scale is not None:
+            flat = flat * placement.scale
+        if placement.rotation is not None:
+            flat = flat @ placement.rotation.T
+        if placement.translation is not None:
+            flat = flat + placement.translation
+        triangles = flat.reshape(-1, 3, 3)
+    lo = triangles.reshape(-1, 3).min(axis=0)
+    hi = triangles.reshape(-1, 3).max(axis=0)
+    bounds = Bounds(lo, hi)
+    facts = dataclasses.replace(facts, bounds=bounds)
+    return triangles_inside(triangles), bounds, facts, warnings
+
+
+__all__ = ["Estimate", "sample", "samples_for_tolerance", "montecarlo_moments", "montecarlo_props",
+           "triangles_inside", "DEFAULT_SAMPLES", "DEFAULT_SEED"]
