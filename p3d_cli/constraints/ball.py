@@ -1,0 +1,38 @@
+"""Ball joint: two body points stay together (the design note's eqs. 21-29, signs per FACTS.md).
+
+Velocity equation (3 rows): ``(v_b + ω_b × r_b) - (v_a + ω_a × r_a) = 0``. Since
+``ω × r = -[r]ₓ ω``, the motion-to-equation matrix of a side is ``ME = [E, -[r]ₓ]`` (the note's
+eq. 28-29 have ``+[r]ₓ``, the wrong sign). The multiplier ``λ`` is the impulse on body ``b``,
+world frame; ``a`` receives ``-λ``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from p3d_cli.constraints.rotation import skew
+
+EQUATIONS = 3
+
+
+def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
+    """``(J_a, J_b)``, each (3, 6): rows of ``J_a u_a + J_b u_b`` with ``u = (v, ω)``."""
+    ja, jb = np.zeros((3, 6)), np.zeros((3, 6))
+    jb[:, :3] = _EYE
+    jb[:, 3:] = -skew(geo.r_b)
+    ja[:, :3] = -_EYE
+    ja[:, 3:] = skew(geo.r_a)
+    return ja, jb
+
+
+_EYE = np.eye(3)
+
+
+def position_error(spec, geo) -> np.ndarray:
+    """(3,) ``p_b - p_a``: the gap between the two attachment points."""
+    return geo.p_b - geo.p_a
+
+
+def impulse(geo, lam: np.ndarray) -> dict:
+    """The impulse on body ``b`` (world frame)."""
+    return {"impulse": lam.copy()}

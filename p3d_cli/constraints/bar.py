@@ -1,0 +1,49 @@
+"""Bar: two body points keep their distance (the design note's eqs. 39-45).
+
+With ``d`` the unit vector from ``a``'s attachment point to ``b``'s, the velocity equation (1 row)
+is ``(v_b + ω_b × r_b - v_a - ω_a × r_a)·d = 0``, i.e. ``ME = [dᵀ, (r × d)ᵀ]`` (eq. 44-45, right as
+written). The multiplier ``λ`` is the impulse on ``b`` along ``d``: positive pushes the bodies
+apart (the bar in compression), negative pulls them together; ``a`` receives ``-λ d``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from p3d_cli.errors import SceneError
+
+EQUATIONS = 1
+
+
+def direction(geo) -> np.ndarray:
+    """Unit vector from ``p_a`` to ``p_b``.
+
+    Raises
+    ------
+    SceneError
+        The points coincide: a bar of zero length has no direction.
+    """
+    d = geo.p_b - geo.p_a
+    norm = float(np.linalg.norm(d))
+    if norm == 0.0:
+        raise SceneError("bar", "the attachment points coincide, so the bar has no direction",
+                         "use a ball joint to join two points")
+    return d / norm
+
+
+def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
+    """``(J_a, J_b)``, each (1, 6)."""
+    d = direction(geo)
+    jb = np.concatenate([d, np.cross(geo.r_b, d)])[None, :]
+    ja = -np.concatenate([d, np.cross(geo.r_a, d)])[None, :]
+    return ja, jb
+
+
+def position_error(spec, geo) -> np.ndarray:
+    """(1,): the distance between the points minus the bar's length."""
+    return np.array([np.linalg.norm(geo.p_b - geo.p_a) - spec.length])
+
+
+def impulse(geo, lam: np.ndarray) -> dict:
+    """The impulse on ``b`` along the bar (scalar) and as a world vector."""
+    return {"impulse": float(lam[0]), "impulse_vector": lam[0] * direction(geo)}

@@ -1,0 +1,141 @@
+"""Mass properties of scene bodies, computed only when a solve needs them.
+
+A body that gives ``mass``, ``inertia`` and ``center_of_mass`` is never integrated. A shape is
+integrated at most once per distinct primitive spec or mesh file in one resolve, and only for
+the bodies asked for (fixed bodies need nothing; resting unconstrained bodies need nothing).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.errors import P3DError, SceneError
+from p3d_cli.massprops import mass_properties
+from p3d_cli.results import Moments
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Resolved mass properties of a free body.
+
+    Attributes
+    ----------
+    mass : float
+    inertia : (3, 3) float64
+        About the centre of mass, body axes (positive tensor).
+    center_of_mass : (3,) float64
+        Body frame.
+    """
+
+    mass: float
+    inertia: np.ndarray
+    center_of_mass: np.ndarray
+
+
+def parse_shape_spec(text: str, where: str):
+    """The primitive shape ``text`` names, or None when it is a mesh path.
+
+    Raises
+    ------
+    SceneError
+        ``text`` names a primitive but its numbers are malformed.
+    """
+    from p3d_cli.shapes import parse_spec
+
+    try:
+        return parse_spec(text)
+    except P3DError as exc:
+        raise SceneError(where, f"{text!r}: {exc.what}", exc.hint) from None
+
+
+def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
+    """Volume moments of a primitive spec, or of a mesh file relative to ``scene_dir``.
+
+    Parameters
+    ----------
+    spec_or_path : str
+    scene_dir : str
+    where : str
+        The place in the scene, for messages.
+
+    Raises
+    ------
+    SceneError
+        Unreadable or corrupt mesh, or a solid with no positive volume.
+    """
+    from p3d_cli.io import load_mesh
+    from p3d_cli.mesh.analysis import analyze
+
+    shape = parse_shape_spec(spec_or_path, where)
+    if shape is not None:
+        moments = shape.moments()
+    else:
+        path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
+        try:
+            moments = analyze(load_mesh(path), path).moments
+        except P3DError as exc:
+            raise SceneError(where, f"cannot use mesh {spec_or_path!r}: {exc.message}",
+                             "fix or re-export the mesh") from None
+    if moments.is_empty or moments.volume <= 0:
+        what = ("encloses no volume" if moments.is_empty else
+                "has negative signed volume (faces wound inward)")
+        raise SceneError(where, f"{spec_or_path!r} {what}, so it has no mass",
+                         "use a closed, outward-wound mesh, or give mass:, inertia: and center_of_mass:")
+    return moments
+
+
+def shape_key(body) -> str:
+    """What identifies a body's shape for the once-per-file cache."""
+    return os.path.realpath(body.shape_path) if body.shape_path else body.shape
+
+
+def resolve_inertials(bodies, scene_dir: str, counter: dict | None = None) -> dict:
+    """``Inertial`` of each body given, integrating each distinct shape once.
+
+    Parameters
+    ----------
+    bodies : iterable of BodySpec
+        Free bodies whose mass properties are needed, or fixed ones whose centre is needed
+        (a fixed body gets an ``Inertial`` with mass ``inf``).
+    scene_dir : str
+    counter : dict, optional
+        Filled with shape key -> number of integrations (for tests and diagnostics).
+
+    Returns
+    -------
+    dict
+        Body name -> Inertial.
+    """
+    cache: dict[str, Moments] = {}
+    out = {}
+    for body in bodies:
+        out[body.name] = _inertial(body, scene_dir, cache, counter)
+    return out
+
+
+def _inertial(body, scene_dir, cache, counter) -> Inertial:
+    need_shape = body.shape is not None and (
+        body.center_of_mass is None or (not body.fixed and (body.inertia is None or body.mass is None)))
+    moments = None
+    if need_shape:
+        key = shape_key(body)
+        if key not in cache:
+            cache[key] = shape_moments(body.shape_path or body.shape, scene_dir, f"{body.where}.shape")
+            if counter is not None:
+                counter[key] = counter.get(key, 0) + 1
+        moments = cache[key]
+    com = body.center_of_mass
+    if com is None:
+        com = moments.center.copy() if moments is not None else np.zeros(3)
+    if body.fixed:
+        return Inertial(float("inf"), np.full((3, 3), np.inf), com)
+    mass = body.mass
+    inertia = body.inertia
+    if moments is not None and (mass is None or inertia is None):
+        props = mass_properties(moments, density=None if mass is not None else body.density, mass=mass)
+        mass = props.mass if mass is None else mass
+        inertia = props.inertia if inertia is None else inertia
+    return Inertial(float(mass), np.asarray(inertia, dtype=np.float64), np.asarray(com, dtype=np.float64))

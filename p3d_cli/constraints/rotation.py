@@ -1,0 +1,85 @@
+"""Unit quaternions ``[w, x, y, z]`` and the rotation matrices they stand for.
+
+A body's orientation ``q`` maps body-frame vectors to world-frame ones: ``v_world = R(q) v_body``.
+A world-frame angular velocity ``ω`` rotates the body by ``exp(ω dt)`` applied on the left
+(``q ← exp(ω dt / 2) ⊗ q``), because ``ω`` is expressed in the world frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a unit quaternion.
+
+    Parameters
+    ----------
+    q : (4,) or (n, 4) float64
+        ``[w, x, y, z]``, unit length.
+
+    Returns
+    -------
+    (3, 3) or (n, 3, 3) float64
+    """
+    q = np.asarray(q, dtype=np.float64)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - w * z)
+    out[..., 0, 2] = 2 * (x * z + w * y)
+    out[..., 1, 0] = 2 * (x * y + w * z)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - w * x)
+    out[..., 2, 0] = 2 * (x * z - w * y)
+    out[..., 2, 1] = 2 * (y * z + w * x)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p ⊗ q`` (rotate by ``q`` first, then ``p``); broadcasts over rows."""
+    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
+    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    return np.stack([pw * qw - px * qx - py * qy - pz * qz,
+                     pw * qx + px * qw + py * qz - pz * qy,
+                     pw * qy - px * qz + py * qw + pz * qx,
+                     pw * qz + px * qy - py * qx + pz * qw], axis=-1)
+
+
+def quat_from_axis_angle(axis, angle: float) -> np.ndarray:
+    """Unit quaternion of a rotation by ``angle`` radians about ``axis`` (any non-zero length)."""
+    a = np.asarray(axis, dtype=np.float64)
+    a = a / np.linalg.norm(a)
+    half = 0.5 * angle
+    return np.concatenate([[np.cos(half)], np.sin(half) * a])
+
+
+def quat_exp(rotvec: np.ndarray) -> np.ndarray:
+    """Unit quaternion of the rotation vector ``θ`` (axis ``θ/|θ|``, angle ``|θ|``); rows broadcast.
+
+    Uses ``sin(|θ|/2)/|θ|`` through its series near zero so that tiny rotations stay exact.
+    """
+    rotvec = np.asarray(rotvec, dtype=np.float64)
+    angle = np.linalg.norm(rotvec, axis=-1)
+    half = 0.5 * angle
+    small = angle < 1e-8
+    safe = np.where(small, 1.0, angle)
+    factor = np.where(small, 0.5 - angle * angle / 48.0, np.sin(half) / safe)
+    return np.concatenate([np.cos(half)[..., None], factor[..., None] * rotvec], axis=-1)
+
+
+def rotate_by(q: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
+    """``exp(θ) ⊗ q``, renormalised: the orientation after a world-frame rotation ``θ``."""
+    out = quat_multiply(quat_exp(rotvec), q)
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+
+
+def skew(r: np.ndarray) -> np.ndarray:
+    """Cross-product matrix ``[r]ₓ`` with ``[r]ₓ v = r × v``; rows broadcast to (n, 3, 3)."""
+    r = np.asarray(r, dtype=np.float64)
+    out = np.zeros(r.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -r[..., 2], r[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = r[..., 2], -r[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -r[..., 1], r[..., 0]
+    return out

@@ -1,0 +1,138 @@
+"""``solve_scene``: one velocity solve, or stepping in time, of a validated scene.
+
+This is the function behind ``p3d solve``; the CLI only parses options and formats the
+``SolveResult`` it returns.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from p3d_cli.constraints.bodies import resolve_inertials
+from p3d_cli.constraints.outcome import BodyState, ConstraintOutcome, SolveResult
+from p3d_cli.constraints.solver import DENSE_LIMIT
+from p3d_cli.constraints.world import World
+from p3d_cli.errors import UsageError
+
+#: Position correction stops once every position error is below this fraction of the
+#: scene's length scale (the largest attachment offset).
+POSITION_RTOL = 1e-12
+
+#: Header of the trajectory rows ``trajectory_rows`` produces.
+TRAJECTORY_HEADER = ("t", "body", "x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
+
+
+def needed_bodies(scene, stepping: bool, centers: bool) -> list:
+    """The bodies whose mass properties the solve needs (see ``docs/solve.md``).
+
+    A free body needs them when a constraint links it, when it moves, or when it will fall
+    under gravity; a fixed body only when its centre of mass is reported (``centers``).
+    """
+    linked = {c.a for c in scene.constraints} | {c.b for c in scene.constraints}
+    falling = stepping and bool(np.any(scene.gravity))
+    out = []
+    for body in scene.bodies:
+        if centers or (not body.fixed and (body.name in linked or body.moving or falling)):
+            out.append(body)
+    return out
+
+
+def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None, centers: bool = False,
+                dense_limit: int = DENSE_LIMIT, scene_dir: str | None = None,
+                shape_counter: dict | None = None) -> SolveResult:
+    """Solve a scene's constraints once, or advance it ``steps`` steps of ``dt``.
+
+    Parameters
+    ----------
+    scene : Scene
+    steps : int
+        0: one velocity solve (no motion). N > 0: N steps of velocity solve, integration of
+        positions and orientations, and position correction, under the scene's gravity.
+    dt : float, optional
+        Time step; required when ``steps > 0``.
+    on_step : callable, optional
+        Called after every step as ``on_step(t, bodies)`` with the tuple of ``BodyState``.
+    centers : bool
+        Resolve every body's centre of mass (a trajectory reports them), integrating fixed
+        bodies' shapes if need be.
+    dense_limit : int
+        Islands with more equations use the sparse solver.
+    scene_dir : str, optional
+        Folder mesh paths are relative to (default: the current folder; ``load_scene`` keeps
+        resolved paths, so this only matters for scenes built by hand).
+    shape_counter : dict, optional
+        Filled with how often each distinct shape was integrated.
+
+    Raises
+    ------
+    SceneError, UsageError
+    """
+    if steps < 0:
+        raise UsageError("--steps", f"must be 0 or more, got {steps}", "give a whole number of steps")
+    if steps > 0 and (dt is None or not math.isfinite(dt) or dt <= 0):
+        raise UsageError("--dt", "stepping needs a positive time step", "give --dt, e.g. --dt 0.001")
+    inertials = resolve_inertials(needed_bodies(scene, steps > 0, centers or on_step is not None),
+                                  scene_dir or os.getcwd(), shape_counter)
+    world = World(scene, inertials, dense_limit)
+    before = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
+    tolerance = POSITION_RTOL * _length_scale(scene)
+    if steps == 0:
+        solution, geos = world.solve_velocities()
+        worst = max((float(np.abs(e).max()) for e in world.position_residuals(geos)), default=0.0)
+        return _result(world, solution, before, 0, 0.0, worst)
+    gravity = scene.gravity
+    worst = 0.0
+    solution = None
+    for step in range(1, steps + 1):
+        world.vel[world.active] += gravity * dt
+        solution, _ = world.solve_velocities()
+        world.drift(dt)
+        worst = max(worst, world.correct_positions(tolerance))
+        if on_step is not None:
+            on_step(step * dt, _bodies(world))
+    return _result(world, solution, before, steps, steps * dt, worst)
+
+
+def trajectory_row(t: float, body: BodyState) -> list:
+    """One trajectory row (``TRAJECTORY_HEADER``) of a body; x, y, z is its centre of mass."""
+    com = body.center_of_mass if body.center_of_mass is not None else body.position
+    return [t, body.name, *com.tolist(), *body.rotation.tolist(), *body.velocity.tolist(),
+            *body.angular_velocity.tolist()]
+
+
+def _length_scale(scene) -> float:
+    scale = 1.0
+    for c in scene.constraints:
+        scale = max(scale, float(np.abs(c.attach_a).max()), float(np.abs(c.attach_b).max()))
+    return scale
+
+
+def _bodies(world: World) -> tuple:
+    origins = world.origins()
+    out = []
+    for i, body in enumerate(world.scene.bodies):
+        out.append(BodyState(body.name, body.fixed, origins[i].copy(), world.quat[i].copy(),
+                             world.com[i].copy() if world.known[i] else None, world.vel[i].copy(),
+                             world.omega[i].copy(), bool(world.constrained[i])))
+    return tuple(out)
+
+
+def _result(world: World, solution, before, steps: int, time: float, worst: float) -> SolveResult:
+    geos = world.geometries()
+    blocks = world._blocks(geos)
+    velocity = world.velocity_residuals(geos, blocks)
+    position = world.position_residuals(geos)
+    constraints = []
+    for k, spec in enumerate(world.scene.constraints):
+        report = world.modules[k].impulse(geos[k], solution.multipliers[k])
+        constraints.append(ConstraintOutcome(spec.type, spec.a, spec.b, report["impulse"],
+                                             report.get("angular_impulse"),
+                                             float(np.linalg.norm(velocity[k])),
+                                             float(np.linalg.norm(position[k])), world.island_of[k]))
+    after = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
+    return SolveResult(_bodies(world), tuple(constraints), solution.rank, solution.equations,
+                       len(world.islands), (before[0], after[0]), (before[1], after[1]),
+                       (before[2], after[2]), steps, time, worst)

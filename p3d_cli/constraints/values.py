@@ -1,0 +1,125 @@
+"""Checking the plain values of a scene file: numbers, vectors, matrices, rotations.
+
+Each function takes the YAML value and the place it came from (``scene.yaml: bodies.arm.mass``)
+and returns a numpy value or raises ``SceneError`` naming that place.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from p3d_cli.constraints.rotation import quat_from_axis_angle
+from p3d_cli.errors import SceneError
+
+
+def is_number(value) -> bool:
+    # YAML's true/false are Python bools, which are ints: never accept them as numbers.
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def describe(value) -> str:
+    """A short description of a wrong value, for messages."""
+    if value is None:
+        return "nothing"
+    if isinstance(value, bool):
+        return f"the boolean {str(value).lower()}"
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return f"a list of {len(value)}"
+    if isinstance(value, str):
+        return f"the text {value!r}"
+    return repr(value)
+
+
+def number(value, where: str, *, positive: bool = False) -> float:
+    """A finite float (``positive``: also > 0)."""
+    if not is_number(value):
+        raise SceneError(where, f"expected a number, got {describe(value)}", "write a plain number such as 2.5")
+    x = float(value)
+    if not math.isfinite(x):
+        raise SceneError(where, f"{value!r} is not finite", "write a finite number")
+    if positive and x <= 0:
+        raise SceneError(where, f"must be positive, got {value!r}", "write a number greater than 0")
+    return x
+
+
+def vector(value, where: str, *, nonzero: bool = False) -> np.ndarray:
+    """A (3,) float64 from a list of three finite numbers (``nonzero``: not the zero vector)."""
+    if not isinstance(value, list) or len(value) != 3 or not all(is_number(v) for v in value):
+        raise SceneError(where, f"expected three numbers [x, y, z], got {describe(value)}",
+                         "write a list like [0, 0, 1]")
+    out = np.array(value, dtype=np.float64)
+    if not np.isfinite(out).all():
+        raise SceneError(where, "a component is not finite", "write finite numbers")
+    if nonzero and not np.any(out):
+        raise SceneError(where, "is the zero vector, which has no direction", "give a non-zero direction")
+    return out
+
+
+def inertia(value, where: str) -> np.ndarray:
+    """A (3, 3) inertia tensor about the centre of mass: symmetric positive definite, and its
+    principal moments obey the triangle inequality ``I1 + I2 >= I3`` (every real solid's do).
+
+    A list of three numbers is the diagonal ``[Ixx, Iyy, Izz]``.
+    """
+    hint = "write [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] or the diagonal [Ixx, Iyy, Izz]"
+    if isinstance(value, list) and len(value) == 3 and all(is_number(v) for v in value):
+        matrix = np.diag(np.array(value, dtype=np.float64))
+    elif (isinstance(value, list) and len(value) == 3
+          and all(isinstance(row, list) and len(row) == 3 and all(is_number(v) for v in row) for row in value)):
+        matrix = np.array(value, dtype=np.float64)
+    else:
+        raise SceneError(where, f"expected a 3×3 matrix, got {describe(value)}", hint)
+    if not np.isfinite(matrix).all():
+        raise SceneError(where, "an entry is not finite", hint)
+    scale = float(np.abs(matrix).max())
+    if scale == 0.0:
+        raise SceneError(where, "is zero", "a body with mass has a positive definite inertia")
+    if np.abs(matrix - matrix.T).max() > 1e-9 * scale:
+        raise SceneError(where, "is not symmetric", "an inertia tensor has Ixy = Iyx, Ixz = Izx, Iyz = Izy")
+    matrix = 0.5 * (matrix + matrix.T)
+    principal = np.linalg.eigvalsh(matrix)
+    if principal[0] <= 1e-12 * scale:
+        raise SceneError(where, f"is not positive definite (principal moments {_join(principal)})",
+                         "every principal moment of a solid is > 0 (p3d uses the positive tensor, "
+                         "Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm)")
+    if principal[0] + principal[1] < principal[2] * (1 - 1e-9):
+        raise SceneError(where, f"breaks the triangle inequality: principal moments {_join(principal)} "
+                         f"have {principal[0]:.6g} + {principal[1]:.6g} < {principal[2]:.6g}",
+                         "no solid has such an inertia; check the units and the diagonal")
+    return matrix
+
+
+def rotation(value, where: str) -> np.ndarray:
+    """A unit quaternion ``[w, x, y, z]`` from ``{quat: [w, x, y, z]}`` (normalised, must be
+    non-zero) or ``{axis: [x, y, z], degrees: A}`` / ``{axis: ..., radians: A}``."""
+    hint = "write {quat: [w, x, y, z]} or {axis: [x, y, z], degrees: 30} (or radians:)"
+    if not isinstance(value, dict):
+        raise SceneError(where, f"expected a mapping, got {describe(value)}", hint)
+    keys = set(value)
+    if keys == {"quat"}:
+        q = value["quat"]
+        if not isinstance(q, list) or len(q) != 4 or not all(is_number(v) for v in q):
+            raise SceneError(f"{where}.quat", f"expected four numbers [w, x, y, z], got {describe(q)}", hint)
+        out = np.array(q, dtype=np.float64)
+        norm = float(np.linalg.norm(out))
+        if not math.isfinite(norm) or norm == 0.0:
+            raise SceneError(f"{where}.quat", "is zero or not finite, so it is no rotation",
+                             "the identity is [1, 0, 0, 0]")
+        return out / norm
+    angle_keys = keys & {"degrees", "radians"}
+    if "axis" in keys and len(angle_keys) == 1 and keys == {"axis"} | angle_keys:
+        axis = vector(value["axis"], f"{where}.axis", nonzero=True)
+        key = angle_keys.pop()
+        angle = number(value[key], f"{where}.{key}")
+        return quat_from_axis_angle(axis, math.radians(angle) if key == "degrees" else angle)
+    unknown = sorted(str(k) for k in keys - {"quat", "axis", "degrees", "radians"})
+    what = f"unknown key {unknown[0]!r}" if unknown else f"has keys {sorted(map(str, keys))}, which name no rotation"
+    raise SceneError(where, what, hint)
+
+
+def _join(values) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"

@@ -1,0 +1,153 @@
+"""The mutable world state of one solve: arrays over all bodies, and the operations on them.
+
+Only this module and ``simulation`` mutate arrays; everything they return is frozen.
+Conventions (FACTS.md, "Constraints"): world frame throughout; ``I⁻¹_world = R I⁻¹_body Rᵀ``;
+``r = attachment - centre of mass``; velocities are those of the centres of mass; fixed bodies
+(and bodies at rest that nothing links, whose mass properties are never computed) have zero
+inverse mass and inverse inertia.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from p3d_cli.constraints.islands import find_islands
+from p3d_cli.constraints.joint import joint_geometry
+from p3d_cli.constraints.registry import CONSTRAINT_TYPES
+from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by
+from p3d_cli.constraints.solver import DENSE_LIMIT, body_changes, solve_impulses
+
+
+class World:
+    """Arrays over the scene's bodies (scene order) and its constraints."""
+
+    def __init__(self, scene, inertials: dict, dense_limit: int = DENSE_LIMIT) -> None:
+        n = len(scene.bodies)
+        self.scene = scene
+        self.dense_limit = dense_limit
+        self.index = {b.name: i for i, b in enumerate(scene.bodies)}
+        self.fixed = np.array([b.fixed for b in scene.bodies], dtype=bool)
+        self.active = np.array([(not b.fixed) and b.name in inertials for b in scene.bodies], dtype=bool)
+        self.known = np.array([b.name in inertials for b in scene.bodies], dtype=bool)
+        self.mass = np.zeros(n)
+        self.inertia_body = np.zeros((n, 3, 3))
+        self.inv_inertia_body = np.zeros((n, 3, 3))
+        self.com_body = np.zeros((n, 3))
+        for i, body in enumerate(scene.bodies):
+            inertial = inertials.get(body.name)
+            if inertial is None:
+                continue
+            self.com_body[i] = inertial.center_of_mass
+            if self.active[i]:
+                self.mass[i] = inertial.mass
+                self.inertia_body[i] = inertial.inertia
+                self.inv_inertia_body[i] = np.linalg.inv(inertial.inertia)
+        self.inv_mass = np.where(self.active, 1.0 / np.where(self.active, self.mass, 1.0), 0.0)
+        self.quat = np.array([b.rotation for b in scene.bodies]).reshape(n, 4)
+        self.rot = quat_to_matrix(self.quat)
+        origins = np.array([b.position for b in scene.bodies]).reshape(n, 3)
+        self.com = origins + np.einsum("nij,nj->ni", self.rot, self.com_body)
+        self.vel = np.array([b.velocity for b in scene.bodies]).reshape(n, 3) * self.active[:, None]
+        self.omega = np.array([b.angular_velocity for b in scene.bodies]).reshape(n, 3) * self.active[:, None]
+        self.pairs = [(self.index[c.a], self.index[c.b]) for c in scene.constraints]
+        self.modules = [CONSTRAINT_TYPES[c.type] for c in scene.constraints]
+        self.islands = find_islands(self.pairs, ~self.active)
+        self.island_of = {}
+        for number, island in enumerate(self.islands):
+            for k in island.constraints:
+                self.island_of[k] = number
+        self.constrained = np.zeros(n, dtype=bool)
+        for a, b in self.pairs:
+            self.constrained[a] = self.constrained[b] = True
+        self._update_inverse_inertia()
+
+    # -- derived quantities -------------------------------------------------------------
+    def _update_inverse_inertia(self) -> None:
+        self.rot = quat_to_matrix(self.quat)
+        self.inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
+
+    def inertia_world(self) -> np.ndarray:
+        return self.rot @ self.inertia_body @ np.transpose(self.rot, (0, 2, 1))
+
+    def origins(self) -> np.ndarray:
+        """World positions of the body frames' origins, (n, 3)."""
+        return self.com - np.einsum("nij,nj->ni", self.rot, self.com_body)
+
+    def geometries(self) -> list:
+        out = []
+        for spec, (a, b) in zip(self.scene.constraints, self.pairs):
+            out.append(joint_geometry(spec, self.com[a], self.rot[a], self.com_body[a],
+                                      self.com[b], self.rot[b], self.com_body[b]))
+        return out
+
+    def kinetic_energy(self) -> float:
+        linear = 0.5 * np.sum(self.mass * np.sum(self.vel ** 2, axis=1))
+        angular = 0.5 * np.einsum("ni,nij,nj->", self.omega, self.inertia_world(), self.omega)
+        return float(linear + angular)
+
+    def momentum(self) -> np.ndarray:
+        return np.sum(self.mass[:, None] * self.vel, axis=0)
+
+    def angular_momentum(self) -> np.ndarray:
+        """About the world origin: ``Σ m x × v + I_world ω``."""
+        orbital = np.cross(self.com, self.mass[:, None] * self.vel)
+        spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
+        return np.sum(orbital + spin, axis=0)
+
+    # -- the two projections ------------------------------------------------------------
+    def _blocks(self, geos) -> list:
+        return [module.jacobian(geo) for module, geo in zip(self.modules, geos)]
+
+    def velocity_residuals(self, geos, blocks) -> list:
+        u = np.hstack([self.vel, self.omega])
+        return [ja @ u[a] + jb @ u[b] for (a, b), (ja, jb) in zip(self.pairs, blocks)]
+
+    def position_residuals(self, geos) -> list:
+        return [module.position_error(spec, geo)
+                for module, spec, geo in zip(self.modules, self.scene.constraints, geos)]
+
+    def solve_velocities(self):
+        """One velocity solve (eq. 20): apply the impulses that make every constraint's velocity
+        equations hold. Returns ``(solution, geometries)``."""
+        geos = self.geometries()
+        blocks = self._blocks(geos)
+        rhs = [-r for r in self.velocity_residuals(geos, blocks)]
+        solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, self.inv_inertia, rhs,
+                                  self.dense_limit)
+        dv, dw = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, self.inv_inertia)
+        self.vel += dv
+        self.omega += dw
+        return solution, geos
+
+    def correct_positions(self, tolerance: float, iterations: int = 3) -> float:
+        """Post-stabilisation: Newton steps on the position equations ``C(x) = 0`` with the same
+        mass-weighted system (``(J W Jᵀ) λ = -C``, displacement ``W Jᵀ λ``). Returns the largest
+        remaining position error."""
+        for _ in range(iterations):
+            geos = self.geometries()
+            errors = self.position_residuals(geos)
+            worst = max((float(np.abs(e).max()) for e in errors), default=0.0)
+            if worst <= tolerance:
+                return worst
+            blocks = self._blocks(geos)
+            solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, self.inv_inertia,
+                                      [-e for e in errors], self.dense_limit)
+            dx, dtheta = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, self.inv_inertia)
+            self.com += dx
+            self.quat = rotate_by(self.quat, dtheta)
+            self._update_inverse_inertia()
+        return max((float(np.abs(e).max()) for e in self.position_residuals(self.geometries())), default=0.0)
+
+    def drift(self, dt: float) -> None:
+        """Advance positions and orientations by ``dt`` at the current velocities.
+
+        The orientation turns by ``exp(ω dt)`` (unit quaternions, renormalised). Each free
+        body's angular momentum ``I_world ω`` is kept through the turn, so ``ω`` follows the
+        rotated inertia (torque-free motion of an asymmetric body is not lost).
+        """
+        moving = self.active
+        spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
+        self.com[moving] += self.vel[moving] * dt
+        self.quat[moving] = rotate_by(self.quat[moving], self.omega[moving] * dt)
+        self._update_inverse_inertia()
+        self.omega[moving] = np.einsum("nij,nj->ni", self.inv_inertia, spin)[moving]
