@@ -23,7 +23,17 @@ from p3d_cli.props import mesh_props
               help="Print only this JSON field, bare (repeatable; dots for nesting, e.g. "
                    "bounds.min). Several fields go on one line, tab-separated.")
 @strict_option
-def props(inputs, fmt, density, mass, about, as_json, fields, strict):
+@click.option("--method", type=click.Choice(["exact", "montecarlo"]), default="exact", show_default=True,
+              help="exact: divergence theorem / closed form, with rounding-error bounds. montecarlo: "
+                   "sample the bounding box with an inside test, with standard errors (an "
+                   "independent check of a mesh you distrust).")
+@click.option("--samples", type=click.IntRange(min=2), default=None, metavar="N",
+              help="Monte Carlo sample count (default 100000).")
+@click.option("--seed", type=click.IntRange(min=0), default=None, metavar="S",
+              help="Monte Carlo random seed (default 0): the same seed gives the same numbers.")
+@click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
+              help="Monte Carlo: pick the sample count for this relative standard error of the volume.")
+def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -39,14 +49,25 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict):
       p3d props part.stl --density 7850 --about 0,0,0
       p3d props part.stl --field volume --field mass
       cat part.stl | p3d props - --format stl
+      p3d props part.stl --method montecarlo --samples 1000000 --seed 7 --json
     """
     if not inputs:
         raise UsageError("p3d props", "no input given", "name a mesh file, a directory, or - for standard input")
     if density is not None and mass is not None:
         raise UsageError("--mass/--density", "both given", "give one: the other follows from the volume")
     failed = warned = False
-    for outcome in run_each(inputs, lambda src: mesh_props(src, fmt=fmt, density=density, mass=mass,
-                                                           about=about)):
+    if method != "montecarlo" and (samples is not None or seed is not None or tolerance is not None):
+        raise UsageError("--samples/--seed/--tolerance", "given without --method montecarlo",
+                         "add --method montecarlo, or drop them")
+
+    def compute(src):
+        if method == "montecarlo":
+            from p3d_cli.montecarlo import montecarlo_props
+            return montecarlo_props(src, samples=samples, seed=seed, tolerance=tolerance, fmt=fmt,
+                                    density=density, mass=mass, about=about)
+        return mesh_props(src, fmt=fmt, density=density, mass=mass, about=about)
+
+    for outcome in run_each(inputs, compute):
         if outcome.error is not None:
             failed = True
             error_line(outcome.error.message)
