@@ -1,0 +1,147 @@
+"""``p3d solve``: constraint impulses (and optionally motion in time) of a YAML scene."""
+
+from __future__ import annotations
+
+import csv
+
+import click
+
+from p3d_cli.cli import output
+from p3d_cli.cli.options import FiniteFloat, json_option
+from p3d_cli.constraints import TRAJECTORY_HEADER, SolveResult, load_scene, solve_scene, trajectory_row
+from p3d_cli.errors import UsageError
+
+
+@click.command()
+@click.argument("scene", metavar="SCENE.yaml")
+@click.option("--steps", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Advance the scene this many time steps under its gravity (0: one velocity solve).")
+@click.option("--dt", type=FiniteFloat(positive=True), default=None, metavar="SECONDS",
+              help="Time step for --steps.")
+@click.option("--trajectory", type=click.Path(dir_okay=False, writable=True), default=None, metavar="FILE.csv",
+              help="Write one CSV row per body per step: t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz "
+                   "(x, y, z: the centre of mass).")
+@json_option
+def solve(scene, steps, dt, trajectory, as_json):
+    """Solve ball, hinge and bar constraints between rigid bodies.
+
+    Reads a YAML scene (bodies with shapes, meshes or plain mass and inertia; constraints
+    between them; see docs/solve.md), solves the constraint equations (design note eq. 20, in
+    world coordinates) for the impulses that make the bodies' motions agree, and reports the
+    new velocities, each constraint's impulse and remaining error, kinetic energy and momentum
+    before and after, and the rank of the system (redundant constraints are solved in the
+    minimum-norm sense). With --steps and --dt it steps the scene in time under gravity.
+
+    \b
+    Examples:
+      p3d solve examples/pendulum.yaml
+      p3d solve examples/four_bar.yaml --json
+      p3d solve examples/pendulum.yaml --steps 2000 --dt 0.001 --trajectory swing.csv
+    """
+    if steps == 0 and (dt is not None or trajectory is not None):
+        option = "--dt" if dt is not None else "--trajectory"
+        raise UsageError(option, "only applies when stepping", "add --steps N")
+    if steps > 0 and dt is None:
+        raise UsageError("--dt", "stepping needs a time step", "give --dt, e.g. --dt 0.001")
+    parsed = load_scene(scene)
+    if trajectory is None:
+        result = solve_scene(parsed, steps=steps, dt=dt)
+    else:
+        try:
+            handle = open(trajectory, "w", newline="", encoding="utf-8")
+        except OSError as exc:
+            raise UsageError("--trajectory", f"cannot write {trajectory!r} ({exc.strerror or exc})",
+                             "choose a writable path") from None
+        with handle:
+            writer = csv.writer(handle)
+            writer.writerow(TRAJECTORY_HEADER)
+
+            def record(t, bodies):
+                for body in bodies:
+                    writer.writerow([_csv_value(v) for v in trajectory_row(t, body)])
+
+            result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
+    if as_json:
+        click.echo(output.dumps(solve_record(result)))
+    else:
+        click.echo(solve_table(scene, result))
+
+
+def _csv_value(value):
+    return repr(value) if isinstance(value, float) else value
+
+
+def solve_record(result: SolveResult) -> dict:
+    """The JSON object of ``p3d solve`` (stable keys; see docs/solve.md)."""
+    bodies = {}
+    for body in result.bodies:
+        bodies[body.name] = {
+            "fixed": body.fixed,
+            "position": body.position,
+            "rotation": body.rotation,
+            "center_of_mass": body.center_of_mass,
+            "velocity": body.velocity,
+            "angular_velocity": body.angular_velocity,
+            "constrained": body.constrained,
+        }
+    constraints = []
+    for c in result.constraints:
+        entry = {"type": c.type, "a": c.a, "b": c.b, "impulse": c.impulse, "error": c.error,
+                 "position_error": c.position_error, "island": c.island}
+        if c.angular_impulse is not None:
+            entry["angular_impulse"] = c.angular_impulse
+        constraints.append(entry)
+    return {
+        "bodies": bodies,
+        "constraints": constraints,
+        "rank": result.rank,
+        "equations": result.equations,
+        "redundant": result.redundant,
+        "islands": result.islands,
+        "kinetic_energy": {"before": result.kinetic_energy[0], "after": result.kinetic_energy[1]},
+        "momentum": {"before": result.momentum[0], "after": result.momentum[1]},
+        "angular_momentum": {"before": result.angular_momentum[0], "after": result.angular_momentum[1]},
+        "steps": result.steps,
+        "time": result.time,
+        "max_position_error": result.max_position_error,
+        "frame": "world; velocity is the centre of mass's; angular momentum about the world origin; "
+                 "impulses act on body b (a receives the opposite)",
+    }
+
+
+def solve_table(where: str, result: SolveResult) -> str:
+    """A readable summary."""
+    num, vec = output.number, _short_vector
+    n_c = len(result.constraints)
+    redundancy = ("no redundancy" if result.redundant == 0 else
+                  f"{result.redundant} redundant, solved in the minimum-norm sense")
+    lines = [f"{where}: {len(result.bodies)} bodies, {n_c} constraint{'s' if n_c != 1 else ''}, "
+             f"{result.islands} island{'s' if result.islands != 1 else ''}; rank {result.rank} of "
+             f"{result.equations} equations ({redundancy})"]
+    if result.steps:
+        lines.append(f"stepped {result.steps} steps to t = {num(result.time)}; largest joint drift "
+                     f"{num(result.max_position_error)}")
+    lines.append("bodies (world frame; velocity of the centre of mass):")
+    width = max(len(b.name) for b in result.bodies)
+    for b in result.bodies:
+        state = "fixed" if b.fixed else ("" if b.constrained else "(free, unchanged by constraints)")
+        lines.append(f"  {b.name:<{width}}  position {vec(b.position)}  rotation {vec(b.rotation)}  {state}".rstrip())
+        if not b.fixed:
+            lines.append(f"  {'':<{width}}  velocity {vec(b.velocity)}  angular velocity {vec(b.angular_velocity)}")
+    if result.constraints:
+        lines.append("constraints (impulse on b, world frame; error: remaining velocity error):")
+        for i, c in enumerate(result.constraints):
+            impulse = num(c.impulse) if isinstance(c.impulse, float) else vec(c.impulse)
+            extra = f"  angular {vec(c.angular_impulse)}" if c.angular_impulse is not None else ""
+            lines.append(f"  [{i}] {c.type:<5} {c.a} -> {c.b}  impulse {impulse}{extra}  error {num(c.error)}"
+                         f"  position error {num(c.position_error)}")
+    ke = result.kinetic_energy
+    lines.append(f"kinetic energy: {num(ke[0])} -> {num(ke[1])}")
+    lines.append(f"momentum: {vec(result.momentum[0])} -> {vec(result.momentum[1])}")
+    lines.append(f"angular momentum (about the origin): {vec(result.angular_momentum[0])} -> "
+                 f"{vec(result.angular_momentum[1])}")
+    return "\n".join(lines)
+
+
+def _short_vector(v) -> str:
+    return "[" + ", ".join(f"{float(x):.6g}" for x in v) + "]"
