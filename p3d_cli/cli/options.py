@@ -75,3 +75,30 @@ def strict_option(f):
     return click.option("--strict", is_flag=True,
                         help="Exit with status 1 when any result carries a warning "
                              "(open, inward-wound, flat or coarse mesh).")(f)
+
+
+def batch_options(f):
+    """``--files-from``, ``--jobs``, ``--dask``, ``--csv``, handed to the command as one
+    ``batch: BatchOptions`` argument (see ``p3d_cli.cli.batch``)."""
+    import functools
+
+    from p3d_cli.cli.batch import BatchOptions
+
+    @functools.wraps(f)
+    def command(*args, files_from, jobs, dask, as_csv, **kwargs):
+        return f(*args, batch=BatchOptions(files_from, jobs, dask, as_csv), **kwargs)
+
+    command = click.option("--csv", "as_csv", is_flag=True,
+                           help="A CSV table: a header, then one row per input (error rows fill "
+                                "the error column).")(command)
+    command = click.option("--dask", metavar="ADDRESS", default=None,
+                           help="Run the batch on an existing Dask cluster (e.g. "
+                                "tcp://scheduler:8786; needs p3d-cli[dask], and p3d and the same "
+                                "paths on the workers).")(command)
+    command = click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
+                           help="Worker processes on this machine (default: one per core; one "
+                                "input or -j 1 runs in this process).")(command)
+    command = click.option("--files-from", metavar="LIST", default=None,
+                           help="Also read input paths from LIST, one per line (- for standard "
+                                "input).")(command)
+    return command

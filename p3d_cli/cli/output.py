@@ -129,3 +129,45 @@ def bare(value) -> str:
     if isinstance(value, list):
         return " ".join(bare(v) for v in value)
     return str(value)
+
+
+def csv_line(values) -> str:
+    """One CSV row (RFC 4180 quoting), without its line end: floats in full precision (repr),
+    booleans as true/false, None and missing values empty."""
+    import csv
+    import io
+
+    cells = []
+    for value in values:
+        value = jsonable(value)
+        if value is None:
+            cells.append("")
+        elif isinstance(value, bool):
+            cells.append("true" if value else "false")
+        elif isinstance(value, float):
+            cells.append(repr(value))
+        else:
+            cells.append(str(value))
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow(cells)
+    return buffer.getvalue()
+
+
+#: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention.
+PROPS_CSV_COLUMNS = ("source", "format", "method", "faces", "closed", "volume", "mass", "density",
+                     "com_x", "com_y", "com_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz",
+                     "warnings", "error")
+
+
+def props_row(record: dict) -> list:
+    """The ``--csv`` cells of a ``props_record`` (or of an error record), in column order."""
+    row = dict.fromkeys(PROPS_CSV_COLUMNS)
+    row.update({k: v for k, v in record.items() if k in row})
+    com, inertia = record.get("center_of_mass"), record.get("inertia")
+    if com is not None:
+        row["com_x"], row["com_y"], row["com_z"] = (float(x) for x in com)
+    if inertia is not None:
+        i = np.asarray(inertia)
+        row.update(ixx=i[0, 0], iyy=i[1, 1], izz=i[2, 2], ixy=i[0, 1], ixz=i[0, 2], iyz=i[1, 2])
+    row["warnings"] = " | ".join(record.get("warnings") or []) or None
+    return [row[k] for k in PROPS_CSV_COLUMNS]
