@@ -272,7 +272,9 @@ def _edges(ids: np.ndarray) -> _Edges:
 
 def _edge_samples(edges: _Edges, groups: np.ndarray, points: np.ndarray) -> tuple[EdgeSample, ...]:
     out = []
-    for g in groups[:SAMPLES]:
+    # The problems met first in file order (each group's first side is its lowest face).
+    first = np.argsort(edges.face[edges.starts[groups]], kind="stable")[:SAMPLES]
+    for g in groups[first]:
         s, c = int(edges.starts[g]), int(edges.counts[g])
         faces = tuple(int(f) for f in edges.face[s:s + c])
         out.append(EdgeSample(faces, (_point(points[edges.lo[s]]), _point(points[edges.hi[s]]))))
@@ -429,3 +431,104 @@ def _shell_volumes(triangles: np.ndarray, shells: _Components, volume: float) ->
         volume = triangle_moments(triangles[members]).volume
         out.append(Shell(int(sizes[label]), int(members[0]), float(volume)))
     return out
+
+
+# --- verdicts --------------------------------------------------------------------------------
+
+#: The checks ``p3d check --require`` can ask for, and what each needs.
+CHECKS = {
+    "closed": "every edge used by exactly two faces, in opposite directions",
+    "oriented": "no edge used twice in the same direction",
+    "outward": "positive total signed volume (faces wound counter-clockwise seen from outside)",
+    "manifold": "no edge used by more than two faces, no vertex joining separate fans of faces",
+    "no-degenerate": "no face with zero area or a repeated vertex",
+    "no-duplicate": "no two faces with the same three vertices",
+}
+
+
+def passes(report: TopologyReport, check: str) -> bool:
+    """Whether ``report`` passes the named check (a key of ``CHECKS``)."""
+    if check == "closed":
+        return report.closed
+    if check == "oriented":
+        return report.oriented
+    if check == "outward":
+        return report.volume > 0
+    if check == "manifold":
+        return report.manifold
+    if check == "no-degenerate":
+        return report.degenerate_faces == 0
+    if check == "no-duplicate":
+        return report.duplicate_faces == 0
+    raise KeyError(check)
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One mesh's verdict.
+
+    Attributes
+    ----------
+    source : str
+    format : str
+    report : TopologyReport
+    required : tuple of str
+        The checks asked for (keys of ``CHECKS``).
+    failed : tuple of str
+        The required checks that failed, then ``min-volume`` / ``max-faces`` if a limit was
+        broken.
+    """
+
+    source: str
+    format: str
+    report: TopologyReport
+    required: tuple[str, ...]
+    failed: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+
+def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
+                 max_faces: int | None = None) -> CheckResult:
+    """Check a loaded mesh against the required checks and limits.
+
+    Parameters
+    ----------
+    mesh : p3d_cli.io.MeshSource
+    source : str
+        The input's name (``-`` for standard input).
+    required : iterable of str
+        Keys of ``CHECKS``.
+    min_volume : float, optional
+        Fail when the total signed volume is below this.
+    max_faces : int, optional
+        Fail when the mesh has more faces than this.
+
+    Raises
+    ------
+    InputError
+        A volume mesh, no faces, or a NaN or infinite coordinate.
+    """
+    from p3d_cli.errors import InputError
+
+    where = "<stdin>" if source == "-" else source
+    if mesh.tetrahedra is not None:
+        raise InputError(where, "is a volume (tetrahedral) mesh; p3d check inspects triangle surfaces",
+                         "export the boundary surface")
+    triangles = mesh.triangles()
+    if len(triangles) == 0:
+        raise InputError(where, "the mesh has no faces", "export it again with its faces")
+    finite = np.isfinite(triangles).reshape(len(triangles), -1).all(axis=1)
+    if not finite.all():
+        bad = int(np.flatnonzero(~finite)[0])
+        raise InputError(where, f"face {bad} has a NaN or infinite coordinate", "repair or re-export the mesh")
+    report = topology(triangles)
+    required = tuple(required)
+    failed = [name for name in required if not passes(report, name)]
+    if min_volume is not None and not report.volume >= min_volume:
+        failed.append("min-volume")
+    if max_faces is not None and report.faces > max_faces:
+        failed.append("max-faces")
+    return CheckResult(source, mesh.format, report, required, tuple(failed))
