@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import functools
+
 import click
 
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import run_each
-from p3d_cli.cli.main_support import error_line
-from p3d_cli.cli.options import VECTOR3, density_options, format_option, inputs_argument, json_option, strict_option
+from p3d_cli.cli.batch import Batch
+from p3d_cli.cli.options import VECTOR3, batch_options, density_options, format_option, inputs_argument, json_option, strict_option
 from p3d_cli.errors import CheckFailedError, UsageError
 from p3d_cli.props import mesh_props
 
@@ -33,7 +34,8 @@ from p3d_cli.props import mesh_props
               help="Monte Carlo random seed (default 0): the same seed gives the same numbers.")
 @click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
               help="Monte Carlo: pick the sample count for this relative standard error of the volume.")
-def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance):
+@batch_options
+def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -51,8 +53,6 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
       cat part.stl | p3d props - --format stl
       p3d props part.stl --method montecarlo --samples 1000000 --seed 7 --json
     """
-    if not inputs:
-        raise UsageError("p3d props", "no input given", "name a mesh file, a directory, or - for standard input")
     if density is not None and mass is not None:
         raise UsageError("--mass/--density", "both given", "give one: the other follows from the volume")
     failed = warned = False
@@ -60,26 +60,30 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
         raise UsageError("--samples/--seed/--tolerance", "given without --method montecarlo",
                          "add --method montecarlo, or drop them")
 
-    def compute(src):
-        if method == "montecarlo":
-            from p3d_cli.montecarlo import montecarlo_props
-            return montecarlo_props(src, samples=samples, seed=seed, tolerance=tolerance, fmt=fmt,
-                                    density=density, mass=mass, about=about)
-        return mesh_props(src, fmt=fmt, density=density, mass=mass, about=about)
-
-    for outcome in run_each(inputs, compute):
+    if batch.csv and (as_json or fields):
+        raise UsageError("--csv", "given with --json or --field", "choose one output format")
+    run = Batch("p3d props", inputs, batch)
+    compute = functools.partial(compute_props, method=method, samples=samples, seed=seed,
+                                tolerance=tolerance, fmt=fmt, density=density, mass=mass, about=about)
+    if batch.csv:
+        click.echo(output.csv_line(output.PROPS_CSV_COLUMNS))
+    for outcome in run.outcomes(compute):
         if outcome.error is not None:
             failed = True
-            error_line(outcome.error.message)
-            if as_json:
-                click.echo(output.dumps({"source": outcome.source, "error": outcome.error.message}))
+            run.error(outcome)
+            if as_json or batch.csv:
+                record = {"source": outcome.source, "error": outcome.error.message}
+                click.echo(output.csv_line(output.props_row(record)) if batch.csv else output.dumps(record))
             continue
         result = outcome.result
         for text in result.warnings:
-            click.echo(f"p3d: warning: {result.facts.source}: {text}", err=True)
+            run.note(f"p3d: warning: {result.facts.source}: {text}")
         warned = warned or bool(result.warnings)
+        run.fail() if strict and result.warnings else run.passed()
         record = output.props_record(result)
-        if fields:
+        if batch.csv:
+            click.echo(output.csv_line(output.props_row(record)))
+        elif fields:
             values = []
             for name in fields:
                 try:
@@ -92,8 +96,18 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
             click.echo(output.dumps(record))
         else:
             click.echo(output.props_table(result))
+    status = run.finish("with warnings (--strict)")
     if failed:
-        raise click.exceptions.Exit(2)
+        raise click.exceptions.Exit(status)
     if strict and warned:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
+
+
+def compute_props(src, *, method, samples, seed, tolerance, fmt, density, mass, about):
+    """One input's ``PropsResult`` (module level, so that worker processes can receive it)."""
+    if method == "montecarlo":
+        from p3d_cli.montecarlo import montecarlo_props
+        return montecarlo_props(src, samples=samples, seed=seed, tolerance=tolerance, fmt=fmt,
+                                density=density, mass=mass, about=about)
+    return mesh_props(src, fmt=fmt, density=density, mass=mass, about=about)
