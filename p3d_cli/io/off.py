@@ -1,11 +1,168 @@
-"""OFF reader (temporary: being written)."""
+"""Object File Format (OFF, with its COFF/NOFF/STOFF variants).
 
-from p3d_cli.errors import UnknownFormatError
+``OFF`` (the counts ``nv nf [ne]`` may follow on the same line), then ``nv`` vertex lines
+(``x y z`` plus normals, colours or texture coordinates in the variants) and ``nf`` face lines
+``k i1 .. ik`` (0-based, optionally followed by a colour). ``#`` starts a comment and blank
+lines are allowed anywhere. Polygons are split as fans from their first vertex; coordinates are
+parsed as float64.
+
+One record per line is what every writer does and what this reader requires, so each line's
+extra values can be told from the next record's. The lines are parsed all at once: a sentinel
+after every line marks where each line's numbers end.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from p3d_cli.errors import FormatError, InputError
+from p3d_cli.io.obj import fan_triangles
+from p3d_cli.io.raw import RawInput
+from p3d_cli.io.source import MeshSource, indexed_source
+
+_KEYWORD = re.compile(rb"^(ST)?C?N?(4)?(n)?OFF$")
+_COMMENT = re.compile(rb"#[^\n]*")
+_HINT = "fix the file or export it again"
 
 
-def looks_like_obj(head: bytes) -> bool:
-    return False
+def load(raw: RawInput) -> MeshSource:
+    """Read an OFF file.
+
+    Raises
+    ------
+    FormatError
+        Bad header, counts claiming more lines than the file holds, malformed lines, or a face
+        index out of range (with the line number).
+    InputError
+        No faces.
+    """
+    data = raw.read_all()
+    if b"\r" in data:
+        data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    if b"#" in data:
+        data = _COMMENT.sub(b"", data)  # keeps the newlines, so line numbers stay right
+    numbered = [(n, line) for n, line in enumerate(data.split(b"\n"), start=1) if line.strip()]
+    if not numbered:
+        raise FormatError(raw.where, "the file holds no OFF data", _HINT)
+    nv, nf, body = _header(raw.where, numbered)
+    if nf == 0:
+        raise InputError(raw.where, f"no faces (the OFF header declares {nv} vertices and 0 faces)",
+                         "export the mesh with its faces, not as a point cloud")
+    if len(body) < nv + nf:
+        raise FormatError(raw.where, f"the header declares {nv} vertices and {nf} faces ({nv + nf} lines) but "
+                          f"only {len(body)} lines follow", "the file is truncated; export it again")
+    vertices = _vertices(raw.where, body[:nv])
+    faces = _faces(raw.where, body[nv:nv + nf], nv)
+    warnings = ()
+    if len(body) > nv + nf:
+        warnings = (f"{len(body) - nv - nf} lines after the last face were ignored",)
+    return indexed_source("off", vertices, faces, "float64", warnings)
 
 
-def load(raw):
-    raise UnknownFormatError(raw.where, "OFF reading is not available yet", "use STL")
+def _header(where: str, numbered: list[tuple[int, bytes]]):
+    number, line = numbered[0]
+    words = line.split()
+    match = _KEYWORD.match(words[0])
+    if not match:
+        raise FormatError(f"{where}: line {number}", f"expected an 'OFF' header, found {words[0][:20]!r}",
+                          "the file is not an OFF file")
+    if match.group(2) or match.group(3):
+        raise FormatError(f"{where}: line {number}", f"{words[0].decode()} (4-D or n-D vertices) is not supported",
+                          "convert the mesh to 3-D OFF, OBJ or PLY")
+    rest = numbered[1:]
+    counts = words[1:]
+    if not counts:
+        if not rest:
+            raise FormatError(where, "the file ends after the 'OFF' line", "the file is truncated")
+        number, line = rest[0]
+        counts = line.split()
+        rest = rest[1:]
+    try:
+        if len(counts) not in (2, 3):
+            raise ValueError
+        values = [int(c) for c in counts]
+        if min(values) < 0:
+            raise ValueError
+    except ValueError:
+        text = b" ".join(counts).decode("utf-8", "replace")[:60]
+        raise FormatError(f"{where}: line {number}", f"expected the counts 'vertices faces edges', found {text!r}",
+                          _HINT) from None
+    return values[0], values[1], rest
+
+
+def _per_line(lines: list[bytes], dtype, sentinel):
+    """All numbers of ``lines`` and each line's count, or None if a word is not a number."""
+    marker = b" nan " if dtype is np.float64 else b" -1 "
+    text = (marker + b"\n").join(lines) + marker
+    try:
+        numbers = np.fromstring(text, dtype=dtype, sep=" ")
+    except ValueError:
+        return None
+    ends = np.flatnonzero(np.isnan(numbers) if dtype is np.float64 else numbers == sentinel)
+    if ends.size != len(lines):
+        return None
+    return numbers, np.diff(ends, prepend=-1) - 1, ends - (np.diff(ends, prepend=-1) - 1)
+
+
+def _bad_line(where: str, numbered, what: str):
+    """The first of ``numbered`` lines that fails ``what``'s shape, as a FormatError."""
+    for number, line in numbered:
+        words = line.split()
+        try:
+            [float(w) for w in words]
+        except ValueError:
+            text = line.decode("utf-8", "replace").strip()[:60]
+            return FormatError(f"{where}: line {number}", f"expected {what}, found {text!r}", _HINT)
+    return FormatError(where, f"malformed {what} lines", _HINT)
+
+
+def _vertices(where: str, numbered) -> np.ndarray:
+    if not numbered:
+        return np.zeros((0, 3))
+    parsed = _per_line([line for _, line in numbered], np.float64, None)
+    if parsed is None:
+        raise _bad_line(where, numbered, "a vertex 'x y z'")
+    numbers, counts, starts = parsed
+    short = np.flatnonzero(counts < 3)
+    if short.size:
+        number, line = numbered[int(short[0])]
+        raise FormatError(f"{where}: line {number}", f"expected a vertex 'x y z', found "
+                          f"{line.decode('utf-8', 'replace').strip()[:60]!r}", _HINT)
+    if np.isnan(numbers).sum() != len(numbered):
+        bad = int(np.searchsorted(starts + counts, np.flatnonzero(np.isnan(numbers))[0]))
+        raise FormatError(f"{where}: line {numbered[min(bad, len(numbered) - 1)][0]}", "a NaN vertex coordinate",
+                          _HINT)
+    return numbers[starts[:, None] + np.arange(3)]
+
+
+def _faces(where: str, numbered, vertex_count: int) -> np.ndarray:
+    lines = [line for _, line in numbered]
+    parsed = _per_line(lines, np.int64, -1)
+    if parsed is None:
+        # Colours after the indices may be floats (or a -1 is among the numbers): parse as float.
+        parsed = _per_line(lines, np.float64, None)
+        if parsed is None:
+            raise _bad_line(where, numbered, "a face 'k i1 .. ik'")
+    numbers, counts, starts = parsed
+    sizes = numbers[starts]
+    bad = np.flatnonzero((counts < 1) | (sizes < 3) | (sizes > counts - 1) | (sizes != np.floor(sizes)))
+    if bad.size:
+        number, line = numbered[int(bad[0])]
+        raise FormatError(f"{where}: line {number}", "expected a face 'k i1 .. ik' with k >= 3, found "
+                          f"{line.decode('utf-8', 'replace').strip()[:60]!r}", _HINT)
+    sizes = sizes.astype(np.int64)
+    owner = np.repeat(np.arange(len(sizes)), sizes)
+    offset = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    corners = numbers[starts[owner] + 1 + offset]
+    wrong = (corners < 0) | (corners >= vertex_count) | (corners != np.floor(corners))
+    if wrong.any():
+        first = int(np.flatnonzero(wrong)[0])
+        number = numbered[int(owner[first])][0]
+        value = corners[first]
+        shown = int(value) if value == np.floor(value) else float(value)
+        raise FormatError(f"{where}: line {number}", f"face index {shown} is out of range: the file has "
+                          f"{vertex_count} vertices (indices 0 to {vertex_count - 1})",
+                          "fix the face or export the mesh again")
+    return fan_triangles(corners.astype(np.int64), sizes)
