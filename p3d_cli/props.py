@@ -108,9 +108,14 @@ def exact_uncertainty(moments: Moments, props) -> dict | None:
     density = abs(props.density)
     central = errors.central * density
     inertia = np.abs(np.trace(central)) * np.eye(3) + central
-    out["center_of_mass"] = errors.center
-    out["inertia"] = inertia
-    out["mass"] = errors.volume * density
+    # The last roundings happen after the sums: the centre is ``origin + offset`` (half an ulp
+    # of the centre, which dominates far from the world origin: nothing finer is representable),
+    # and mass, second moments and ``tr(S) E - S`` round a few more times.
+    eps = np.finfo(np.float64).eps
+    second = np.abs(props.second_moments)
+    out["center_of_mass"] = errors.center + np.spacing(np.abs(props.center_of_mass))
+    out["inertia"] = inertia + 4 * eps * (np.trace(second) * np.eye(3) + second)
+    out["mass"] = errors.volume * density + float(np.spacing(abs(props.mass)))
     return out
 
 
