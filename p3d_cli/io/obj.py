@@ -359,7 +359,8 @@ def _parse_lines(where: str, data: bytes):
             for word in words[1:]:
                 parts = word.split(b"/")
                 try:
-                    if len(parts) > 3 or any(p and int(p) == 0 for p in parts[1:]):
+                    shape_ok = len(parts) == 1 or (len(parts) == 2 and parts[1]) or (len(parts) == 3 and parts[2])
+                    if not shape_ok or any(p and int(p) == 0 for p in parts[1:]):
                         raise ValueError
                     index = int(parts[0])
                 except ValueError:

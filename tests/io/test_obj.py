@@ -1,0 +1,251 @@
+"""The OBJ reader: every statement form, fan order, relative indices, strict errors, real data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from p3d_cli.errors import FormatError, InputError
+from p3d_cli.io import load_mesh, obj
+from p3d_cli.io.raw import open_input
+from p3d_cli.props import mesh_props
+
+# A unit cube [0, 1]^3 as six outward quads (1-based, as OBJ writes them).
+CUBE_V = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+CUBE_QUADS = [(1, 4, 3, 2), (5, 6, 7, 8), (1, 2, 6, 5), (2, 3, 7, 6), (3, 4, 8, 7), (4, 1, 5, 8)]
+
+
+def write(tmp_path: Path, text: str, name: str = "m.obj", newline: str = "\n") -> str:
+    path = tmp_path / name
+    path.write_bytes(text.replace("\n", newline).encode())
+    return str(path)
+
+
+def cube_text(face=lambda q: "f " + " ".join(map(str, q))) -> str:
+    lines = ["# cube", "mtllib cube.mtl", "o cube"]
+    lines += [f"v {x} {y} {z}" for x, y, z in CUBE_V]
+    lines += ["g sides", "usemtl steel", "s off"]
+    lines += [face(q) for q in CUBE_QUADS]
+    return "\n".join(lines) + "\n"
+
+
+def canonical(triangles: np.ndarray) -> list:
+    """Triangles as sorted tuples of corner tuples, each rotated to start at its least corner
+    (keeps the winding, forgets which corner is first and the order of triangles)."""
+    out = []
+    for tri in np.asarray(triangles, dtype=np.float64).tolist():
+        corners = [tuple(c) for c in tri]
+        i = corners.index(min(corners))
+        out.append(tuple(corners[i:] + corners[:i]))
+    return sorted(out)
+
+
+def test_quads_split_as_fans_from_first_vertex(tmp_path):
+    mesh = load_mesh(write(tmp_path, cube_text()))
+    assert mesh.format == "obj" and mesh.coordinate_dtype == "float64"
+    assert mesh.face_count == 12
+    tris = mesh.triangles()
+    v = np.array(CUBE_V, dtype=float)
+    expected = []
+    for q in CUBE_QUADS:
+        a, b, c, d = (np.array(q) - 1).tolist()
+        expected += [v[[a, b, c]], v[[a, c, d]]]
+    np.testing.assert_array_equal(tris, np.array(expected))
+
+
+def test_cube_volume_and_inertia_exact(tmp_path):
+    props = mesh_props(write(tmp_path, cube_text())).properties
+    assert props.volume == pytest.approx(1.0, rel=1e-15)
+    np.testing.assert_allclose(props.center_of_mass, [0.5, 0.5, 0.5], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(props.inertia, np.eye(3) / 6, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("form", ["{i}", "{i}/{i}", "{i}//{i}", "{i}/{i}/{i}"])
+def test_corner_forms_give_the_same_triangles(tmp_path, form):
+    text = cube_text(lambda q: "f " + " ".join(form.format(i=i) for i in q))
+    text = text.replace("g sides", "vt 0 0\nvt 1 0\nvn 0 0 1\ng sides")
+    text += "".join(f"vt {i} 0\nvn 0 {i} 0\n" for i in range(10))  # enough for every index
+    plain = load_mesh(write(tmp_path, cube_text(), "plain.obj")).triangles()
+    np.testing.assert_array_equal(load_mesh(write(tmp_path, text)).triangles(), plain)
+    assert obj._parse_fast(text.encode()) is not None  # the vectorised path handles every form
+
+
+def test_mixed_corner_forms_and_sizes_use_careful_path_correctly(tmp_path):
+    text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1/1 2/2/2 3//3 4\nf 1 2 5\n"
+    tris = load_mesh(write(tmp_path, text)).triangles()
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    np.testing.assert_array_equal(tris, v[[[0, 1, 2], [0, 2, 3], [0, 1, 4]]])
+
+
+def test_ngon_fan_order_matches_trimesh(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    n = 22  # FACTS.md: 22-sided faces are seen in the wild
+    angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = [f"v {float(np.cos(a))!r} {float(np.sin(a))!r} 0" for a in angles]
+    text = "\n".join(ring + ["v 0 0 1", "f " + " ".join(str(i) for i in range(n, 0, -1))]
+                     + [f"f {i + 1} {i % n + 2 if i + 1 < n else 1} {n + 1}" for i in range(n)]) + "\n"
+    path = write(tmp_path, text)
+    ours = load_mesh(path).triangles()
+    assert len(ours) == (n - 2) + n
+    # Ours is the fan (v0, vi, vi+1) in file order.
+    polygon = [n - 1 - k for k in range(n)]
+    v = np.array([[np.cos(a), np.sin(a), 0] for a in angles] + [[0, 0, 1]])
+    fan = [v[[polygon[0], polygon[i], polygon[i + 1]]] for i in range(1, n - 1)]
+    np.testing.assert_array_equal(ours[:n - 2], np.array(fan))
+    theirs = trimesh.load(path, process=False, force="mesh")
+    assert canonical(ours) == canonical(theirs.triangles)
+
+
+def test_quads_match_trimesh_triangulation_on_real_spot(real_meshes):
+    trimesh = pytest.importorskip("trimesh")
+    path = str(real_meshes / "common3d__spot_quadrangulated.obj")
+    theirs = trimesh.load(path, process=False, force="mesh", maintain_order=True)
+    assert canonical(load_mesh(path).triangles()) == canonical(theirs.triangles)
+
+
+def test_negative_indices_are_relative_to_the_face_line(tmp_path):
+    text = ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
+            "v 5 5 5\nv 6 5 5\nv 5 6 5\nf -3 -2 -1\nf 1 -2 -1\n")
+    tris = load_mesh(write(tmp_path, text)).triangles()
+    np.testing.assert_array_equal(tris[0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(tris[1], [[5, 5, 5], [6, 5, 5], [5, 6, 5]])
+    np.testing.assert_array_equal(tris[2], [[0, 0, 0], [6, 5, 5], [5, 6, 5]])
+
+
+def test_negative_indices_with_slashes_match_positive(tmp_path):
+    pos = cube_text(lambda q: "f " + " ".join(f"{i}/1/1" for i in q))
+    neg = cube_text(lambda q: "f " + " ".join(f"{i - 9}/1/1" for i in q))  # 8 vertices before
+    a = load_mesh(write(tmp_path, pos.replace("g sides", "vt 0 0\nvn 0 0 1\ng sides"), "p.obj")).triangles()
+    b = load_mesh(write(tmp_path, neg.replace("g sides", "vt 0 0\nvn 0 0 1\ng sides"), "n.obj")).triangles()
+    np.testing.assert_array_equal(a, b)
+
+
+def test_crlf_comments_w_and_continuations(tmp_path):
+    crlf = load_mesh(write(tmp_path, cube_text(), "crlf.obj", newline="\r\n")).triangles()
+    plain = load_mesh(write(tmp_path, cube_text(), "plain.obj")).triangles()
+    np.testing.assert_array_equal(crlf, plain)
+    text = cube_text().replace("v 1 1 1", "v 1 1 1 1.0  # with w and a comment")
+    text = text.replace("f 5 6 7 8", "f 5 6 \\\n 7 8")
+    np.testing.assert_array_equal(load_mesh(write(tmp_path, text, "odd.obj")).triangles(), plain)
+
+
+def test_decimal_text_parsed_as_float64(tmp_path):
+    text = "v 0.1 0.2 0.3\nv 1e-3 2.5E+2 -0\nv 0.30000000000000004 1 1\nf 1 2 3\n"
+    tris = load_mesh(write(tmp_path, text)).triangles()
+    assert tris.dtype == np.float64
+    assert tris[0, 0].tolist() == [0.1, 0.2, 0.3]
+    assert tris[0, 2, 0] == 0.30000000000000004
+
+
+def test_unknown_statement_is_ignored_with_a_warning(tmp_path):
+    mesh = load_mesh(write(tmp_path, cube_text() + "cstype bspline\n"))
+    assert mesh.face_count == 12
+    assert any("cstype" in w for w in mesh.warnings)
+
+
+def test_looks_like_obj():
+    assert obj.looks_like_obj(b"# comment\n\nv 1 2 3\n")
+    assert obj.looks_like_obj(b"mtllib a.mtl\no x\n")
+    assert not obj.looks_like_obj(b"solid x\nfacet normal 0 0 0\n")
+    assert not obj.looks_like_obj(b"v 1 2 3\0\0")
+
+
+# --- errors ------------------------------------------------------------------------------
+
+def raises(tmp_path, text, kind=FormatError):
+    with pytest.raises(kind) as info:
+        load_mesh(write(tmp_path, text))
+    return info.value
+
+
+def test_index_out_of_range_names_line_and_index(tmp_path):
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\n# c\nf 1 2 3\nf 1 2 7\n")
+    assert "line 6" in err.where and "7" in err.what and "3 vertices" in err.what and err.hint
+
+
+def test_index_out_of_range_with_slashes(tmp_path):
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 9/1\n")
+    assert "line 5" in err.where and "9" in err.what
+
+
+def test_relative_index_before_first_vertex(tmp_path):
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n")
+    assert "line 3" in err.where and "-3" in err.what
+
+
+def test_index_zero(tmp_path):
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
+    assert "line 4" in err.where and "0" in err.what
+
+
+def test_no_faces_is_input_error(tmp_path):
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\n", InputError)
+    assert not isinstance(err, FormatError)
+    assert "no faces" in err.what and "3 vertices" in err.what
+
+
+@pytest.mark.parametrize("text, line, word", [
+    ("v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 1, "v X Y Z"),
+    ("v 0 0 0\nv 1 0 x\nv 0 1 0\nf 1 2 3\n", 2, "v X Y Z"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", 4, "at least 3"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n", 4, "3a"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/ 2/3 3\n", 4, None),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\n12 13 14\nf 1 2 3\n", 4, "unexpected"),
+])
+def test_malformed_lines_name_the_line(tmp_path, text, line, word):
+    err = raises(tmp_path, text)
+    assert f"line {line}" in err.where
+    if word:
+        assert word in err.what
+
+
+def test_malformed_corner_after_slash(tmp_path):
+    # 'f 1/ 2/3 3' is not a valid corner list; it must not be read as two corners.
+    err = raises(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/0 2/1 3/1\n")
+    assert "line 5" in err.where
+
+
+def test_binary_garbage(tmp_path):
+    path = tmp_path / "g.obj"
+    path.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(FormatError) as info:
+        load_mesh(str(path))
+    assert "line 1" in info.value.where
+
+
+def test_fast_and_careful_paths_agree(tmp_path):
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(50, 3))
+    sizes = rng.integers(3, 7, size=40)
+    faces = [rng.choice(50, size=k, replace=False) + 1 for k in sizes]
+    text = "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist())
+    text += "".join("f " + " ".join(f"{i}/{i}/{i}" for i in f) + "\n" for f in faces)
+    raw = open_input(write(tmp_path, text))
+    data = raw.read_all()
+    fast = obj._parse_fast(data)
+    assert fast is not None
+    careful = obj._parse_lines(raw.where, data)
+    np.testing.assert_array_equal(fast[0], careful[0])
+    np.testing.assert_array_equal(fast[1], careful[1])
+    assert len(fast[1]) == int((sizes - 2).sum())
+
+
+# --- real meshes -------------------------------------------------------------------------
+
+def check_reference(result, ref):
+    p = result.properties
+    assert abs(p.volume - ref["volume"]) <= 1e-12 * abs(ref["volume"])
+    diagonal = np.linalg.norm(np.subtract(ref["bounds_max"], ref["bounds_min"]))
+    assert np.linalg.norm(p.center_of_mass - ref["center_mass"]) <= 1e-12 * diagonal
+    inertia = np.array(ref["inertia_com"])
+    assert np.linalg.norm(p.inertia - inertia) <= 1e-12 * np.linalg.norm(inertia)
+
+
+def test_real_obj_matches_reference(real_meshes, reference):
+    name = "common3d__spot_quadrangulated.obj"
+    path = str(real_meshes / name)
+    mesh = load_mesh(path)
+    assert mesh.format == "obj" and mesh.face_count == reference[name]["faces"]
+    check_reference(mesh_props(path), reference[name])
