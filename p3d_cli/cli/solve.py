@@ -144,4 +144,4 @@ def solve_table(where: str, result: SolveResult) -> str:
 
 
 def _short_vector(v) -> str:
-    return "[" + ", ".join(f"{float(x):.6g}" for x in v) + "]"
+    return "[" + ", ".join(f"{float(x) + 0.0:.6g}" for x in v) + "]"  # + 0.0: no "-0"
