@@ -123,7 +123,8 @@ def face_grid(triangles: np.ndarray, origin=None, scale=None, axis: int | None =
     else:
         plo, phi = np.zeros(2), np.ones(2)
     extent = np.maximum(phi - plo, 1e-300)
-    target = max(1.0, cells_per_face * n)
+    # Small meshes still get a fine grid: large faces then cost little per query point.
+    target = max(1024.0, cells_per_face * n)
     while True:
         side = np.sqrt(extent[0] * extent[1] / target)
         shape = np.clip(np.ceil(extent / max(side, 1e-300)), 1, max(1, int(target))).astype(np.int64)
