@@ -13,8 +13,8 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.closed import closed_exact, corner_hashes, directed_edge_keys, keys_pair_up
-from p3d_cli.mesh.integrals import MomentSums, local_origin, tetrahedron_moments
+from p3d_cli.mesh.closed import closed_exact, column_edge_keys, keys_pair_up
+from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_moments
 from p3d_cli.results import Bounds, Moments
 
 
@@ -64,22 +64,28 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
     keys = np.empty(3 * source.face_count, dtype=np.uint64) if closed else None
     filled = seen = 0
     for block in source.read_blocks():
-        if not np.isfinite(block).all():
-            bad = int(np.flatnonzero(~np.isfinite(block).reshape(len(block), -1).all(axis=1))[0])
+        # One widening copy per block, in the layout the integrals want; everything else
+        # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
+        # file records.
+        cols = columns(block)
+        block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
+        # min and max propagate NaN and show any infinity: a finite check for free.
+        if not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
+            bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
             raise InputError(where, f"face {seen + bad} has a NaN or infinite coordinate",
                              "repair or re-export the mesh")
         if sums is None:
-            sums = MomentSums(local_origin(block))
-            lo, hi = block.reshape(-1, 3).min(axis=0), block.reshape(-1, 3).max(axis=0)
+            float32 = np.asarray(block).dtype == np.float32
+            sums = MomentSums(origin_from_bounds(block_lo, block_hi, float32))
+            lo, hi = block_lo, block_hi
         else:
-            flat = block.reshape(-1, 3)
-            lo, hi = np.minimum(lo, flat.min(axis=0)), np.maximum(hi, flat.max(axis=0))
-        sums.add_triangles(block)
+            lo, hi = np.minimum(lo, block_lo), np.maximum(hi, block_hi)
         if keys is not None:
-            block_keys = directed_edge_keys(corner_hashes(block))
+            block_keys = column_edge_keys(cols)     # before the sums shift cols in place
             keys[filled:filled + block_keys.size] = block_keys
             filled += block_keys.size
-        seen += len(block)
+        sums.add_columns(cols)
+        seen += cols.shape[2]
     if seen != source.face_count:
         raise FormatError(where, f"expected {source.face_count} faces but read {seen}",
                           "the file is truncated or corrupt; export it again")

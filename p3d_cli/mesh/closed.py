@@ -19,13 +19,22 @@ _M2 = np.uint64(0x94D049BB133111EB)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 
-def _mix(z: np.ndarray) -> np.ndarray:
-    """The splitmix64 finalizer, in place on a uint64 array (wrapping arithmetic)."""
-    z ^= z >> np.uint64(30)
+_S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
+_ONE = np.uint64(1)
+
+
+def _mix(z: np.ndarray, scratch: np.ndarray | None = None) -> np.ndarray:
+    """The splitmix64 finalizer, in place on a uint64 array (wrapping arithmetic).
+
+    ``scratch``, an array like ``z``, saves the three temporaries of the shifts.
+    """
+    if scratch is None:
+        scratch = np.empty_like(z)
+    z ^= np.right_shift(z, _S30, out=scratch)
     z *= _M1
-    z ^= z >> np.uint64(27)
+    z ^= np.right_shift(z, _S27, out=scratch)
     z *= _M2
-    z ^= z >> np.uint64(31)
+    z ^= np.right_shift(z, _S31, out=scratch)
     return z
 
 
@@ -48,6 +57,49 @@ def corner_hashes(triangles: np.ndarray) -> np.ndarray:
     h = _mix(h)
     h ^= bits[..., 2]
     return _mix(h)
+
+
+def column_edge_keys(columns: np.ndarray) -> np.ndarray:
+    """``directed_edge_keys(corner_hashes(triangles))`` for triangles given as columns.
+
+    The same keys (in another order, which the sort makes irrelevant), computed with reused
+    buffers from the layout the one-pass analysis already holds.
+
+    Parameters
+    ----------
+    columns : (3, 3, n) float64
+        Vertex slot, axis, triangle; exact world coordinates (not shifted).
+
+    Returns
+    -------
+    (m,) uint64
+    """
+    n = columns.shape[2]
+    scratch = np.empty((3, n), dtype=np.uint64)
+    # Same hash as corner_hashes: mix(mix(mix(x ^ G) ^ y) ^ z) of the float64 bits, after
+    # adding 0.0 so that -0.0 and 0.0 hash alike.
+    coord = np.empty((3, n))
+    h = np.add(columns[:, 0], 0.0, out=coord).view(np.uint64).copy()
+    h ^= _GOLDEN
+    _mix(h, scratch)
+    h ^= np.add(columns[:, 1], 0.0, out=coord).view(np.uint64)
+    _mix(h, scratch)
+    h ^= np.add(columns[:, 2], 0.0, out=coord).view(np.uint64)
+    _mix(h, scratch)
+    start, end = h, h[[1, 2, 0]]            # edges 0→1, 1→2, 2→0 of every triangle
+    if (start == end).any():                # rare: a degenerate edge bounds nothing
+        keep = start != end
+        start, end = start[keep], end[keep]
+        scratch = np.empty_like(start)
+    forward = start < end
+    key = np.minimum(start, end)
+    high = np.maximum(start, end, out=end)
+    key *= _GOLDEN
+    key += high
+    _mix(key, scratch)
+    key &= ~_ONE
+    key |= forward
+    return key.reshape(-1)
 
 
 def directed_edge_keys(hashes: np.ndarray) -> np.ndarray:
@@ -85,13 +137,16 @@ def keys_pair_up(keys: np.ndarray) -> bool:
     if keys.size == 0 or keys.size % 2:
         return False
     keys.sort()
-    first, second = keys[0::2], keys[1::2]
-    if not np.array_equal(first >> np.uint64(1), second >> np.uint64(1)):
-        return False
-    if (first & np.uint64(1)).any() or not (second & np.uint64(1)).all():
-        return False
-    # No edge used by a third face: the next pair must be a different edge.
-    return not bool(((first[1:] >> np.uint64(1)) == (second[:-1] >> np.uint64(1))).any())
+    pairs = keys.reshape(-1, 2)
+    # Each pair must be (2e, 2e + 1): one edge, direction 0 then 1. That also rules out a third
+    # use of an edge: sorted, the next pair starts at or above 2e + 1, and being even, above it.
+    # Checked in slices so that the temporaries stay small beside the keys (peak memory).
+    step = 1 << 18
+    for start in range(0, len(pairs), step):
+        first, second = pairs[start:start + step, 0], pairs[start:start + step, 1]
+        if (first & _ONE).any() or not np.array_equal(first + _ONE, second):
+            return False
+    return True
 
 
 def vertex_ids(points: np.ndarray) -> np.ndarray:

@@ -50,16 +50,36 @@ def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> np.ndarray:
     x1, y1, z1 = p1
     x2, y2, z2 = p2
     x3, y3, z3 = p3
-    det = x1 * (y2 * z3 - z2 * y3) + y1 * (z2 * x3 - x2 * z3) + z1 * (x2 * y3 - y2 * x3)
-    s = p1 + p2 + p3
-    out = np.empty((N_SUMS, det.shape[0]))
-    out[0] = det
+    n = x1.shape[0]
+    out = np.empty((N_SUMS, n))
+    # Every product goes into a reused buffer (out=...): the block is a few MB and fresh
+    # temporaries would cost page faults and cache misses, not arithmetic. The order of the
+    # operations, hence every rounding, is that of the plain expressions in the comments.
+    t = np.empty(n)
+    u = np.empty(n)
+    # det = x1 * (y2*z3 - z2*y3) + y1 * (z2*x3 - x2*z3) + z1 * (x2*y3 - y2*x3)
+    det = out[0]
+    np.multiply(y2, z3, out=det)
+    det -= np.multiply(z2, y3, out=t)
+    det *= x1
+    np.multiply(z2, x3, out=u)
+    u -= np.multiply(x2, z3, out=t)
+    u *= y1
+    det += u
+    np.multiply(x2, y3, out=u)
+    u -= np.multiply(y2, x3, out=t)
+    u *= z1
+    det += u
+    # s = p1 + p2 + p3
+    s = np.add(p1, p2)
+    s += p3
     np.multiply(det, s, out=out[1:4])
+    # q_ij = p1_i p1_j + p2_i p2_j + p3_i p3_j + s_i s_j, times det
     for row, (i, j) in enumerate(_PAIRS, start=4):
-        q = p1[i] * p1[j]
-        q += p2[i] * p2[j]
-        q += p3[i] * p3[j]
-        q += s[i] * s[j]
+        q = np.multiply(p1[i], p1[j], out=u)
+        q += np.multiply(p2[i], p2[j], out=t)
+        q += np.multiply(p3[i], p3[j], out=t)
+        q += np.multiply(s[i], s[j], out=t)
         np.multiply(q, det, out=out[row])
     return out
 
@@ -80,8 +100,20 @@ class MomentSums:
 
     def add_triangles(self, triangles: np.ndarray) -> None:
         """Add triangles ``(n, 3, 3)`` (any float dtype; widened to float64 before arithmetic)."""
-        local = _local_columns(triangles, self.origin)
-        self._add(tetra_terms(local[0], local[1], local[2]))
+        self.add_columns(columns(triangles))
+
+    def add_columns(self, columns: np.ndarray) -> None:
+        """Add triangles given as float64 columns, the layout the one-pass analysis reads into.
+
+        Parameters
+        ----------
+        columns : (3, 3, n) float64, C-contiguous
+            Vertex slot, axis, triangle; world coordinates. Overwritten: shifted in place to
+            the local origin (the caller has no further use for it, and a copy would cost a
+            pass over the block).
+        """
+        columns -= self.origin[None, :, None]
+        self._add(tetra_terms(columns[0], columns[1], columns[2]))
 
     def add_tetrahedra(self, tetrahedra: np.ndarray) -> None:
         """Add tetrahedra ``(n, 4, 3)``: each contributes its own signed volume integrals."""
@@ -105,7 +137,7 @@ class MomentSums:
         if n == 0:
             return
         self._totals.append(terms.sum(axis=1))
-        self._abs_totals.append(np.abs(terms).sum(axis=1))
+        self._abs_totals.append(np.abs(terms, out=terms).sum(axis=1))   # terms are not reused
         self.count += n
         self._longest_block = max(self._longest_block, n)
 
@@ -157,12 +189,21 @@ def _errors(volume, offset, bound, volume_error) -> MomentErrors:
     return MomentErrors(volume_error, center_error, central_error)
 
 
-def _local_columns(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """``points - origin`` in float64 as ``(k, 3, n)``: vertex slot, axis, element.
+def columns(points: np.ndarray) -> np.ndarray:
+    """A fresh float64 copy of ``points`` ``(n, k, 3)`` as ``(k, 3, n)``: vertex slot, axis, element.
 
-    Float32 input is widened first (FACTS.md: widen before any arithmetic).
+    Float32 input is widened (exactly) first (FACTS.md: widen before any arithmetic). Always a
+    new array, so callers may shift it in place.
     """
-    local = np.ascontiguousarray(np.asarray(points).transpose(1, 2, 0), dtype=np.float64)
+    points = np.asarray(points)
+    out = np.empty((points.shape[1], 3, points.shape[0]))
+    np.copyto(out, points.transpose(1, 2, 0))
+    return out
+
+
+def _local_columns(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """``points - origin`` in float64 as ``(k, 3, n)``: vertex slot, axis, element."""
+    local = columns(points)
     local -= origin[None, :, None]
     return local
 
@@ -213,7 +254,12 @@ def local_origin(points: np.ndarray) -> np.ndarray:
     flat = np.asarray(points).reshape(-1, 3)
     if flat.shape[0] == 0:
         return np.zeros(3)
-    center = 0.5 * (flat.min(axis=0).astype(np.float64) + flat.max(axis=0).astype(np.float64))
-    if flat.dtype == np.float32:
+    return origin_from_bounds(flat.min(axis=0), flat.max(axis=0), flat.dtype == np.float32)
+
+
+def origin_from_bounds(lo: np.ndarray, hi: np.ndarray, float32: bool) -> np.ndarray:
+    """``local_origin`` from the points' bounds (for callers that have them already)."""
+    center = 0.5 * (np.asarray(lo, dtype=np.float64) + np.asarray(hi, dtype=np.float64))
+    if float32:
         center = center.astype(np.float32).astype(np.float64)
     return center
