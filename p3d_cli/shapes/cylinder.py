@@ -6,7 +6,9 @@ Closed forms of the canonical cylinder (r = 1, z ∈ [-1, 1]): V = π·1²·2 = 
 
 Bounds (FACTS.md, "Rotated bounds"): the cylinder is the Minkowski sum of its axis segment
 ``±h a`` and its central disc, so along world axis i the half-extent is
-``|a_i| h + r sqrt(1 - a_i²)`` with ``a = R e_z`` the world axis direction.
+``|a_i| h + r sqrt(1 - a_i²)`` with ``a = R e_z`` the world axis direction (evaluated as
+``r sqrt(R_i0² + R_i1²)`` for the second term, which is the same for a rotation and does not
+cancel when |a_i| ≈ 1).
 """
 
 from __future__ import annotations
@@ -68,9 +70,11 @@ class Cylinder:
 
     def bounds(self, rotation=None, translation=None) -> Bounds:
         """Exact: half-extent i is ``|a_i| h + r sqrt(1 - a_i²)``, ``a = R e_z``."""
-        a = np.array([0.0, 0.0, 1.0]) if rotation is None else np.asarray(rotation, dtype=np.float64)[:, 2]
-        # 1 - a_i² can round below zero when |a_i| = 1; the clip only removes that rounding.
-        half = np.abs(a) * self.h + self.r * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+        r = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
+        # Row i of R is a unit vector, so 1 - a_i² = R_i0² + R_i1². The sum of squares is
+        # used because 1 - a_i² cancels catastrophically when |a_i| ≈ 1: for a_i = 1 - 2e-20
+        # it rounds to 0 where the true value is 2e-10 (found by the hypothesis tests).
+        half = np.abs(r[:, 2]) * self.h + self.r * np.sqrt(r[:, 0] ** 2 + r[:, 1] ** 2)
         t = np.zeros(3) if translation is None else np.asarray(translation, dtype=np.float64)
         return Bounds(t - half, t + half)
 
