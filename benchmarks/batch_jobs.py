@@ -1,0 +1,92 @@
+"""Does ``--jobs 2`` beat ``--jobs 1`` on a directory of a few hundred small meshes?
+
+Writes N binary STL spheres (icosphere, ~5k faces each, each moved and scaled differently)
+into a temporary directory, then times the whole command ``p3d props DIR --json --jobs J``
+(process start-up included, output to /dev/null) for J = 1 and 2, alternating the runs so
+that drift in the machine's load hits both alike, and prints the medians and their ratio.
+
+    python benchmarks/batch_jobs.py [--files 300] [--subdivisions 4] [--runs 5] [--command check]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def icosphere(subdivisions: int) -> np.ndarray:
+    """A unit icosphere as (n, 3, 3) float64 outward-wound triangles (n = 20 * 4**subdivisions)."""
+    t = (1 + 5 ** 0.5) / 2
+    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    tri = v[f] / np.linalg.norm(v[f], axis=2, keepdims=True)
+    for _ in range(subdivisions):
+        a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+        ab, bc, ca = ((p + q) / 2 for p, q in ((a, b), (b, c), (c, a)))
+        ab, bc, ca = (m / np.linalg.norm(m, axis=1, keepdims=True) for m in (ab, bc, ca))
+        tri = np.concatenate([np.stack(x, axis=1) for x in
+                              ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    return tri
+
+
+def write_binary_stl(path: str, triangles: np.ndarray) -> None:
+    records = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    records["v"] = triangles
+    with open(path, "wb") as f:
+        f.write(b"p3d benchmark".ljust(80))
+        f.write(np.uint32(len(triangles)).tobytes())
+        f.write(records.tobytes())
+
+
+def p3d_command() -> list[str]:
+    exe = shutil.which("p3d", path=os.path.dirname(sys.executable)) or shutil.which("p3d")
+    return [exe] if exe else [sys.executable, "-m", "p3d_cli"]
+
+
+def time_run(cmd: list[str]) -> float:
+    start = time.perf_counter()
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--files", type=int, default=300)
+    parser.add_argument("--subdivisions", type=int, default=4)
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--command", default="props", choices=["props", "check"])
+    args = parser.parse_args()
+
+    sphere = icosphere(args.subdivisions)
+    rng = np.random.default_rng(0)
+    with tempfile.TemporaryDirectory(prefix="p3d-bench-") as folder:
+        for i in range(args.files):
+            scale, shift = rng.uniform(0.5, 2.0), rng.uniform(-10, 10, size=3)
+            write_binary_stl(os.path.join(folder, f"part{i:04}.stl"), sphere * scale + shift)
+        base = p3d_command() + [args.command, folder, "--json"]
+        times: dict[int, list[float]] = {1: [], 2: []}
+        time_run(base + ["--jobs", "1"])  # warm the page cache and the imports
+        for _ in range(args.runs):
+            for jobs in (1, 2):
+                times[jobs].append(time_run(base + ["--jobs", str(jobs)]))
+        one, two = statistics.median(times[1]), statistics.median(times[2])
+        print(f"p3d {args.command}: {args.files} files x {len(sphere)} faces, {args.runs} alternating runs, "
+              f"{os.cpu_count()} cpus")
+        print(f"  --jobs 1: median {one:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[1])})")
+        print(f"  --jobs 2: median {two:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[2])})")
+        print(f"  speed-up --jobs 2 / --jobs 1: {one / two:.2f}x")
+
+
+if __name__ == "__main__":
+    main()
