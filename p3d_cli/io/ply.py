@@ -16,6 +16,7 @@ checked against the bytes (binary) or numbers (ASCII) actually present first.
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass
 
@@ -36,6 +37,7 @@ TYPES = {
 _FORMATS = {"ascii": None, "binary_little_endian": "<", "binary_big_endian": ">"}
 _FACE_LISTS = ("vertex_indices", "vertex_index")
 _MAX_HEADER = 1 << 20
+_END_HEADER = re.compile(rb"\nend_header[ \t]*(?:\r?\n|$)")
 _HINT = "the file is truncated or corrupt; export it again"
 
 
@@ -105,18 +107,18 @@ def parse_header(raw: RawInput) -> Header:
         Not a PLY file, no ``end_header``, unknown format or type, malformed lines.
     """
     head = raw.head(_MAX_HEADER)
-    end = head.find(b"end_header")
+    # The end_header line, not the words in a comment (binary data follows its newline).
+    found = _END_HEADER.search(head)
+    end = found.start() + 1 if found else -1
     if not head.startswith(b"ply") or end == -1:
         what = "not a PLY file (no 'ply' first line)" if not head.startswith(b"ply") else \
             f"no 'end_header' line in the first {len(head)} bytes"
         raise FormatError(raw.where, what, _HINT)
     newline = head.find(b"\n", end)
     if newline == -1:
-        newline = len(head) - 1
-    try:
-        text = head[:end].decode("ascii")
-    except UnicodeDecodeError:
-        raise FormatError(raw.where, "the PLY header holds non-ASCII bytes", _HINT) from None
+        newline = len(head)
+    # Keywords are ASCII; a comment in another encoding should not make the file unreadable.
+    text = head[:end].decode("ascii", "replace")
     if head[end:newline].strip() != b"end_header":
         raise FormatError(raw.where, "malformed 'end_header' line", _HINT)
     lines = text.replace("\r", "").split("\n")
@@ -250,8 +252,7 @@ def _binary_element(where: str, element: Element, data: bytes, offset: int, orde
         same = all((table[f"n{i}"] == n).all() for (i, n) in zip(_list_positions(element), lengths))
         if same:
             return _columns(element, table, wanted, lengths), offset + need
-    if not lengths:
-        raise FormatError(where, f"the file ends inside the {element.name} records", _HINT)
+    # Lists of varying length (or a first record that does not fit): walk record by record.
     return _walk_binary(where, element, data, offset, order, wanted)
 
 
@@ -345,7 +346,7 @@ def _read_ascii_lines(where: str, header: Header, data: bytes):
     if b"\r" in body:
         body = body.replace(b"\r", b" ")
     breaks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == 10)
-    total = header.elements and sum(e.size for e in header.elements)
+    total = sum(e.size for e in header.elements)
     if len(breaks) < total - 1 or b"\n\n" in body:
         return None
     starts = np.concatenate(([0], breaks + 1))

@@ -308,3 +308,10 @@ def test_real_ply_matches_reference(real_meshes, reference, name, dtype):
     assert mesh.format == "ply" and mesh.coordinate_dtype == dtype
     assert mesh.face_count == reference[name]["faces"]
     check_reference(mesh_props(path), reference[name])
+
+
+def test_header_words_in_comments_and_non_ascii_comments(tmp_path):
+    data = ply_bytes("binary_little_endian", cube_elements())
+    data = data.replace(b"comment made by p3d tests", "comment end_header here, by Jürgen".encode())
+    mesh = load_mesh(write(tmp_path, data))
+    assert mesh.face_count == 12
