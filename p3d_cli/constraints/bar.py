@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.constraints.rotation import cross
+
 from p3d_cli.errors import SceneError
 
 EQUATIONS = 1
@@ -34,8 +36,8 @@ def direction(geo) -> np.ndarray:
 def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
     """``(J_a, J_b)``, each (1, 6)."""
     d = direction(geo)
-    jb = np.concatenate([d, np.cross(geo.r_b, d)])[None, :]
-    ja = -np.concatenate([d, np.cross(geo.r_a, d)])[None, :]
+    jb = np.concatenate([d, cross(geo.r_b, d)])[None, :]
+    ja = -np.concatenate([d, cross(geo.r_a, d)])[None, :]
     return ja, jb
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.constraints import ball
+from p3d_cli.constraints.rotation import cross
 
 EQUATIONS = 5
 
@@ -38,7 +39,7 @@ def frame(geo) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     seed[int(np.argmin(np.abs(z)))] = 1.0
     x = seed - (seed @ z) * z
     x /= np.linalg.norm(x)
-    y = np.cross(z, x)
+    y = cross(z, x)
     return x, y, z, s
 
 
@@ -54,7 +55,7 @@ def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
 def position_error(spec, geo) -> np.ndarray:
     """(5,): the attachment gap, then the axis misalignment ``(z_a × s z_b)`` along ``x`` and ``y``."""
     x, y, _, s = frame(geo)
-    tilt = np.cross(geo.z_a, s * geo.z_b)
+    tilt = cross(geo.z_a, s * geo.z_b)
     return np.concatenate([geo.p_b - geo.p_a, [tilt @ x, tilt @ y]])
 
 

@@ -83,14 +83,27 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
         solution, geos = world.solve_velocities()
         worst = max((float(np.abs(e).max()) for e in world.position_residuals(geos)), default=0.0)
         return _result(world, solution, before, 0, 0.0, worst)
-    gravity = scene.gravity
-    worst = 0.0
-    solution = None
+    # RATTLE (Andersen 1983; Leimkuhler & Skeel 1994) with the velocity solve of eq. 20 as its
+    # velocity projection: half kick; drift; project positions back onto the constraints along
+    # the start-of-step constraint directions, crediting the correction to the velocities (so
+    # the step is the constrained one, not a dissipative pull-back); half kick; velocity solve at
+    # the new positions. Second order, and a pendulum's energy shows no drift, where projecting
+    # velocities only (symplectic Euler + projection) loses amplitude at O(dt).
+    # The scene is first assembled (joints brought together by a mass-weighted Newton
+    # projection, velocities untouched): a gap credited to the velocity would become a kick.
+    half_kick = 0.5 * dt * scene.gravity
+    worst, _, _ = world.correct_positions(tolerance)
+    solution, _ = world.solve_velocities()
     for step in range(1, steps + 1):
-        world.vel[world.active] += gravity * dt
-        solution, _ = world.solve_velocities()
+        frozen = world.frozen_rows()
+        world.vel[world.active] += half_kick
         world.drift(dt)
-        worst = max(worst, world.correct_positions(tolerance))
+        error, dx, dtheta = world.correct_positions(tolerance, frozen)
+        world.vel += dx / dt
+        world.omega += dtheta / dt
+        worst = max(worst, error)
+        world.vel[world.active] += half_kick
+        solution, _ = world.solve_velocities()
         if on_step is not None:
             on_step(step * dt, _bodies(world))
     return _result(world, solution, before, steps, steps * dt, worst)

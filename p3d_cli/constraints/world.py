@@ -119,24 +119,52 @@ class World:
         self.omega += dw
         return solution, geos
 
-    def correct_positions(self, tolerance: float, iterations: int = 3) -> float:
-        """Post-stabilisation: Newton steps on the position equations ``C(x) = 0`` with the same
-        mass-weighted system (``(J W Jᵀ) λ = -C``, displacement ``W Jᵀ λ``). Returns the largest
-        remaining position error."""
+    def correct_positions(self, tolerance: float, frozen=None, iterations: int = 8):
+        """Position projection onto ``C(x) = 0`` along mass-weighted constraint directions.
+
+        Parameters
+        ----------
+        tolerance : float
+            Stop once every position error is at most this.
+        frozen : (blocks, inv_inertia), optional
+            Constraint rows and world inverse inertia taken at the start of a time step. The
+            displacement is then ``W₀ J₀ᵀ λ`` with ``λ`` found by iterating
+            ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient projection, which RATTLE needs
+            to be symplectic; it converges at a rate of order ``ω dt`` per iteration).
+            Without it, each iteration re-linearises at the current positions (Newton), which
+            is what assembling a scene needs.
+        iterations : int
+
+        Returns
+        -------
+        worst : float
+            The largest remaining position error.
+        dx, dtheta : (n, 3) float64
+            Total displacement of each centre of mass and rotation vector applied.
+        """
+        n = len(self.mass)
+        total_dx, total_dtheta = np.zeros((n, 3)), np.zeros((n, 3))
         for _ in range(iterations):
             geos = self.geometries()
             errors = self.position_residuals(geos)
             worst = max((float(np.abs(e).max()) for e in errors), default=0.0)
             if worst <= tolerance:
-                return worst
-            blocks = self._blocks(geos)
-            solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, self.inv_inertia,
+                return worst, total_dx, total_dtheta
+            blocks, inv_inertia = frozen if frozen is not None else (self._blocks(geos), self.inv_inertia)
+            solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, inv_inertia,
                                       [-e for e in errors], self.dense_limit)
-            dx, dtheta = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, self.inv_inertia)
+            dx, dtheta = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, inv_inertia)
             self.com += dx
             self.quat = rotate_by(self.quat, dtheta)
             self._update_inverse_inertia()
-        return max((float(np.abs(e).max()) for e in self.position_residuals(self.geometries())), default=0.0)
+            total_dx += dx
+            total_dtheta += dtheta
+        worst = max((float(np.abs(e).max()) for e in self.position_residuals(self.geometries())), default=0.0)
+        return worst, total_dx, total_dtheta
+
+    def frozen_rows(self):
+        """Constraint rows and world inverse inertia now, for ``correct_positions(frozen=...)``."""
+        return self._blocks(self.geometries()), self.inv_inertia.copy()
 
     def drift(self, dt: float) -> None:
         """Advance positions and orientations by ``dt`` at the current velocities.
