@@ -58,10 +58,11 @@ class FaceGrid:
         Row pointers of the cell -> face lists.
     items : (entries,) int64
         Face indices, cell after cell.
-    edges : (n, 3, 5) float64
-        Per face and edge (opposite vertex 0, 1, 2): canonical start ``(u, v)``, direction
-        ``(du, dv)`` and the orientation sign (+1 or -1) that makes it the face's edge.
-    heights : (n, 3) float64
+    edges : (3, 5, n) float64
+        Per edge (opposite vertex 0, 1, 2) and face: canonical start ``(u, v)``, direction
+        ``(du, dv)`` and the orientation sign (+1 or -1) that makes it the face's edge
+        (component-major, so that gathers read contiguous arrays).
+    heights : (3, n) float64
         Ray-axis coordinate of each vertex.
     """
 
@@ -78,7 +79,7 @@ class FaceGrid:
 
 
 def face_grid(triangles: np.ndarray, origin=None, scale=None, axis: int | None = None,
-              cells_per_face: float = 1.0) -> FaceGrid:
+              cells_per_face: float = 4.0) -> FaceGrid:
     """Prepare ``triangles`` for ``inside``.
 
     Parameters
@@ -114,8 +115,8 @@ def face_grid(triangles: np.ndarray, origin=None, scale=None, axis: int | None =
     area2 = ((uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1])
              - (uv[:, 1, 1] - uv[:, 0, 1]) * (uv[:, 2, 0] - uv[:, 0, 0]))
     keep = area2 != 0
-    uv, heights = uv[keep], local[keep][:, :, axis]
-    edges = _canonical_edges(uv)
+    uv, heights = uv[keep], np.ascontiguousarray(local[keep][:, :, axis].T)
+    edges = np.ascontiguousarray(_canonical_edges(uv).transpose(1, 2, 0))
 
     n = len(uv)
     if n:
@@ -208,9 +209,9 @@ def inside_local(grid: FaceGrid, local: np.ndarray) -> np.ndarray:
     """``inside`` for points already in the grid's local frame ``(x - origin) / scale``."""
     m = len(local)
     plane = [i for i in range(3) if i != grid.axis]
-    uv = local[:, plane]
-    h = local[:, grid.axis]
-    cell = _cell(uv, grid.lo, grid.inv_cell, grid.shape)
+    uv = np.ascontiguousarray(local[:, plane].T)
+    h = np.ascontiguousarray(local[:, grid.axis])
+    cell = _cell(uv.T, grid.lo, grid.inv_cell, grid.shape)
     cell = cell[:, 0] * grid.shape[1] + cell[:, 1]
     begin = grid.starts[cell]
     counts = grid.starts[cell + 1] - begin
@@ -228,6 +229,20 @@ def inside_local(grid: FaceGrid, local: np.ndarray) -> np.ndarray:
     return 0.5 * ((up & 1) + (down & 1)).astype(np.float64)
 
 
+def _edge_value(grid, k, face, pu, pv) -> np.ndarray:
+    """Oriented edge function of edge ``k`` of ``face`` at ``(pu, pv)``, never exactly zero."""
+    au, av, du, dv, sgn = (grid.edges[k, i][face] for i in range(5))
+    val = du * (pv - av) - dv * (pu - au)
+    zero = val == 0
+    if zero.any():
+        # Simulation of simplicity: p moved by (ε, ε²) gives -dv ε + du ε²; du > 0 whenever
+        # dv == 0 on a canonical edge, so the tie never stays at zero.
+        tie = np.where(dv[zero] != 0, -np.sign(dv[zero]), 1.0)
+        val[zero] = tie * np.finfo(np.float64).tiny
+    val *= sgn
+    return val
+
+
 def _count_crossings(grid, uv, h, begin, counts, start, stop, up, down) -> None:
     c = counts[start:stop]
     total = int(c.sum())
@@ -236,27 +251,23 @@ def _count_crossings(grid, uv, h, begin, counts, start, stop, up, down) -> None:
     point = np.repeat(np.arange(start, stop), c)
     offset = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
     face = grid.items[np.repeat(begin[start:stop], c) + offset]
-    pu, pv = uv[point, 0], uv[point, 1]
-    e = grid.edges[face]                                      # (pairs, 3, 5)
-    w = np.empty((total, 3))
-    for k in range(3):
-        au, av, du, dv, sgn = (e[:, k, i] for i in range(5))
-        val = du * (pv - av) - dv * (pu - au)
-        # Simulation of simplicity: p moved by (ε, ε²) gives -dv ε + du ε²; du > 0 whenever
-        # dv == 0 on a canonical edge, so the tie never stays at zero.
-        tie = np.where(dv != 0, -np.sign(dv), 1.0)
-        val = np.where(val == 0, tie * np.finfo(np.float64).tiny, val)
-        w[:, k] = sgn * val
-    pos = (w > 0).all(axis=1)
-    neg = (w < 0).all(axis=1)
-    hit = pos | neg
-    if not hit.any():
+    pu, pv = uv[0][point], uv[1][point]
+    # Edge by edge, dropping pairs as soon as two edge functions disagree in sign (most
+    # candidates from the grid cell are not crossed at all).
+    w0 = _edge_value(grid, 0, face, pu, pv)
+    w1 = _edge_value(grid, 1, face, pu, pv)
+    keep = (w0 > 0) == (w1 > 0)
+    point, face, pu, pv, w0, w1 = point[keep], face[keep], pu[keep], pv[keep], w0[keep], w1[keep]
+    w2 = _edge_value(grid, 2, face, pu, pv)
+    keep = (w0 > 0) == (w2 > 0)
+    if not keep.any():
         return
-    point, face, w, flip = point[hit], face[hit], w[hit], neg[hit]
-    z = grid.heights[face] - h[point, None]
+    point, face, w0, w1, w2 = point[keep], face[keep], w0[keep], w1[keep], w2[keep]
+    hp = h[point]
     # Barycentric height of the crossing relative to the point: sign(Σ w_i z_i / Σ w_i).
-    num = (w * z).sum(axis=1)
-    above = np.where(flip, num < 0, num > 0)
+    num = (w0 * (grid.heights[0][face] - hp) + w1 * (grid.heights[1][face] - hp)
+           + w2 * (grid.heights[2][face] - hp))
+    above = (num > 0) == (w0 > 0)
     size = stop - start
     up[start:stop] += np.bincount(point[above] - start, minlength=size)
     down[start:stop] += np.bincount(point[~above] - start, minlength=size)
