@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 import trimesh
@@ -139,13 +141,14 @@ def test_rigid_motion_and_scale_invariants(seed, offset, scale):
 def test_parallel_axis_and_winding_reversal(seed, point):
     tri = convex_mesh(seed % 50, 25)
     props = mass_properties(triangle_moments(tri), about=point)
-    # Parallel axis: inertia about a point equals the direct sum about that point.
-    direct = triangle_moments(tri - np.array(point), origin=np.zeros(3))
-    d = direct.center
-    raw_second = direct.central + direct.volume * np.outer(d, d)   # ∫ r rᵀ about the point
-    expected = inertia_from_second_moments(raw_second)
-    np.testing.assert_allclose(props.inertia_about, expected, rtol=1e-9,
-                               atol=1e-9 * np.abs(expected).max())
+    # Parallel axis: inertia about a point equals the exact second moments about that point
+    # (rational arithmetic: a float sum about a far point would itself lose digits).
+    exact = exact_moments(tri)
+    d = [c - Fraction(x) for c, x in zip(exact.center, point)]
+    about = [[exact.central[i][j] + exact.volume * d[i] * d[j] for j in range(3)] for i in range(3)]
+    trace = about[0][0] + about[1][1] + about[2][2]
+    expected = np.array([[float((trace if i == j else 0) - about[i][j]) for j in range(3)] for i in range(3)])
+    np.testing.assert_allclose(props.inertia_about, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
     np.testing.assert_allclose(props.inertia_about,
                                shifted_inertia(props.inertia, props.mass, props.center_of_mass, point))
     # Reversing the winding negates the signed volume and the inertia.
