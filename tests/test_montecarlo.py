@@ -301,3 +301,21 @@ def test_cli_refuses_sampling_options_without_montecarlo():
     result = CliRunner().invoke(cli, ["props", "sphere:1", "--samples", "100"])
     assert result.exit_code == 2
     assert "--method montecarlo" in result.output
+
+
+@pytest.mark.parametrize("source", ["wedge:1,2,3", "cylinder:1,1,2", "mesh"])
+def test_placed_inputs_agree_with_the_exact_placed_result(tmp_path, source):
+    from p3d_cli.placed import Placement, input_props
+
+    if source == "mesh":
+        source = str(tmp_path / "part.stl")
+        write_ascii_stl(source, torus())
+    c, s = np.cos(0.7), np.sin(0.7)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    placement = Placement(scale=np.array([1.0, 2.0, 0.5]), rotation=rot, translation=np.array([5.0, -3.0, 1e6]))
+    exact = input_props(source, placement)
+    result = montecarlo_props(source, samples=100_000, seed=5, placement=placement)
+    p, u = result.properties, result.uncertainty
+    assert_within(p.volume, exact.properties.volume, u["volume"])
+    assert_within(p.center_of_mass, exact.properties.center_of_mass, u["center_of_mass"])
+    assert_within(p.inertia, exact.properties.inertia, u["inertia"])
