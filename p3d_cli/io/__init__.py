@@ -8,21 +8,35 @@ extension; ``--format`` overrides both.
 
 from __future__ import annotations
 
+import importlib
 import os
 
 from p3d_cli.errors import UnknownFormatError
-from p3d_cli.io import meshio_backend, obj, off, ply, stl
 from p3d_cli.io.raw import RawInput, open_input
 from p3d_cli.io.source import MeshSource
 
+
+def _backend(name: str):
+    """The module ``p3d_cli.io.<name>``, imported on first use.
+
+    Each format's module (and meshio's, with its xml/tempfile/zlib imports) is imported only
+    when a file of that format is read: ``p3d props part.stl`` in a shell loop pays for the
+    STL reader alone (issue 7, start-up).
+    """
+    return importlib.import_module(f"p3d_cli.io.{name}")
+
+
+def _lazy_loader(name: str):
+    def load(raw: RawInput, *args):
+        return _backend(name).load(raw, *args)
+    load.__name__ = load.__qualname__ = f"{name}.load"
+    load.__doc__ = f"``p3d_cli.io.{name}.load``, imported when first called."
+    return load
+
+
 #: Format name -> loader. ``meshio`` covers every other format meshio reads.
-LOADERS = {
-    "stl": stl.load,
-    "obj": obj.load,
-    "ply": ply.load,
-    "off": off.load,
-    "meshio": meshio_backend.load,
-}
+LOADERS = {name: _lazy_loader(name) for name in ("stl", "obj", "ply", "off")}
+LOADERS["meshio"] = _lazy_loader("meshio_backend")
 
 _EXTENSIONS = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off"}
 
@@ -32,7 +46,7 @@ __all__ = ["LOADERS", "MeshSource", "RawInput", "load_mesh", "detect_format", "i
 def is_mesh_path(path: str) -> bool:
     """True when the file name has an extension p3d reads (used to search directories)."""
     ext = os.path.splitext(path)[1].lower()
-    return ext in _EXTENSIONS or meshio_backend.knows_extension(ext)
+    return ext in _EXTENSIONS or _backend("meshio_backend").knows_extension(ext)
 
 
 def detect_format(raw: RawInput, override: str | None = None) -> str:
@@ -47,7 +61,7 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
         name = override.lower()
         if name in LOADERS and name != "meshio":
             return name
-        if meshio_backend.knows_format(name):
+        if _backend("meshio_backend").knows_format(name):
             return "meshio:" + name
         known = ", ".join(sorted(set(LOADERS) - {"meshio"}))
         raise UnknownFormatError("--format", f"unknown format {override!r}",
@@ -61,11 +75,11 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
     ext = os.path.splitext(raw.path or "")[1].lower()
     if ext in _EXTENSIONS:
         return _EXTENSIONS[ext]
-    if stl.looks_like_stl(raw):
+    if _backend("stl").looks_like_stl(raw):
         return "stl"
-    if ext and meshio_backend.knows_extension(ext):
-        return "meshio:" + meshio_backend.format_for_extension(ext)
-    if obj.looks_like_obj(head):
+    if ext and _backend("meshio_backend").knows_extension(ext):
+        return "meshio:" + _backend("meshio_backend").format_for_extension(ext)
+    if _backend("obj").looks_like_obj(head):
         return "obj"
     what = f"cannot tell the format of {'this extension' if ext else 'an input without an extension'}"
     raise UnknownFormatError(raw.where, what,
@@ -92,5 +106,5 @@ def load_mesh(source: str, fmt: str | None = None, stdin=None) -> MeshSource:
     raw = open_input(source, stdin)
     name = detect_format(raw, fmt)
     if name.startswith("meshio:"):
-        return meshio_backend.load(raw, name.split(":", 1)[1])
+        return _backend("meshio_backend").load(raw, name.split(":", 1)[1])
     return LOADERS[name](raw)

@@ -14,7 +14,7 @@ ignored: the winding of the corners is what the integrals use.
 
 from __future__ import annotations
 
-import re
+import warnings
 
 import numpy as np
 
@@ -99,33 +99,130 @@ def _load_binary(raw: RawInput, n: int, warnings) -> MeshSource:
 
 # --- ASCII -------------------------------------------------------------------------------
 
-_SOLID_LINE = re.compile(rb"^[ \t]*(?:end)?solid\b[^\n]*$", re.MULTILINE | re.IGNORECASE)
-_KEYWORDS = (b"endfacet", b"endloop", b"facet", b"normal", b"outer", b"loop", b"vertex")
+#: Bytes of text parsed at a time by the fast path: small enough to stay in cache between the
+#: few passes each chunk gets, large enough that the per-chunk overhead is nothing.
+_ASCII_CHUNK = 1 << 22
+
+#: The fast path's byte map: digits, sign and point stay; ``e``/``E`` become ``e`` (exponents);
+#: whitespace and every other letter become a space; anything else becomes ``!``, which no
+#: number contains, so that numpy's parser stops and the careful line parser takes over.
+_NUMBER_BYTES = b"0123456789+-."
+_LETTERS = bytes(range(ord("a"), ord("z") + 1)) + bytes(range(ord("A"), ord("Z") + 1))
+_ASCII_TABLE = bytes(
+    c if c in _NUMBER_BYTES else
+    ord("e") if c in b"eE" else
+    ord(" ") if c in _LETTERS or c in b" \t\n\r\x0b\x0c" else
+    ord("!")
+    for c in range(256))
+#: Per facet: 'facet normal', 'outer loop', 3 x 'vertex', 'endloop', 'endfacet' hold 42
+#: letters other than e, and 11 e's, each of which the map leaves as a lone word " e ".
+_FACET_LETTERS, _FACET_LONE_ES = 42, 11
+_SPACE, _E = ord(" "), ord("e")
 
 
 def _load_ascii(raw: RawInput) -> MeshSource:
-    data = raw.read_all()
-    if b"\r" in data:
-        data = data.replace(b"\r", b"")
-    body = _strip_solid_lines(data)
-    facets = body.count(b"endfacet")
-    vertices = body.count(b"vertex")
-    if facets and vertices == 3 * facets and body.count(b"facet") == 2 * facets:
-        fast = _fast_numbers(body, facets)
-        if fast is not None:
-            return array_source("stl-ascii", fast, "float64")
-    return array_source("stl-ascii", _parse_lines(raw.where, data), "float64")
+    blocks = _fast_ascii(raw)
+    if blocks is None:
+        data = raw.read_all()
+        if b"\r" in data:
+            data = data.replace(b"\r", b"")
+        return array_source("stl-ascii", _parse_lines(raw.where, data), "float64")
+    count = sum(len(b) for b in blocks)
+    return MeshSource("stl-ascii", count, "float64", lambda: iter(blocks), None, ())
+
+
+def _fast_ascii(raw: RawInput) -> list[np.ndarray] | None:
+    """The triangles of a well-formed ASCII STL, parsed chunk by chunk at C speed.
+
+    Returns ``(k, 3, 3)`` float64 blocks, or None whenever anything is unusual (a polygon, a
+    stray word, a character outside numbers and keywords, no facets at all): the line parser
+    then reads the file and names the line at fault. The numbers are the same either way:
+    numpy's parser, like ``float``, rounds correctly.
+    """
+    blocks = []
+    with raw.open() as f:
+        tail = b""
+        while True:
+            piece = f.read(_ASCII_CHUNK)
+            data = tail + piece if tail else piece
+            if piece:
+                # Cut after the last whole facet; the rest starts the next chunk.
+                cut = data.rfind(b"endfacet")
+                if cut == -1:
+                    if len(data) > 4 * _ASCII_CHUNK:
+                        return None             # no facet end in 16 MB: not for the fast path
+                    tail = data
+                    continue
+                cut += len(b"endfacet")
+                chunk, tail = data[:cut], data[cut:]
+            else:
+                chunk, tail = data, b""
+            triangles = _chunk_triangles(chunk)
+            if triangles is None:
+                return None
+            if len(triangles):
+                blocks.append(triangles)
+            if not piece:
+                break
+    return blocks or None
+
+
+def _chunk_triangles(chunk: bytes) -> np.ndarray | None:
+    """The triangles of whole facets of well-formed text; None when in doubt.
+
+    Well-formed means: after the ``solid``/``endsolid`` lines, the letters are exactly those of
+    one set of keywords per facet, and the numbers exactly 12 per facet (a normal and three
+    vertices). A polygon, a stray word or a missing number breaks a count; any other character
+    stops numpy's parser.
+    """
+    facets = chunk.count(b"endfacet")
+    if facets == 0:
+        return np.zeros((0, 3, 3)) if not _strip_solid_lines(chunk).strip() else None
+    body = chunk
+    mapped, letters = _map_ascii(body)
+    if letters != _FACET_LETTERS * facets:
+        # Most chunks hold no 'solid' line; those that do are stripped and counted again.
+        body = _strip_solid_lines(chunk)
+        if body is chunk:
+            return None
+        mapped, letters = _map_ascii(body)
+        if letters != _FACET_LETTERS * facets:
+            return None
+    numbers_text = mapped.replace(b" e ", b"   ")
+    lone = (np.count_nonzero(np.frombuffer(mapped, np.uint8) == _E)
+            - np.count_nonzero(np.frombuffer(numbers_text, np.uint8) == _E))
+    if lone != _FACET_LONE_ES * facets:
+        return None
+    try:
+        with warnings.catch_warnings():
+            # Older numpy warns and returns what it read so far; make that a failure too.
+            warnings.simplefilter("error", DeprecationWarning)
+            numbers = np.fromstring(numbers_text, dtype=np.float64, sep=" ")
+    except (ValueError, DeprecationWarning):
+        return None
+    if numbers.size != 12 * facets:
+        return None
+    return numbers.reshape(facets, 4, 3)[:, 1:, :]     # drop the stored normals
+
+
+def _map_ascii(body: bytes) -> tuple[bytes, int]:
+    """``body`` through ``_ASCII_TABLE``, and how many letters other than e it held."""
+    mapped = body.translate(_ASCII_TABLE)
+    # Whitespace and letters other than e became spaces; whitespace was there before.
+    spaces = np.count_nonzero(np.frombuffer(mapped, np.uint8) == _SPACE)
+    return mapped, spaces - np.count_nonzero(np.frombuffer(body, np.uint8) <= _SPACE)
 
 
 def _strip_solid_lines(data: bytes) -> bytes:
-    """Remove ``solid NAME`` and ``endsolid NAME`` lines: names may hold anything, even numbers."""
-    return _SOLID_LINE.sub(b"", data) if len(data) < 4096 else _strip_solid_lines_fast(data)
+    """Remove ``solid NAME`` and ``endsolid NAME`` lines: names may hold anything, even numbers.
 
-
-def _strip_solid_lines_fast(data: bytes) -> bytes:
-    # The regex would scan every byte; 'solid' occurs only in those few lines, so cut around them.
-    pieces, pos = [], 0
+    'solid' occurs only in those few lines (any other line holding it fails the fast path's
+    letter count afterwards), so cut around each occurrence rather than scan with a regex.
+    """
     lower = data.find(b"solid")
+    if lower == -1:
+        return data
+    pieces, pos = [], 0
     while lower != -1:
         line_start = data.rfind(b"\n", 0, lower) + 1
         line_end = data.find(b"\n", lower)
@@ -135,16 +232,6 @@ def _strip_solid_lines_fast(data: bytes) -> bytes:
         lower = data.find(b"solid", line_end)
     pieces.append(data[pos:])
     return b"".join(pieces)
-
-
-def _fast_numbers(body: bytes, facets: int) -> np.ndarray | None:
-    """All numbers of a well-formed file in one C-level parse; None to fall back to lines."""
-    for word in _KEYWORDS:
-        body = body.replace(word, b" ")
-    numbers = np.fromstring(body, dtype=np.float64, sep=" ") if body.strip() else np.zeros(0)
-    if numbers.size != 12 * facets:
-        return None
-    return numbers.reshape(facets, 4, 3)[:, 1:, :]
 
 
 def _parse_lines(where: str, data: bytes) -> np.ndarray:
