@@ -151,7 +151,10 @@ def test_closed_agrees_with_closed_module_on_random_soups(seed, n):
     pts = rng.integers(0, 4, size=(5, 3)).astype(float)
     t = pts[rng.integers(0, 5, size=(n, 3))]
     r = topology(t)
-    assert r.closed == closed_exact(t)
+    if r.edges:  # closed_exact calls a soup of point-faces (no edge at all) closed; we do not
+        assert r.closed == closed_exact(t)
+    else:
+        assert not r.closed
     assert r.degenerate_faces >= r.faces_with_repeated_vertex
 
 
