@@ -169,6 +169,11 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, batch):
       0  every mesh passes the required checks and limits
       1  some mesh fails a check or a limit
       2  usage error, or some input cannot be read (the batch still goes on)
+      3  a bug in p3d met on some input (please report it)
+
+    Many inputs (files, directories, --files-from) give one result each, in input order,
+    as they are ready; an input that cannot be read gives an error record and the batch
+    goes on, and a summary goes to stderr.
 
     \b
     Examples:
