@@ -102,3 +102,66 @@ def batch_options(f):
                            help="Also read input paths from LIST, one per line (- for standard "
                                 "input).")(command)
     return command
+
+
+#: How --scale, --rotate/--quat and --translate combine; quoted in the commands' help.
+PLACEMENT_HELP = ("Placement order: --scale (in the solid's own frame), then the rotation "
+                  "about the world origin, then --translate.")
+
+
+def placement_options(f):
+    """``--scale``, ``--rotate``, ``--quat``, ``--translate``, ``--tessellate``, handed to the
+    command as ``placement: p3d_cli.placed.Placement`` and ``tessellate: int | None``."""
+    import functools
+
+    @functools.wraps(f)
+    def command(*args, scale, turns, quat, translate, tessellate, **kwargs):
+        return f(*args, placement=make_placement(scale, turns, quat, translate),
+                 tessellate=tessellate, **kwargs)
+
+    command = click.option("--tessellate", type=click.IntRange(min=3), default=None, metavar="N",
+                           help="Replace a round shape spec (sphere, cylinder, ellipsoid, ecylinder) "
+                                "by an inscribed polyhedron of N segments, to see how far the "
+                                "polyhedral approximation is from the exact shape.")(command)
+    command = click.option("--translate", type=VECTOR3, default=None, metavar="X,Y,Z",
+                           help="Move the solid by X,Y,Z (applied last).")(command)
+    command = click.option("--quat", default=None, metavar="W,X,Y,Z",
+                           help="Rotate by the quaternion W + Xi + Yj + Zk (scalar first), "
+                                "normalised for you; q and -q give the same rotation; a leading "
+                                "minus is fine (--quat -0.7,0.1,0.7,0). Not with --rotate.")(command)
+    command = click.option("--rotate", "turns", multiple=True, metavar="AXIS:DEGREES",
+                           help="Turn by DEGREES about AXIS (x, y, z or a vector such as 1,1,0) "
+                                "through the world origin, right-hand rule. Repeatable: each turn "
+                                "is applied after the previous one about the fixed world axes "
+                                "(R = Rn...R2 R1).")(command)
+    command = click.option("--scale", type=VECTOR3, default=None, metavar="SX,SY,SZ",
+                           help="Scale the solid by SX,SY,SZ > 0 along its own axes, about the "
+                                "origin (applied first; mass properties by the design note's "
+                                "eq. 9). A sphere or cylinder scaled unevenly becomes the ellipsoid "
+                                "or elliptic cylinder.")(command)
+    return command
+
+
+def make_placement(scale, turns, quat, translate):
+    """The ``Placement`` of the placement options, or None when none was given.
+
+    Raises
+    ------
+    UsageError
+        A malformed turn or quaternion, a non-positive scale, or --rotate with --quat.
+    """
+    from p3d_cli.errors import UsageError
+    from p3d_cli.placed import Placement
+    from p3d_cli.rotation import compose_rotations, parse_quaternion, parse_turn
+
+    if turns and quat is not None:
+        raise UsageError("--rotate/--quat", "both given",
+                         "give the rotation one way: --rotate turns, or one --quat")
+    rotation = None
+    if turns:
+        rotation = compose_rotations(parse_turn(t) for t in turns)
+    elif quat is not None:
+        rotation = parse_quaternion(quat)
+    if scale is None and rotation is None and translate is None:
+        return None
+    return Placement(scale, rotation, translate)

@@ -9,8 +9,9 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.batch import Batch
 from p3d_cli.cli.options import VECTOR3, batch_options, density_options, format_option, inputs_argument, json_option, strict_option
+from p3d_cli.cli.options import placement_options
 from p3d_cli.errors import CheckFailedError, UsageError
-from p3d_cli.props import mesh_props
+from p3d_cli.placed import input_props
 
 
 @click.command()
@@ -34,8 +35,10 @@ from p3d_cli.props import mesh_props
               help="Monte Carlo random seed (default 0): the same seed gives the same numbers.")
 @click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
               help="Monte Carlo: pick the sample count for this relative standard error of the volume.")
+@placement_options
 @batch_options
-def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch):
+def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch,
+          placement, tessellate):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -52,6 +55,13 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
       p3d props part.stl --field volume --field mass
       cat part.stl | p3d props - --format stl
       p3d props part.stl --method montecarlo --samples 1000000 --seed 7 --json
+      p3d props box:1,2,3 --rotate z:30 --translate 0,0,5 --density 7850
+      p3d props sphere:2 --tessellate 64
+
+    Shape specs (box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder; see p3d bounds
+    --help) give exact closed forms. --scale, --rotate/--quat and --translate place the solid
+    (scale first, then rotation about the world origin, then translation); the centre of mass
+    and inertia reported are the placed solid's (I' = R I Rᵀ).
     """
     if density is not None and mass is not None:
         raise UsageError("--mass/--density", "both given", "give one: the other follows from the volume")
@@ -64,7 +74,8 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
         raise UsageError("--csv", "given with --json or --field", "choose one output format")
     run = Batch("p3d props", inputs, batch)
     compute = functools.partial(compute_props, method=method, samples=samples, seed=seed,
-                                tolerance=tolerance, fmt=fmt, density=density, mass=mass, about=about)
+                                tolerance=tolerance, fmt=fmt, density=density, mass=mass, about=about,
+                                placement=placement, tessellate=tessellate)
     if batch.csv:
         click.echo(output.csv_line(output.PROPS_CSV_COLUMNS))
     for outcome in run.outcomes(compute):
@@ -104,10 +115,15 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
                                "fix the mesh, or drop --strict to accept it")
 
 
-def compute_props(src, *, method, samples, seed, tolerance, fmt, density, mass, about):
+def compute_props(src, *, method, samples, seed, tolerance, fmt, density, mass, about,
+                  placement=None, tessellate=None):
     """One input's ``PropsResult`` (module level, so that worker processes can receive it)."""
     if method == "montecarlo":
+        if tessellate is not None:
+            raise UsageError("--tessellate", "given with --method montecarlo",
+                             "Monte Carlo samples the exact shape; drop one of them")
         from p3d_cli.montecarlo import montecarlo_props
         return montecarlo_props(src, samples=samples, seed=seed, tolerance=tolerance, fmt=fmt,
-                                density=density, mass=mass, about=about)
-    return mesh_props(src, fmt=fmt, density=density, mass=mass, about=about)
+                                density=density, mass=mass, about=about, placement=placement)
+    return input_props(src, placement, tessellate=tessellate, fmt=fmt, density=density, mass=mass,
+                       about=about)
