@@ -28,8 +28,8 @@ def direction(geo) -> np.ndarray:
     d = geo.p_b - geo.p_a
     norm = float(np.linalg.norm(d))
     if norm == 0.0:
-        raise SceneError("bar", "the attachment points coincide, so the bar has no direction",
-                         "use a ball joint to join two points")
+        raise SceneError(geo.where or "bar", "the attachment points have come together, so the bar has "
+                         "no direction", "use a ball joint to join two points, or a smaller --dt")
     return d / norm
 
 

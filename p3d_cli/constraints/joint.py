@@ -24,6 +24,8 @@ class JointGeometry:
         Attachment points, world frame.
     z_a, z_b : (3,) float64 or None
         Unit hinge axes, world frame.
+    where : str
+        The constraint's place in the scene, for messages.
     """
 
     r_a: np.ndarray
@@ -32,6 +34,7 @@ class JointGeometry:
     p_b: np.ndarray
     z_a: np.ndarray | None = None
     z_b: np.ndarray | None = None
+    where: str = ""
 
 
 def joint_geometry(spec, com_a, rot_a, com_body_a, com_b, rot_b, com_body_b) -> JointGeometry:
@@ -52,4 +55,4 @@ def joint_geometry(spec, com_a, rot_a, com_body_a, com_b, rot_b, com_body_b) -> 
     z_a = z_b = None
     if spec.axis_a is not None:
         z_a, z_b = rot_a @ spec.axis_a, rot_b @ spec.axis_b
-    return JointGeometry(r_a, r_b, com_a + r_a, com_b + r_b, z_a, z_b)
+    return JointGeometry(r_a, r_b, com_a + r_a, com_b + r_b, z_a, z_b, spec.where)

@@ -83,6 +83,8 @@ class ConstraintSpec:
     ----------
     index : int
         Position in the scene's list.
+    where : str
+        ``scene.yaml: constraints[<index>]``, for messages.
     type : str
         ``ball``, ``hinge`` or ``bar``.
     a, b : str
@@ -103,6 +105,7 @@ class ConstraintSpec:
     axis_a: np.ndarray | None = None
     axis_b: np.ndarray | None = None
     length: float | None = None
+    where: str = ""
 
 
 @dataclass(frozen=True)
@@ -300,7 +303,7 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
         if gap == 0.0:
             raise SceneError(place, "the bar's two attachment points coincide, so it has no direction",
                              "place the bodies so the points are apart, or use a ball joint")
-    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, axis_a, axis_b, length)
+    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, axis_a, axis_b, length, place)
 
 
 def _pair(spec: dict, stem: str, place: str, body_a: BodySpec, body_b: BodySpec, point: bool):

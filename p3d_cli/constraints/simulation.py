@@ -35,9 +35,19 @@ def needed_bodies(scene, stepping: bool, centers: bool) -> list:
     falling = stepping and bool(np.any(scene.gravity))
     out = []
     for body in scene.bodies:
-        if centers or (not body.fixed and (body.name in linked or body.moving or falling)):
+        free_needed = not body.fixed and (body.name in linked or body.moving or falling)
+        if centers or free_needed or _known_without_integration(body):
             out.append(body)
     return out
+
+
+def _known_without_integration(body) -> bool:
+    # Reporting these costs nothing, so their centre of mass is reported too.
+    if body.shape is None:
+        return True
+    if body.center_of_mass is None:
+        return False
+    return body.fixed or (body.mass is not None and body.inertia is not None)
 
 
 def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None, centers: bool = False,
