@@ -3,9 +3,11 @@
 Every class is exact: the polyhedral shapes and meshes by projecting their vertices (the
 box around a convex hull is attained at vertices, the note's eq. 10), the round shapes by
 their closed forms (``p3d_cli.shapes``). A mesh is projected as it is: no convex hull is
-built, because projecting all n vertices is one (n, 3) × (3, 3) product, which is already
-cheaper than any hull algorithm's O(n log n) pass over the same vertices (measured in
-docs/shapes.md); a hull pays off only when one mesh is bounded under many rotations.
+built, because projecting all corners is one linear pass, already cheaper than any hull
+algorithm's O(n log n) pass over the same vertices. Measured on a 1.3M-triangle sphere: 0.08 s
+to project every corner, against 8 s to merge vertices and 22 s for scipy's ConvexHull
+(docs/shapes.md). A hull would pay off only when one mesh is bounded under many rotations,
+which one ``p3d bounds`` run never does.
 """
 
 from __future__ import annotations
@@ -17,6 +19,10 @@ import numpy as np
 
 from p3d_cli.results import Bounds
 from p3d_cli.shapes.polyhedron import projected_bounds
+
+
+#: Triangles projected at a time when one big array is given.
+_BLOCK = 1 << 16
 
 
 def check_scale(scale) -> np.ndarray:
@@ -50,7 +56,9 @@ def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rota
     translation : (3,) array_like, optional
     """
     if isinstance(blocks, np.ndarray):
-        blocks = (blocks,)
+        # Blocks that fit in cache project several times faster than one huge array.
+        array = blocks
+        blocks = (array[i:i + _BLOCK] for i in range(0, max(len(array), 1), _BLOCK))
     m = np.diag(check_scale(scale))
     if rotation is not None:
         m = np.asarray(rotation, dtype=np.float64) @ m
