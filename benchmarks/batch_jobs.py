@@ -60,6 +60,32 @@ def time_run(cmd: list[str]) -> float:
     return time.perf_counter() - start
 
 
+def _spin(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i
+    return total
+
+
+def machine_speedup(tasks: int = 16, n: int = 1_000_000) -> float:
+    """What two processes gain over one on a pure-CPU task on this machine, right now.
+
+    On a shared or busy machine this is well below 2, and no ``--jobs`` can do better:
+    printed so that a small speed-up of p3d can be told from a machine without a free core.
+    """
+    import multiprocessing
+
+    start = time.perf_counter()
+    for _ in range(tasks):
+        _spin(n)
+    serial = time.perf_counter() - start
+    with multiprocessing.get_context("fork").Pool(2) as pool:
+        start = time.perf_counter()
+        pool.map(_spin, [n] * tasks)
+        parallel = time.perf_counter() - start
+    return serial / parallel
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=300)
@@ -86,6 +112,8 @@ def main() -> None:
         print(f"  --jobs 1: median {one:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[1])})")
         print(f"  --jobs 2: median {two:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[2])})")
         print(f"  speed-up --jobs 2 / --jobs 1: {one / two:.2f}x")
+        print(f"  (this machine's own two-process speed-up on pure CPU work, now: "
+              f"{machine_speedup():.2f}x; load average {os.getloadavg()[0]:.1f})")
 
 
 if __name__ == "__main__":
