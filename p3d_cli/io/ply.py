@@ -251,7 +251,7 @@ def _binary_element(where: str, element: Element, data: bytes, offset: int, orde
         table = np.frombuffer(data, record, element.size, offset)
         same = all((table[f"n{i}"] == n).all() for (i, n) in zip(_list_positions(element), lengths))
         if same:
-            return _columns(element, table, wanted, lengths), offset + need
+            return _columns(element, table, wanted), offset + need
     # Lists of varying length (or a first record that does not fit): walk record by record.
     return _walk_binary(where, element, data, offset, order, wanted)
 
@@ -277,9 +277,9 @@ def _first_lengths(where, element, data, offset, order) -> list[int]:
     return lengths
 
 
-def _columns(element: Element, table: np.ndarray, wanted: set, lengths: list[int]):
-    """The wanted columns: for a vertex element ``{name: array}``, for a face element
-    ``(corners, sizes)``."""
+def _columns(element: Element, table: np.ndarray, wanted: set):
+    """For the face element ``(corners, sizes)``; for others one array per property, None for
+    properties not wanted."""
     if element.name == "face":
         for i, p in enumerate(element.properties):
             if p.name in wanted:
@@ -299,7 +299,7 @@ def _walk_binary(where, element, data, offset, order, wanted):
             steps.append((struct.Struct(order + np.dtype(p.count).char), np.dtype(order + p.dtype),
                           p.name in wanted))
     scalars = {p.name: [] for p in element.properties if p.count is None and p.name in wanted}
-    pieces, sizes = [], []
+    starts, sizes = [], []
     end = len(data)
     view = memoryview(data)
     try:
@@ -317,16 +317,26 @@ def _walk_binary(where, element, data, offset, order, wanted):
                     if n < 0 or stop > end:
                         raise struct.error
                     if keep:
-                        pieces.append(np.frombuffer(data, kind, n, offset))
+                        starts.append(offset)
                         sizes.append(n)
                     offset = stop
     except struct.error:
         raise FormatError(where, f"the file ends inside the {element.name} records "
                           f"(the header declares {element.size})", _HINT) from None
     if element.name == "face":
-        corners = np.concatenate(pieces) if pieces else np.zeros(0, dtype=np.int64)
-        return (corners, np.array(sizes, dtype=np.int64)), offset
+        item = next(kind for (count, kind, keep) in steps if count is not None and keep)
+        return (_gather(data, np.array(starts, dtype=np.int64), np.array(sizes, dtype=np.int64), item),
+                np.array(sizes, dtype=np.int64)), offset
     return [np.array(scalars[p.name]) if p.name in scalars else None for p in element.properties], offset
+
+
+def _gather(data: bytes, starts: np.ndarray, sizes: np.ndarray, item: np.dtype) -> np.ndarray:
+    """The lists at byte offsets ``starts`` (``sizes`` items each), concatenated, in one gather."""
+    width = sizes * item.itemsize
+    total = int(width.sum())
+    within = np.arange(total) - np.repeat(np.cumsum(width) - width, width)
+    index = np.repeat(starts, width) + within
+    return np.frombuffer(data, np.uint8)[index].view(item)
 
 
 # --- ASCII -------------------------------------------------------------------------------
@@ -414,7 +424,7 @@ def _ascii_element(where: str, element: Element, numbers: np.ndarray, pos: int):
     total = numbers.size
     lists = _list_positions(element)
     width = len(element.properties)
-    if element.size * (width + 0) > total - pos:
+    if element.size * width > total - pos:  # each record holds at least one number per property
         raise FormatError(where, f"the header declares {element.size} {element.name} records but the data "
                           f"holds only {total - pos} more numbers", _HINT)
     wanted = _wanted(element)
