@@ -7,11 +7,12 @@ only ``a`` matters. Indices are 1-based, or negative: ``-1`` is the last vertex 
 (the decimal text rounded once), and nothing is merged or repaired.
 
 Two parsers share one meaning. The fast path handles what exporters write (one statement per
-line, known keywords, single-spaced faces) with a handful of C-level passes: ``split`` into
-lines, keep the ``v``/``f`` lines, ``join`` them with a sentinel after each line and parse all
-numbers with one ``np.fromstring``; the sentinels give every line's count, so malformed lines
-are detected, never silently shifted. Anything it does not recognise, including every error,
-goes to the careful line-by-line parser, which reports the line number.
+line, known keywords, single-spaced faces) with a handful of C-level passes and no Python
+object per line: numpy classifies every line by its first two bytes, the ``v`` and ``f`` lines
+are cut out as runs, a sentinel is put after each line and all numbers are parsed with one
+``np.fromstring``; the sentinels give every line's count, so a malformed line is detected,
+never silently shifted into its neighbour. Anything the fast path does not recognise, and
+every error, goes to the careful line-by-line parser, which reports the line number.
 """
 
 from __future__ import annotations
