@@ -109,6 +109,9 @@ def test_negative_indices_are_relative_to_the_face_line(tmp_path):
     text = ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
             "v 5 5 5\nv 6 5 5\nv 5 6 5\nf -3 -2 -1\nf 1 -2 -1\n")
     tris = load_mesh(write(tmp_path, text)).triangles()
+    fast = obj._parse_fast(text.encode())
+    assert fast is not None  # interleaved runs of v and f lines stay on the vectorised path
+    np.testing.assert_array_equal(fast[0][fast[1]], tris)
     np.testing.assert_array_equal(tris[0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     np.testing.assert_array_equal(tris[1], [[5, 5, 5], [6, 5, 5], [5, 6, 5]])
     np.testing.assert_array_equal(tris[2], [[0, 0, 0], [6, 5, 5], [5, 6, 5]])
