@@ -104,10 +104,12 @@ def cli() -> None:
 
 
 # One line per command; each command lives in its own module.
+from p3d_cli.cli.bounds import bounds  # noqa: E402
 from p3d_cli.cli.check import check  # noqa: E402
 from p3d_cli.cli.props import props  # noqa: E402
 from p3d_cli.cli.solve import solve  # noqa: E402
 
+cli.add_command(bounds)
 cli.add_command(check)
 cli.add_command(props)
 cli.add_command(solve)
