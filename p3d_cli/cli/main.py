@@ -12,8 +12,10 @@ Exit statuses:
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
+from collections.abc import MutableMapping
 
 import click
 
@@ -103,13 +105,46 @@ def cli() -> None:
     pass
 
 
-# One line per command; each command lives in its own module.
-from p3d_cli.cli.bounds import bounds  # noqa: E402
-from p3d_cli.cli.check import check  # noqa: E402
-from p3d_cli.cli.props import props  # noqa: E402
-from p3d_cli.cli.solve import solve  # noqa: E402
+class _Commands(MutableMapping):
+    """The group's ``commands`` mapping, importing a command's module when it is first used.
 
-cli.add_command(bounds)
-cli.add_command(check)
-cli.add_command(props)
-cli.add_command(solve)
+    ``p3d props part.stl`` then imports the props command alone, not the constraint solver
+    (yaml, ...) behind ``solve`` nor the topology checks behind ``check``: start-up is most of
+    the time of a small file in a shell loop (issue 7). Listing the commands (``p3d --help``,
+    ``cli.commands.items()``) imports them all.
+    """
+
+    def __init__(self, modules: dict[str, str]) -> None:
+        self._modules = dict(modules)
+        self._loaded: dict[str, click.Command] = {}
+
+    def __getitem__(self, name: str) -> click.Command:
+        if name not in self._loaded:
+            module = self._modules[name]              # KeyError: no such command
+            self._loaded[name] = getattr(importlib.import_module(module), name)
+        return self._loaded[name]
+
+    def __setitem__(self, name: str, command: click.Command) -> None:
+        self._loaded[name] = command
+
+    def __delitem__(self, name: str) -> None:
+        if name not in self._modules and name not in self._loaded:
+            raise KeyError(name)
+        self._modules.pop(name, None)
+        self._loaded.pop(name, None)
+
+    def __iter__(self):
+        return iter(sorted(set(self._modules) | set(self._loaded)))
+
+    def __len__(self) -> int:
+        return len(set(self._modules) | set(self._loaded))
+
+
+# One line per command: its name and the module that defines a click command of that name
+# (imported only when the command runs; see _Commands).
+cli.commands = _Commands({
+    "bounds": "p3d_cli.cli.bounds",
+    "check": "p3d_cli.cli.check",
+    "props": "p3d_cli.cli.props",
+    "solve": "p3d_cli.cli.solve",
+})
