@@ -54,10 +54,21 @@ def p3d_command() -> list[str]:
     return [exe] if exe else [sys.executable, "-m", "p3d_cli"]
 
 
-def time_run(cmd: list[str]) -> float:
+CPU: dict[int, list[float]] = {1: [], 2: []}
+
+
+def time_run(cmd: list[str], jobs: int | None = None) -> float:
+    """Wall time of ``cmd``; its CPU time (workers included) goes to ``CPU[jobs]``."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if jobs is not None:
+        CPU[jobs].append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return wall
 
 
 def _spin(n: int) -> int:
@@ -105,13 +116,15 @@ def main() -> None:
         time_run(base + ["--jobs", "1"])  # warm the page cache and the imports
         for _ in range(args.runs):
             for jobs in (1, 2):
-                times[jobs].append(time_run(base + ["--jobs", str(jobs)]))
+                times[jobs].append(time_run(base + ["--jobs", str(jobs)], jobs))
         one, two = statistics.median(times[1]), statistics.median(times[2])
         print(f"p3d {args.command}: {args.files} files x {len(sphere)} faces, {args.runs} alternating runs, "
               f"{os.cpu_count()} cpus")
         print(f"  --jobs 1: median {one:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[1])})")
         print(f"  --jobs 2: median {two:.3f} s  (runs: {', '.join(f'{t:.3f}' for t in times[2])})")
         print(f"  speed-up --jobs 2 / --jobs 1: {one / two:.2f}x")
+        print(f"  CPU time (user + sys, workers included), median: --jobs 1 "
+              f"{statistics.median(CPU[1]):.3f} s, --jobs 2 {statistics.median(CPU[2]):.3f} s")
         print(f"  (this machine's own two-process speed-up on pure CPU work, now: "
               f"{machine_speedup():.2f}x; load average {os.getloadavg()[0]:.1f})")
 
