@@ -84,7 +84,7 @@ def accumulate(triangles: np.ndarray, dtype) -> tuple[float, np.ndarray]:
     flat = tri.reshape(-1, 3)
     origin = ((flat.min(axis=0) + flat.max(axis=0)) / dtype(2)).astype(dtype)
     local = (tri - origin).transpose(1, 2, 0)
-    terms = tetra_terms(local[0], local[1], local[2]).astype(dtype)
+    terms = tetra_terms(local[0], local[1], local[2])[0].astype(dtype)
     total = terms.sum(axis=1, dtype=dtype)
     volume = total[0] / dtype(6)
     first = total[1:4] / dtype(24)

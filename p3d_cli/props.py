@@ -56,6 +56,9 @@ def mesh_props(source: str, *, fmt: str | None = None, density: float | None = N
     facts = MeshFacts(source, mesh.format, found.face_count, found.closed, found.bounds,
                       mesh.coordinate_dtype)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
+    if found.inverted_tetrahedra:
+        warnings.append(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed inside "
+                        "out (negative orientation); each was counted with its positive volume")
     moments = found.moments
     if placement is not None:
         moments = placement.moments(moments)

@@ -110,9 +110,12 @@ def check(triangles, ratios: list | None = None):
     assert ev <= DOCUMENTED * volume
     assert (ec <= DOCUMENTED * size + np.spacing(np.abs(props.center_of_mass))).all()
     assert (ei <= DOCUMENTED * inertia_scale).all()
-    # "Not absurdly loose": the bound itself is within the documented accuracy.
-    assert bound["volume"] <= DOCUMENTED * volume
-    assert (bound["inertia"] <= DOCUMENTED * inertia_scale).all()
+    # "Not absurdly loose": the bound is within the documented accuracy, or, for meshes of many
+    # slivers, within the classic worst-case growth of n roundings (each sliver's determinant
+    # really can carry an error of u·R³; only their random signs make the true sum smaller).
+    loose = max(DOCUMENTED, 64 * np.finfo(float).eps / 2 * len(triangles))
+    assert bound["volume"] <= loose * volume
+    assert (bound["inertia"] <= loose * inertia_scale).all()
     if ratios is not None:
         for b, e in ((bound["volume"], ev), (bound["center_of_mass"], ec), (bound["inertia"], ei)):
             b, e = np.ravel(b), np.ravel(e)
@@ -163,10 +166,6 @@ def test_rotated_needle_and_pancake_keep_the_documented_thin_part_accuracy(kind,
     assert (ei <= allowed * np.abs(ref.inertia()).max()).all()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known gap: the a-priori bound sums |terms| (|D|·q), but a sliver's determinant D cancels, "
-    "so its rounding error scales with Σ|products of D|, not |D|; fixing it needs that magnitude "
-    "summed in the hot loop (MomentSums), see docs/accuracy.md"))
 @pytest.mark.parametrize("kind", ["needle", "pancake"])
 @pytest.mark.parametrize("aspect", [1e3, 1e6])
 def test_exact_bound_covers_rotated_needles_and_pancakes(kind, aspect):

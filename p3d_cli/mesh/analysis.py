@@ -14,7 +14,7 @@ import numpy as np
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
 from p3d_cli.mesh.closed import closed_exact, column_edge_keys, keys_pair_up
-from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_moments
+from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_sums
 from p3d_cli.results import Bounds, Moments
 
 
@@ -29,12 +29,15 @@ class MeshAnalysis:
     closed : bool or None
         None for volume meshes, where it does not apply.
     face_count : int
+    inverted_tetrahedra : int
+        Tetrahedra of a volume mesh listed with negative orientation (counted positive).
     """
 
     moments: Moments
     bounds: Bounds
     closed: bool | None
     face_count: int
+    inverted_tetrahedra: int = 0
 
 
 def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis:
@@ -117,5 +120,5 @@ def _analyze_tetrahedra(source: MeshSource, where: str) -> MeshAnalysis:
         raise InputError(where, f"tetrahedron {bad} has a NaN or infinite coordinate", "repair the mesh")
     flat = tets.reshape(-1, 3)
     bounds = Bounds(flat.min(axis=0).astype(np.float64), flat.max(axis=0).astype(np.float64))
-    moments: Moments = tetrahedron_moments(tets, origin=local_origin(tets))
-    return MeshAnalysis(moments, bounds, None, len(tets))
+    sums = tetrahedron_sums(tets, origin=local_origin(tets))
+    return MeshAnalysis(sums.moments(), bounds, None, len(tets), sums.inverted)

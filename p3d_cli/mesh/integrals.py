@@ -33,7 +33,7 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _UNIT_ROUNDOFF = np.finfo(np.float64).eps / 2
 
 
-def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> np.ndarray:
+def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per-tetrahedron terms of the sums, for tetrahedra ``(0, p1, p2, p3)``.
 
     Parameters
@@ -43,45 +43,91 @@ def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (10, n) float64
+    terms : (10, n) float64
         Rows: ``D``, ``D s`` (3 rows), ``D q_ij`` for ij in xx, yy, zz, xy, xz, yz, where
+        ``D = det[p1 p2 p3]``, ``s = p1 + p2 + p3`` and
         ``q_ij = p1_i p1_j + p2_i p2_j + p3_i p3_j + s_i s_j``.
+    magnitude : (n,) float64
+        ``Σ_i |p1_i| (|e1_j e2_k| + |e1_k e2_j|)``: the sum of the magnitudes of the products
+        that make up ``D``. ``D``'s rounding error is a small multiple of it times the unit
+        roundoff; on a sliver face ``D`` itself cancels far below it.
+    weighted : (3,) float64
+        ``Σ magnitude · q_ii`` for i = x, y, z: with Cauchy-Schwarz these bound the magnitudes
+        of every row's terms (see ``_abs_bounds``).
+
+    Notes
+    -----
+    ``D`` is computed as ``p1 · ((p2 - p1) × (p3 - p1))``, which equals ``p1 · (p2 × p3)``
+    exactly but crosses two short edge vectors instead of two long position vectors, so only
+    the face's own shape, not its distance from the origin, limits the cross product's accuracy.
     """
-    x1, y1, z1 = p1
-    x2, y2, z2 = p2
-    x3, y3, z3 = p3
-    n = x1.shape[0]
+    n = p1.shape[1]
     out = np.empty((N_SUMS, n))
-    # Every product goes into a reused buffer (out=...): the block is a few MB and fresh
-    # temporaries would cost page faults and cache misses, not arithmetic. The order of the
-    # operations, hence every rounding, is that of the plain expressions in the comments.
+    # Products go into reused buffers (out=...): the block is a few MB and fresh temporaries
+    # would cost page faults and cache misses, not arithmetic.
     t = np.empty(n)
     u = np.empty(n)
-    # det = x1 * (y2*z3 - z2*y3) + y1 * (z2*x3 - x2*z3) + z1 * (x2*y3 - y2*x3)
+    e1 = np.subtract(p2, p1)
+    e2 = np.subtract(p3, p1)
+    magnitude = np.zeros(n)
     det = out[0]
-    np.multiply(y2, z3, out=det)
-    det -= np.multiply(z2, y3, out=t)
-    det *= x1
-    np.multiply(z2, x3, out=u)
-    u -= np.multiply(x2, z3, out=t)
-    u *= y1
-    det += u
-    np.multiply(x2, y3, out=u)
-    u -= np.multiply(y2, x3, out=t)
-    u *= z1
-    det += u
+    det[:] = 0.0
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        # cross_i = e1_j e2_k - e1_k e2_j;  D += p1_i cross_i
+        np.multiply(e1[j], e2[k], out=t)
+        np.multiply(e1[k], e2[j], out=u)
+        cross = np.subtract(t, u)
+        cross *= p1[i]
+        det += cross
+        np.abs(t, out=t)
+        np.abs(u, out=u)
+        t += u
+        t *= np.abs(p1[i], out=u)
+        magnitude += t
     # s = p1 + p2 + p3
     s = np.add(p1, p2)
     s += p3
     np.multiply(det, s, out=out[1:4])
     # q_ij = p1_i p1_j + p2_i p2_j + p3_i p3_j + s_i s_j, times det
+    weighted = np.empty(3)
     for row, (i, j) in enumerate(_PAIRS, start=4):
         q = np.multiply(p1[i], p1[j], out=u)
         q += np.multiply(p2[i], p2[j], out=t)
         q += np.multiply(p3[i], p3[j], out=t)
         q += np.multiply(s[i], s[j], out=t)
+        if i == j:
+            weighted[i] = np.dot(magnitude, q)
         np.multiply(q, det, out=out[row])
-    return out
+    return out, magnitude, weighted
+
+
+def _abs_bounds(total_magnitude: float, weighted: np.ndarray) -> np.ndarray:
+    """Bounds on ``Σ |term|`` (and on the magnitudes each term is computed from), per row.
+
+    With ``m = magnitude`` of each ``D`` and ``q_ii`` the diagonal factors:
+    ``|s_i| <= |p1_i| + |p2_i| + |p3_i| <= sqrt(3 q_ii)``, so by Cauchy-Schwarz
+    ``Σ m |s_i| <= sqrt(3 Σm · Σ m q_ii)``; ``|q_ij|`` with its products' magnitudes
+    ``<= (q_ii + q_jj) / 2``. The 1.01 covers the rounding of these sums themselves.
+    """
+    out = np.empty(N_SUMS)
+    out[0] = total_magnitude
+    out[1:4] = np.sqrt(3.0 * total_magnitude * weighted)
+    for row, (i, j) in enumerate(_PAIRS, start=4):
+        out[row] = 0.5 * (weighted[i] + weighted[j])
+    return out * 1.01
+
+
+def _term_scales(radius: np.ndarray, first: float, second: float) -> np.ndarray:
+    """Bounds on the factor multiplying ``D`` in each row, for coordinates within ``radius``.
+
+    ``|s_i| <= first·r_i`` and ``|q_ij|`` (with the magnitudes of its products) ``<= second·r_i r_j``.
+    """
+    scales = np.empty(N_SUMS)
+    scales[0] = 1.0
+    scales[1:4] = first * radius
+    for row, (i, j) in enumerate(_PAIRS, start=4):
+        scales[row] = second * radius[i] * radius[j]
+    return scales
 
 
 class MomentSums:
@@ -96,6 +142,7 @@ class MomentSums:
         self._totals: list[np.ndarray] = []
         self._abs_totals: list[np.ndarray] = []
         self.count = 0
+        self.inverted = 0          # tetrahedra given with negative orientation
         self._longest_block = 1
 
     def add_triangles(self, triangles: np.ndarray) -> None:
@@ -113,7 +160,8 @@ class MomentSums:
             pass over the block).
         """
         columns -= self.origin[None, :, None]
-        self._add(tetra_terms(columns[0], columns[1], columns[2]))
+        terms, magnitude, weighted = tetra_terms(columns[0], columns[1], columns[2])
+        self._add(terms, _abs_bounds(float(magnitude.sum()), weighted))
 
     def add_tetrahedra(self, tetrahedra: np.ndarray) -> None:
         """Add tetrahedra ``(n, 4, 3)``: each contributes its own signed volume integrals."""
@@ -122,7 +170,13 @@ class MomentSums:
         # Shift each tetrahedron so that p0 is its origin, then move its integrals back:
         # a tetra (p0, p1, p2, p3) equals tetra (0, p1-p0, p2-p0, p3-p0) translated by p0.
         e1, e2, e3 = local[1] - p0, local[2] - p0, local[3] - p0
-        terms = tetra_terms(e1, e2, e3)
+        terms, magnitude, _ = tetra_terms(e1, e2, e3)
+        # Each tetrahedron of a volume mesh is a piece of material whatever the order of its
+        # vertices (generators such as Delaunay do not orient them): count it positive, and
+        # remember how many were listed inside out.
+        inverted = terms[0] < 0
+        self.inverted += int(inverted.sum())
+        terms *= np.where(inverted, -1.0, 1.0)
         det, s = terms[0], e1 + e2 + e3
         # About the shared origin: ∫x = D/24 (s + 4 p0); ∫x xᵀ = ∫(y+p0)(y+p0)ᵀ with y local.
         first = det * (s + 4 * p0)
@@ -130,19 +184,24 @@ class MomentSums:
         for row, (i, j) in enumerate(_PAIRS):
             second[row] = (terms[4 + row] + 5 * det * (s[i] * p0[j] + s[j] * p0[i])
                            + 20 * det * p0[i] * p0[j])
-        self._add(np.vstack([det[None], first, second]))
+        # Edges are within 2r, so |s + 4 p0| <= 10 r and the shifted second-moment factor
+        # (q of the edges, 5 |s| |p0| twice, 20 |p0|²) <= 128 r_i r_j.
+        scales = _term_scales(_radius(local), 10.0, 128.0)
+        self._add(np.vstack([det[None], first, second]), float(magnitude.sum()) * scales)
 
-    def _add(self, terms: np.ndarray) -> None:
+    def _add(self, terms: np.ndarray, abs_bounds: np.ndarray) -> None:
+        """Add a block's terms; ``abs_bounds`` bounds the block's absolute terms and, times a
+        few unit roundoffs, the rounding error of computing them."""
         n = terms.shape[1]
         if n == 0:
             return
         self._totals.append(terms.sum(axis=1))
-        self._abs_totals.append(np.abs(terms, out=terms).sum(axis=1))   # terms are not reused
+        self._abs_totals.append(abs_bounds)
         self.count += n
         self._longest_block = max(self._longest_block, n)
 
     def totals(self) -> tuple[np.ndarray, np.ndarray]:
-        """Exactly rounded sums of the block totals, and the sums of absolute terms."""
+        """Exactly rounded sums of the block totals, and bounds on the sums of absolute terms."""
         if not self._totals:
             return np.zeros(N_SUMS), np.zeros(N_SUMS)
         blocks = np.array(self._totals)
@@ -152,9 +211,10 @@ class MomentSums:
     def moments(self) -> Moments:
         """The solid's ``Moments``; volume 0 and no centre when the sum is within rounding of 0."""
         total, abs_total = self.totals()
-        # A-priori rounding bound per summed quantity: each term is a product of at most 5
-        # rounded factors built with a handful of additions (~12 roundings), and pairwise
-        # summation of a block adds at most ~log2(n) + 8 roundings of the absolute sum.
+        # A-priori rounding bound per summed quantity. Each term D·f: D's error is at most
+        # ~6 roundings of its products' magnitudes, f's a few roundings of its own magnitude
+        # (bounded by the term scales), the product one more (~12 in all); pairwise summation
+        # of a block adds at most ~log2(n) + 8 roundings of the absolute sum.
         rounding = (20 + math.log2(self._longest_block)) * _UNIT_ROUNDOFF
         bound = rounding * abs_total
         volume = total[0] / 6.0
@@ -187,6 +247,13 @@ def _errors(volume, offset, bound, volume_error) -> MomentErrors:
     ulp_terms = 4 * _UNIT_ROUNDOFF * abs(volume) * np.outer(a, a)
     central_error = (second_error + shift_error + ulp_terms) * 1.01
     return MomentErrors(volume_error, center_error, central_error)
+
+
+def _radius(local: np.ndarray) -> np.ndarray:
+    """Largest ``|coordinate|`` per axis of a ``(k, 3, n)`` block relative to the local origin."""
+    if local.shape[2] == 0:
+        return np.zeros(3)
+    return np.maximum(local.max(axis=(0, 2)), -local.min(axis=(0, 2)))
 
 
 def columns(points: np.ndarray) -> np.ndarray:
@@ -230,19 +297,25 @@ def triangle_moments(triangles: np.ndarray, origin=None, block: int = 65536) -> 
 
 
 def tetrahedron_moments(tetrahedra: np.ndarray, origin=None, block: int = 65536) -> Moments:
-    """Moments of a tetrahedral volume mesh, each tetrahedron with its own signed volume.
+    """Moments of a tetrahedral volume mesh; every tetrahedron counts positive, whatever the
+    order of its vertices (``tetrahedron_sums`` also tells how many were inverted).
 
     Parameters
     ----------
     tetrahedra : (n, 4, 3) float64
     """
+    return tetrahedron_sums(tetrahedra, origin, block).moments()
+
+
+def tetrahedron_sums(tetrahedra: np.ndarray, origin=None, block: int = 65536) -> MomentSums:
+    """The accumulated sums of a tetrahedral mesh (``.moments()``, ``.inverted``)."""
     tetrahedra = np.asarray(tetrahedra)
     if origin is None:
         origin = local_origin(tetrahedra)
     sums = MomentSums(origin)
     for start in range(0, len(tetrahedra), block):
         sums.add_tetrahedra(tetrahedra[start:start + block])
-    return sums.moments()
+    return sums
 
 
 def local_origin(points: np.ndarray) -> np.ndarray:

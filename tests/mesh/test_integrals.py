@@ -180,3 +180,21 @@ def test_flat_mesh_has_no_volume():
     tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [0, 1, 0], [1, 0, 0]]], float) + 1e3
     m = triangle_moments(tri)
     assert m.volume == 0.0 and m.center is None and m.central is None
+
+
+def test_tetrahedra_listed_inside_out_count_positive():
+    """A volume mesh's elements are material whatever their vertex order (Delaunay output is
+    not oriented): the volume equals the convex hull's, and the inverted count is reported."""
+    from scipy.spatial import Delaunay
+
+    from p3d_cli.mesh.integrals import tetrahedron_sums
+
+    points = np.random.default_rng(0).normal(size=(120, 3))
+    tets = points[Delaunay(points).simplices]
+    sums = tetrahedron_sums(tets)
+    hull = trimesh.convex.convex_hull(points)
+    assert sums.moments().volume == pytest.approx(hull.volume, rel=1e-12)
+    np.testing.assert_allclose(sums.moments().center, hull.center_mass, rtol=0, atol=1e-12)
+    assert 0 < sums.inverted < len(tets)
+    flipped = tets[:, [1, 0, 2, 3]]
+    assert tetrahedron_sums(flipped).inverted == len(tets) - sums.inverted

@@ -66,7 +66,7 @@ def test_placement_equals_exact_integration_of_the_placed_mesh(name, s, r, t):
     """Scale, rotation and translation of the moments equal the placed mesh's exact integrals.
 
     The reference is tests/exact.py (rational arithmetic on the placed float coordinates):
-    triangle_moments itself loses accuracy on rotated needles (see the xfail below). The
+    triangle_moments itself loses accuracy on rotated needles (its error bound covers it: below). The
     placed coordinates are rounded to float64, by up to eps·|coordinate|; relative to the
     part's thinnest extent that is eps·(largest coordinate / smallest scale), which bounds
     how closely the reference can agree (aspect ratios reach 1e6 here).
@@ -83,8 +83,6 @@ def test_placement_equals_exact_integration_of_the_placed_mesh(name, s, r, t):
     assert np.all(np.abs(placed.center - exact.center_float()) <= rel * (s.max() + np.abs(t)))
 
 
-@pytest.mark.xfail(reason="known gap in mesh.integrals: the det p1·(p2×p3) cancels on long rotated "
-                          "faces and the a-priori bound (from Σ|D|) misses it; see tests/test_extremes.py")
 def test_direct_integration_of_a_rotated_needle_is_within_its_error_bound():
     tris = SHAPES["box"]().triangles() * [1, 1, 1e5]
     r = rotation_from_quaternion(0, 1, 1, 1)
