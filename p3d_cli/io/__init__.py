@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 
 from p3d_cli.errors import UnknownFormatError
 from p3d_cli.io.raw import RawInput, open_input
@@ -43,6 +44,19 @@ _EXTENSIONS = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off"}
 __all__ = ["LOADERS", "MeshSource", "RawInput", "load_mesh", "detect_format", "is_mesh_path"]
 
 
+#: OFF and its variants (colours, normals, texture coordinates, other dimensions).
+_OFF_KEYWORD = re.compile(rb"(ST)?C?N?4?n?OFF")
+
+
+def _first_word(head: bytes) -> bytes:
+    """The first word of the text after blank lines and ``#`` comments (b"" if none)."""
+    for line in head.split(b"\n"):
+        words = line.split(b"#", 1)[0].split()
+        if words:
+            return words[0]
+    return b""
+
+
 def is_mesh_path(path: str) -> bool:
     """True when the file name has an extension p3d reads (used to search directories)."""
     ext = os.path.splitext(path)[1].lower()
@@ -70,7 +84,7 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
     stripped = head.lstrip()
     if stripped.startswith(b"ply"):
         return "ply"
-    if stripped[:4] in (b"OFF\n", b"OFF\r", b"OFF ", b"COFF", b"NOFF") or stripped.startswith(b"OFF\t"):
+    if _OFF_KEYWORD.fullmatch(_first_word(head)):
         return "off"
     ext = os.path.splitext(raw.path or "")[1].lower()
     if ext in _EXTENSIONS:

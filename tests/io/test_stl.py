@@ -135,3 +135,18 @@ def test_stdin_is_read(tmp_path):
     result = mesh_props("-", stdin=io.BytesIO(path.read_bytes()))
     assert result.properties.volume == pytest.approx(1.0)
     assert result.facts.format == "stl-binary"
+
+
+def test_off_variants_are_recognised_by_content_on_stdin():
+    """Standard input has no extension: an OFF header after comments, or a variant keyword
+    (COFF with colours), must still be recognised from the content."""
+    import io as _io
+
+    points = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"]
+    faces = "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"
+    plain = "4 4 0\n" + "\n".join(points) + "\n" + faces
+    coloured = "4 4 0\n" + "\n".join(p + " 255 0 0 255" for p in points) + "\n" + faces
+    for text in ("OFF\n" + plain, "# made by hand\n\nOFF\n" + plain, "COFF\n" + coloured):
+        result = mesh_props("-", stdin=_io.BytesIO(text.encode()))
+        assert result.facts.format == "off", text[:20]
+        assert result.properties.volume == pytest.approx(1 / 6), text[:20]
