@@ -270,7 +270,10 @@ def montecarlo_props(source: str, *, samples: int | None = None, seed: int | Non
         uncertainty = {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
-    return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty)
+    details = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
+    if placement is not None and not placement.is_identity:
+        details["placement"] = placement.describe()
+    return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty, details)
 
 
 def _shape_setup(shape, source, placement):

@@ -54,6 +54,11 @@ class Placement:
         if self.translation is not None:
             object.__setattr__(self, "translation", np.asarray(self.translation, dtype=np.float64).reshape(3))
 
+    def describe(self) -> dict:
+        """The placement for the record: only the parts that were given."""
+        parts = {"scale": self.scale, "rotation": self.rotation, "translation": self.translation}
+        return {name: value for name, value in parts.items() if value is not None}
+
     @property
     def is_identity(self) -> bool:
         return self.scale is None and self.rotation is None and self.translation is None
@@ -195,14 +200,19 @@ def input_props(source: str, placement: Placement | None = None, *, tessellate: 
     """
     placement = placement or Placement()
     shape = resolve_spec(source)
+    details = {} if placement.is_identity else {"placement": placement.describe()}
     if shape is not None:
-        return shape_props(shape, source, placement, tessellate=tessellate, density=density,
-                           mass=mass, about=about)
+        if tessellate is not None:
+            details["tessellate"] = tessellate
+        result = shape_props(shape, source, placement, tessellate=tessellate, density=density,
+                             mass=mass, about=about)
+        return dataclasses.replace(result, details={**result.details, **details})
     _refuse_tessellate(source, tessellate)
     from p3d_cli.props import mesh_props
 
-    return mesh_props(source, fmt=fmt, density=density, mass=mass, about=about, stdin=stdin,
-                      placement=None if placement.is_identity else placement)
+    result = mesh_props(source, fmt=fmt, density=density, mass=mass, about=about, stdin=stdin,
+                        placement=None if placement.is_identity else placement)
+    return dataclasses.replace(result, details={**result.details, **details})
 
 
 def input_bounds(source: str, placement: Placement | None = None, *, tessellate: int | None = None,

@@ -170,6 +170,9 @@ class PropsResult:
     uncertainty : dict or None
         Same keys as the estimates (``volume``, ``center_of_mass``, ``inertia``): standard
         errors for Monte Carlo, rounding-error bounds for the exact method.
+    details : dict
+        How the result was made, for the record: ``samples`` and ``seed`` (Monte Carlo),
+        ``placement`` (the scale, rotation and translation applied), ``tessellate``.
     """
 
     facts: MeshFacts
@@ -177,3 +180,4 @@ class PropsResult:
     method: str = "exact"
     warnings: tuple[str, ...] = field(default_factory=tuple)
     uncertainty: dict | None = None
+    details: dict = field(default_factory=dict)

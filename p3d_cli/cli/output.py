@@ -57,6 +57,7 @@ def props_record(result: PropsResult) -> dict:
     if p.about is not None:
         record["about"] = p.about
         record["inertia_about"] = p.inertia_about
+    record.update(result.details)
     return record
 
 

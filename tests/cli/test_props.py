@@ -171,3 +171,17 @@ def test_every_command_has_help_with_example():
         result = run(name, "--help")
         assert result.exit_code == 0, name
         assert "Example" in result.stdout, f"p3d {name} --help shows no example"
+
+
+def test_json_records_how_the_result_was_made(cube):
+    placed = json.loads(run("props", "box:1,2,3", "--rotate", "z:90", "--translate", "0,0,-1", "--json").stdout)
+    assert placed["placement"]["translation"] == [0.0, 0.0, -1.0]
+    np.testing.assert_allclose(placed["placement"]["rotation"], [[0, -1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-15)
+    assert "scale" not in placed["placement"]
+    sampled = json.loads(run("props", cube, "--method", "montecarlo", "--samples", "5000", "--seed", "7",
+                             "--json").stdout)
+    assert (sampled["method"], sampled["samples"], sampled["seed"]) == ("montecarlo", 5000, 7)
+    tessellated = json.loads(run("props", "sphere:1", "--tessellate", "16", "--json").stdout)
+    assert tessellated["tessellate"] == 16
+    plain = json.loads(run("props", cube, "--json").stdout)
+    assert not {"placement", "samples", "seed", "tessellate"} & set(plain)
