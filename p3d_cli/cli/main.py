@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import signal
 import sys
 from collections.abc import MutableMapping
 
@@ -48,6 +49,10 @@ class P3DGroup(click.Group):
     """A click group that turns every failure into one stderr line and a documented status."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if standalone_mode and hasattr(signal, "SIGPIPE"):
+            # Like any Unix filter, stop quietly when the reader goes away (p3d ... | head):
+            # Python ignores SIGPIPE and click would turn the broken pipe into exit 1.
+            signal.signal(signal.SIGPIPE, signal.SIG_DFL)
         try:
             status = super().main(args, prog_name or "p3d", complete_var, standalone_mode=False, **extra)
         except click.exceptions.Exit as exc:
@@ -63,10 +68,6 @@ class P3DGroup(click.Group):
         except P3DError as exc:
             error_line(exc.message)
             status = exc.exit_code
-        except BrokenPipeError:
-            # The reader of our output went away (p3d ... | head): not an error of ours.
-            _silence_stdout()
-            status = 0
         except KeyboardInterrupt:
             status = 130
         except Exception as exc:  # noqa: BLE001 - the last guard: a bug still gets one line
@@ -89,14 +90,6 @@ def _usage_error(exc: click.ClickException) -> int:
         return EXIT_USAGE
     error_line(message)
     return exc.exit_code
-
-
-def _silence_stdout() -> None:
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except OSError:
-        pass
 
 
 @click.group(cls=P3DGroup, help=HELP, context_settings={"help_option_names": ["-h", "--help"]})

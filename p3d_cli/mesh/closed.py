@@ -175,6 +175,8 @@ def closed_exact(triangles: np.ndarray) -> bool:
     end = np.roll(ids, -1, axis=1).reshape(-1)
     keep = start != end
     start, end = start[keep], end[keep]
+    if start.size == 0:
+        return False  # faces that are single points bound nothing
     directed = np.stack([start, end], axis=1)
     uniq, counts = np.unique(directed, axis=0, return_counts=True)
     if (counts != 1).any():

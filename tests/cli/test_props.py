@@ -13,6 +13,8 @@ from click.testing import CliRunner
 from conftest import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
+REPO_SAMPLE = __import__("pathlib").Path(__file__).resolve().parents[2] / "sample_meshes" / "bracket.stl"
+
 REQUIRED_KEYS = {"source", "faces", "closed", "volume", "mass", "density", "center_of_mass", "inertia",
                  "inertia_origin", "principal_moments", "principal_axes", "bounds", "warnings"}
 
@@ -185,3 +187,28 @@ def test_json_records_how_the_result_was_made(cube):
     assert tessellated["tessellate"] == 16
     plain = json.loads(run("props", cube, "--json").stdout)
     assert not {"placement", "samples", "seed", "tessellate"} & set(plain)
+
+
+def test_a_closed_pipe_ends_quietly(tmp_path):
+    """p3d ... | head: when the reader goes away, p3d stops like any Unix filter (SIGPIPE),
+    with nothing on stderr."""
+    import shutil
+    import signal
+
+    for i in range(40):
+        shutil.copy(REPO_SAMPLE, tmp_path / f"part{i:02}.stl")
+    proc = subprocess.Popen([sys.executable, "-m", "p3d_cli", "props", str(tmp_path), "--json", "--jobs", "1"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = proc.stdout.readline()
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=60)
+    assert json.loads(first)["volume"] == 4500.0
+    assert proc.returncode in (0, -signal.SIGPIPE)
+    assert b"Traceback" not in err and b"error" not in err
+
+
+def test_point_faces_are_not_closed():
+    from p3d_cli.mesh.closed import closed_exact
+
+    points = np.repeat(np.eye(3)[:, None, :], 3, axis=1)   # three faces, each a single point
+    assert closed_exact(points) is False
