@@ -7,10 +7,7 @@ from fractions import Fraction as F
 
 import numpy as np
 
-from p3d_cli.moments import scale_moments
-from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
-from p3d_cli.shapes.closed_form import canonical_moments
 
 #: Canonical vertices, index = 4·(x>0) + 2·(y>0) + (z>0).
 VERTICES = tuple((x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1))
@@ -27,49 +24,11 @@ CENTRAL = ((F(8, 3), F(0), F(0)), (F(0), F(8, 3), F(0)), (F(0), F(0), F(8, 3)))
 
 
 @dataclass(frozen=True)
-class Box:
-    """The box [-sx, sx] × [-sy, sy] × [-sz, sz].
-
-    Attributes
-    ----------
-    sx, sy, sz : float
-        Half-extents (positive).
-    """
-
-    sx: float = 1.0
-    sy: float = 1.0
-    sz: float = 1.0
+class Box(polyhedron.ScaledPolyhedron):
+    """The box [-sx, sx] × [-sy, sy] × [-sz, sz]."""
 
     name = "box"
-    polyhedral = True
-
-    @property
-    def scale(self) -> np.ndarray:
-        return np.array([self.sx, self.sy, self.sz], dtype=np.float64)
-
-    def spec(self) -> str:
-        return f"box:{self.sx:g},{self.sy:g},{self.sz:g}"
-
-    def scaled(self, scale) -> "Box":
-        """The box after a further diagonal scale (still a box)."""
-        s = self.scale * np.asarray(scale, dtype=np.float64)
-        return Box(*map(float, s))
-
-    def moments(self) -> Moments:
-        """Exact volume moments (eq. 4-9 applied to the canonical constants)."""
-        return scale_moments(canonical_moments(VOLUME, CENTER, CENTRAL), self.scale)
-
-    def vertices(self) -> np.ndarray:
-        """The 8 corners, ``(8, 3) float64``."""
-        return polyhedron.scaled_vertices(VERTICES, self.scale)
-
-    def triangles(self) -> np.ndarray:
-        """12 outward-wound triangles, ``(12, 3, 3) float64``."""
-        return polyhedron.face_triangles(self.vertices(), FACES)
-
-    def bounds(self, rotation=None, translation=None) -> Bounds:
-        """Exact axis-aligned box of ``R x + t`` over the solid (eq. 10)."""
-        return polyhedron.projected_bounds(self.vertices(), rotation, translation)
+    VERTICES, FACES, VOLUME, CENTER, CENTRAL = VERTICES, FACES, VOLUME, CENTER, CENTRAL
 
     def inside(self, points) -> np.ndarray:
         """Boolean mask: which points (shape's own frame) lie in the closed box."""

@@ -19,10 +19,7 @@ from fractions import Fraction as F
 
 import numpy as np
 
-from p3d_cli.moments import scale_moments
-from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
-from p3d_cli.shapes.closed_form import canonical_moments
 
 #: The four corners as FACTS.md lists them.
 VERTICES = ((-1, -1, -1), (-1, -1, 1), (-1, 1, -1), (1, -1, -1))
@@ -37,46 +34,11 @@ CENTRAL = ((F(1, 5), F(-1, 15), F(-1, 15)),
 
 
 @dataclass(frozen=True)
-class Corner:
-    """The tetrahedron with the right-angled corner at (-sx, -sy, -sz).
-
-    Attributes
-    ----------
-    sx, sy, sz : float
-        Half-extents of its bounding box (positive).
-    """
-
-    sx: float = 1.0
-    sy: float = 1.0
-    sz: float = 1.0
+class Corner(polyhedron.ScaledPolyhedron):
+    """The tetrahedron with the right-angled corner at (-sx, -sy, -sz)."""
 
     name = "corner"
-    polyhedral = True
-
-    @property
-    def scale(self) -> np.ndarray:
-        return np.array([self.sx, self.sy, self.sz], dtype=np.float64)
-
-    def spec(self) -> str:
-        return f"corner:{self.sx:g},{self.sy:g},{self.sz:g}"
-
-    def scaled(self, scale) -> "Corner":
-        s = self.scale * np.asarray(scale, dtype=np.float64)
-        return Corner(*map(float, s))
-
-    def moments(self) -> Moments:
-        return scale_moments(canonical_moments(VOLUME, CENTER, CENTRAL), self.scale)
-
-    def vertices(self) -> np.ndarray:
-        """The 4 corners, ``(4, 3) float64``, in FACTS.md's order."""
-        return polyhedron.scaled_vertices(VERTICES, self.scale)
-
-    def triangles(self) -> np.ndarray:
-        """4 outward-wound triangles, ``(4, 3, 3) float64``."""
-        return polyhedron.face_triangles(self.vertices(), FACES)
-
-    def bounds(self, rotation=None, translation=None) -> Bounds:
-        return polyhedron.projected_bounds(self.vertices(), rotation, translation)
+    VERTICES, FACES, VOLUME, CENTER, CENTRAL = VERTICES, FACES, VOLUME, CENTER, CENTRAL
 
     def inside(self, points) -> np.ndarray:
         """Boolean mask over points in the shape's own frame (closed set)."""

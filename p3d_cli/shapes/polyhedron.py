@@ -9,9 +9,13 @@ a box around a convex hull is attained at vertices.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from p3d_cli.results import Bounds
+from p3d_cli.moments import scale_moments
+from p3d_cli.results import Bounds, Moments
+from p3d_cli.shapes.closed_form import canonical_moments
 
 
 def scaled_vertices(vertices, scale) -> np.ndarray:
@@ -62,3 +66,52 @@ def face_triangles(vertices: np.ndarray, faces) -> np.ndarray:
 def as_points(points) -> np.ndarray:
     """Points as ``(n, 3) float64`` (a single point becomes one row)."""
     return np.asarray(points, dtype=np.float64).reshape(-1, 3)
+
+
+@dataclass(frozen=True)
+class ScaledPolyhedron:
+    """What box, wedge and corner share: canonical constants in [-1, 1]³, scaled.
+
+    A subclass sets the class attributes ``name``, ``VERTICES`` (canonical corners), ``FACES``
+    (wound counter-clockwise seen from outside), ``VOLUME``, ``CENTER``, ``CENTRAL`` (exact
+    ``Fraction`` constants of the canonical solid) and defines its own ``inside``.
+
+    Attributes
+    ----------
+    sx, sy, sz : float
+        Half-extents of the bounding box (positive).
+    """
+
+    sx: float = 1.0
+    sy: float = 1.0
+    sz: float = 1.0
+
+    polyhedral = True
+
+    @property
+    def scale(self) -> np.ndarray:
+        return np.array([self.sx, self.sy, self.sz], dtype=np.float64)
+
+    def spec(self) -> str:
+        return f"{self.name}:{self.sx:g},{self.sy:g},{self.sz:g}"
+
+    def scaled(self, scale):
+        """The same class after a further diagonal scale."""
+        s = self.scale * np.asarray(scale, dtype=np.float64)
+        return type(self)(*map(float, s))
+
+    def moments(self) -> Moments:
+        """Exact volume moments: eq. 4-9 applied to the canonical constants."""
+        return scale_moments(canonical_moments(self.VOLUME, self.CENTER, self.CENTRAL), self.scale)
+
+    def vertices(self) -> np.ndarray:
+        """The corners, ``(k, 3) float64``, in the order of ``VERTICES``."""
+        return scaled_vertices(self.VERTICES, self.scale)
+
+    def triangles(self) -> np.ndarray:
+        """Outward-wound triangles, ``(n, 3, 3) float64``."""
+        return face_triangles(self.vertices(), self.FACES)
+
+    def bounds(self, rotation=None, translation=None) -> Bounds:
+        """Exact axis-aligned box of ``R x + t`` over the solid (eq. 10)."""
+        return projected_bounds(self.vertices(), rotation, translation)
