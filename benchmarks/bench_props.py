@@ -47,7 +47,8 @@ from dataclasses import dataclass, field
 
 #: Triangle counts and the torus grid (u, v) giving 2·u·v triangles.
 SIZES = {10_000: (100, 50), 100_000: (250, 200), 1_000_000: (1000, 500), 4_000_000: (2000, 1000)}
-TINY = (20, 10)  # 400 triangles
+TINY = (20, 10)
+TINY_TRIANGLES = 2 * TINY[0] * TINY[1]
 FORMATS = ("stl-binary", "stl-ascii", "obj", "ply-binary")
 EXTENSIONS = {"stl-binary": "stl", "stl-ascii": "stl", "obj": "obj", "ply-binary": "ply"}
 
@@ -317,6 +318,8 @@ def main(argv=None) -> int:
     parser.add_argument("--runs-huge", type=int, default=1, help="runs per tool at 4M triangles (default 1)")
     parser.add_argument("--quick", action="store_true", help="10k and 100k triangles only, 3 runs")
     parser.add_argument("--sizes", help="comma-separated triangle counts (default 10000,100000,1000000,4000000)")
+    parser.add_argument("--formats", default=",".join(FORMATS),
+                        help=f"comma-separated formats to time (default {','.join(FORMATS)})")
     parser.add_argument("--huge-formats", default="stl-binary",
                         help="formats generated and timed at 4M triangles (default stl-binary)")
     parser.add_argument("--numpy-stl-max", type=int, default=100_000,
@@ -342,7 +345,10 @@ def main(argv=None) -> int:
     unknown = set(sizes) - set(SIZES)
     if unknown:
         parser.error(f"sizes must be among {sorted(SIZES)}")
-    huge_formats = [f for f in args.huge_formats.split(",") if f]
+    formats = [f for f in args.formats.split(",") if f]
+    huge_formats = [f for f in args.huge_formats.split(",") if f and f in formats]
+    if set(formats) - set(FORMATS):
+        parser.error(f"formats must be among {', '.join(FORMATS)}")
 
     def log(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
@@ -356,9 +362,10 @@ def main(argv=None) -> int:
         parser.error("no p3d command found next to this python or on PATH")
     t_all = time.perf_counter()
     for size in sizes:
-        formats = huge_formats if size >= 4_000_000 else FORMATS
-        subprocess.run([python, os.path.abspath(__file__), "--generate", workdir, str(size), ",".join(formats)],
-                       check=True)
+        wanted = huge_formats if size >= 4_000_000 else formats
+        if wanted:
+            subprocess.run([python, os.path.abspath(__file__), "--generate", workdir, str(size), ",".join(wanted)],
+                           check=True)
 
     global ENV
     ENV = child_env(workdir)
@@ -366,7 +373,8 @@ def main(argv=None) -> int:
     tiny = os.path.join(workdir, "tiny.stl")
     # Warm-up, untimed: fills the bytecode cache of every tool and the page cache.
     log("warm-up")
-    for path in [tiny] + [mesh_path(workdir, f, min(sizes)) for f in FORMATS]:
+    subprocess.run([python, os.path.abspath(__file__), "--generate", workdir, "10000", ",".join(FORMATS)], check=True)
+    for path in [tiny] + [mesh_path(workdir, f, 10_000) for f in FORMATS]:
         commands = [[p3d, "props", path, "--json"], [python, "-c", TRIMESH, path], [python, "-c", MESHIO, path]]
         if path.endswith(".stl"):
             commands.append([python, "-c", NUMPY_STL, path])
@@ -411,16 +419,19 @@ def main(argv=None) -> int:
 
     # The size sweep.
     lines.append("**Size sweep.** Medians over *runs* whole processes per tool, alternated. Times in "
-                 "seconds; *×wall* and *×cpu* = fastest peer's time / p3d's (wall clock, and user+sys "
-                 "CPU time, which other load on the machine disturbs less); *ns/tri* = p3d's CPU "
-                 "time above its start-up, per triangle (flat when the cost is linear); RSS = peak "
-                 "resident memory.")
+                 "seconds, wall clock unless marked cpu (user+sys, which other load on the machine "
+                 "disturbs less); *×trimesh* = trimesh's time / p3d's; *×fastest* = the fastest peer's "
+                 "wall time / p3d's; *ns/tri* = p3d's marginal CPU time per triangle, from the next "
+                 "smaller size of the same format (from the tiny file for the smallest): flat when "
+                 "the cost grows linearly, noisy at 10k where it is a difference of two start-ups; "
+                 "RSS = peak resident memory.")
     lines.append("")
-    lines.append("| format | triangles | file MB | runs | p3d | trimesh | meshio | numpy-stl | ×wall "
-                 "| p3d cpu | trimesh cpu | ×cpu | ns/tri | p3d RSS MB | trimesh RSS MB |")
-    lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    lines.append("| format | triangles | file MB | runs | p3d | trimesh | meshio | numpy-stl | ×trimesh "
+                 "| ×fastest | p3d cpu | trimesh cpu | ×trimesh cpu | ns/tri | p3d RSS MB | trimesh RSS MB |")
+    lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     memory_rows, failures = [], []
-    for fmt in FORMATS:
+    previous: dict[str, tuple[int, float]] = {}
+    for fmt in formats:
         for size in sizes:
             if size >= 4_000_000 and fmt not in huge_formats:
                 continue
@@ -451,18 +462,24 @@ def main(argv=None) -> int:
 
             peers = [r for name, r in ok.items() if name != "p3d"]
             mb = os.path.getsize(path) / 1e6
+            x_trimesh = x_trimesh_cpu = "–"
             if "p3d" in ok and peers:
                 p3d_s, p3d_cpu = ok["p3d"].median("wall"), ok["p3d"].median("cpu")
                 x_wall = f"{min(r.median('wall') for r in peers) / p3d_s:.1f}×"
-                x_cpu = f"{min(r.median('cpu') for r in peers) / p3d_cpu:.1f}×"
-                # Below 100k triangles the start-up dominates and the difference is noise.
-                ns = f"{max(p3d_cpu - p3d_start_cpu, 0.0) / size * 1e9:.0f}" if size >= 100_000 else "–"
+                if "trimesh" in ok:
+                    x_trimesh = f"{ok['trimesh'].median('wall') / p3d_s:.1f}×"
+                    x_trimesh_cpu = f"{ok['trimesh'].median('cpu') / p3d_cpu:.1f}×"
+                # Marginal cost: CPU time added per triangle since the next smaller size of
+                # this format (or the tiny file's start-up); flat when the cost is linear.
+                prev_size, prev_cpu = previous.get(fmt, (TINY_TRIANGLES, p3d_start_cpu))
+                ns = f"{(p3d_cpu - prev_cpu) / (size - prev_size) * 1e9:.0f}"
+                previous[fmt] = (size, p3d_cpu)
             else:
-                x_wall = x_cpu = ns = "–"
+                x_wall = ns = "–"
             rss = {name: f"{r.median('rss_mb'):.0f}" if name in ok else "–" for name, r in got.items()}
             lines.append(f"| {fmt} | {size:,} | {mb:.1f} | {runs} | {cell('p3d')} | {cell('trimesh')} "
-                         f"| {cell('meshio')} | {cell('numpy-stl')} | {x_wall} | {cell('p3d', 'cpu')} "
-                         f"| {cell('trimesh', 'cpu')} | {x_cpu} | {ns} | {rss['p3d']} | {rss['trimesh']} |")
+                         f"| {cell('meshio')} | {cell('numpy-stl')} | {x_trimesh} | {x_wall} | {cell('p3d', 'cpu')} "
+                         f"| {cell('trimesh', 'cpu')} | {x_trimesh_cpu} | {ns} | {rss['p3d']} | {rss['trimesh']} |")
             if "p3d" in ok and (size >= 4_000_000 or (size == max(sizes) and fmt == "stl-binary")):
                 memory_rows.append((fmt, size, mb, ok["p3d"].median("rss_mb")))
     lines.append("")
