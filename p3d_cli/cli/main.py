@@ -25,6 +25,33 @@ from collections.abc import MutableMapping
 # setting of the user's wins. The library itself leaves the environment alone.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+
+def _keep_freed_memory() -> None:
+    """Ask glibc's malloc to reuse freed memory instead of returning it to the system.
+
+    Every block of a mesh allocates and frees the same few MB of numpy temporaries; with
+    glibc's defaults these go back to the kernel (munmap, heap trimming) and come back as
+    fresh page faults, block after block: on a 1M-triangle STL 29k page faults and a third
+    of the run's time, 4M triangles 90k. Larger mmap/trim thresholds keep them in the heap
+    (7k faults; 0.26 -> 0.21 s and 0.7 -> 0.5 s); the peak is unchanged. Command line only,
+    glibc only (mallopt is absent elsewhere and this is then skipped).
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes  # noqa: PLC0415 - numpy imports it anyway
+
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    m_trim_threshold, m_top_pad, m_mmap_threshold = -1, -2, -3
+    mallopt(m_mmap_threshold, 32 << 20)
+    mallopt(m_trim_threshold, 128 << 20)
+    mallopt(m_top_pad, 16 << 20)
+
+
+_keep_freed_memory()
+
 import click  # noqa: E402
 
 from p3d_cli import __version__  # noqa: E402
