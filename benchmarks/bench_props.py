@@ -4,13 +4,16 @@
 What it does:
 
 1. Generates closed test meshes (a grid torus, so every edge is shared by two faces in opposite
-   directions) of 10k, 100k, 1M and 4M triangles as binary STL, ASCII STL, OBJ and binary PLY
-   (OBJ and PLY with shared vertices), plus a few-hundred-triangle ``tiny.stl``, in a work
-   directory outside the repository (default: a fresh temporary directory).
+   directions) of 10k, 100k and 1M triangles as binary STL, ASCII STL, OBJ and binary PLY
+   (OBJ and PLY with shared vertices), 4M triangles as binary STL (``--huge-formats``), plus
+   a 400-triangle ``tiny.stl``, in a work directory outside the repository (default: a fresh
+   temporary directory; ``--workdir`` keeps them for the next run).
 2. Runs each tool as a separate process, the way a shell loop or CI job would, alternating the
    tools run by run (and rotating which goes first), and reads each child's wall time, user+sys
    CPU time and peak resident memory (``ru_maxrss``) from ``os.wait4``. The same numbers can
-   be had by hand with ``/usr/bin/time -v``.
+   be had by hand with ``/usr/bin/time -v``. Runs per tool: ``--runs`` (5) up to 100k
+   triangles, ``--runs-large`` (3) at 1M, ``--runs-huge`` (2) at 4M; numpy-stl 2 from 100k.
+   One untimed warm-up run of every tool fills the page and bytecode caches first.
 3. Checks that every tool printed the same volume (so none skipped the work), and prints a
    markdown table of medians and of each peer's time relative to p3d; the table is also
    written to ``--output``.
@@ -48,7 +51,6 @@ from dataclasses import dataclass, field
 #: Triangle counts and the torus grid (u, v) giving 2·u·v triangles.
 SIZES = {10_000: (100, 50), 100_000: (250, 200), 1_000_000: (1000, 500), 4_000_000: (2000, 1000)}
 TINY = (20, 10)
-TINY_TRIANGLES = 2 * TINY[0] * TINY[1]
 FORMATS = ("stl-binary", "stl-ascii", "obj", "ply-binary")
 EXTENSIONS = {"stl-binary": "stl", "stl-ascii": "stl", "obj": "obj", "ply-binary": "ply"}
 
@@ -315,7 +317,7 @@ def main(argv=None) -> int:
     parser.add_argument("--workdir", help="where the meshes go (kept); default a temporary directory")
     parser.add_argument("--runs", type=int, default=5, help="runs per tool up to 100k triangles (default 5)")
     parser.add_argument("--runs-large", type=int, default=3, help="runs per tool at 1M triangles (default 3)")
-    parser.add_argument("--runs-huge", type=int, default=1, help="runs per tool at 4M triangles (default 1)")
+    parser.add_argument("--runs-huge", type=int, default=2, help="runs per tool at 4M triangles (default 2)")
     parser.add_argument("--quick", action="store_true", help="10k and 100k triangles only, 3 runs")
     parser.add_argument("--sizes", help="comma-separated triangle counts (default 10000,100000,1000000,4000000)")
     parser.add_argument("--formats", default=",".join(FORMATS),
@@ -422,9 +424,9 @@ def main(argv=None) -> int:
                  "seconds, wall clock unless marked cpu (user+sys, which other load on the machine "
                  "disturbs less); *×trimesh* = trimesh's time / p3d's; *×fastest* = the fastest peer's "
                  "wall time / p3d's; *ns/tri* = p3d's marginal CPU time per triangle, from the next "
-                 "smaller size of the same format (from the tiny file for the smallest): flat when "
-                 "the cost grows linearly, noisy at 10k where it is a difference of two start-ups; "
-                 "RSS = peak resident memory.")
+                 "smaller size of the same format: flat when the cost grows linearly (noisy at "
+                 "100k, where it is a small difference of two start-up-dominated runs); RSS = peak "
+                 "resident memory.")
     lines.append("")
     lines.append("| format | triangles | file MB | runs | p3d | trimesh | meshio | numpy-stl | ×trimesh "
                  "| ×fastest | p3d cpu | trimesh cpu | ×trimesh cpu | ns/tri | p3d RSS MB | trimesh RSS MB |")
@@ -470,9 +472,12 @@ def main(argv=None) -> int:
                     x_trimesh = f"{ok['trimesh'].median('wall') / p3d_s:.1f}×"
                     x_trimesh_cpu = f"{ok['trimesh'].median('cpu') / p3d_cpu:.1f}×"
                 # Marginal cost: CPU time added per triangle since the next smaller size of
-                # this format (or the tiny file's start-up); flat when the cost is linear.
-                prev_size, prev_cpu = previous.get(fmt, (TINY_TRIANGLES, p3d_start_cpu))
-                ns = f"{(p3d_cpu - prev_cpu) / (size - prev_size) * 1e9:.0f}"
+                # this format, measured in the same stretch of the run; flat when linear.
+                if fmt in previous:
+                    prev_size, prev_cpu = previous[fmt]
+                    ns = f"{(p3d_cpu - prev_cpu) / (size - prev_size) * 1e9:.0f}"
+                else:
+                    ns = "–"
                 previous[fmt] = (size, p3d_cpu)
             else:
                 x_wall = ns = "–"
