@@ -71,6 +71,8 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
         # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
         # file records.
         cols = columns(block)
+        if cols.shape[2] == 0:
+            continue                                # an empty block: nothing to add, no bounds
         block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
         # min and max propagate NaN and show any infinity: a finite check for free.
         if not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
