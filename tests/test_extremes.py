@@ -110,10 +110,11 @@ def check(triangles, ratios: list | None = None):
     assert ev <= DOCUMENTED * volume
     assert (ec <= DOCUMENTED * size + np.spacing(np.abs(props.center_of_mass))).all()
     assert (ei <= DOCUMENTED * inertia_scale).all()
-    # "Not absurdly loose": the bound is within the documented accuracy, or, for meshes of many
+    # "Not absurdly loose": the bound is within 1e-11 relative (worst seen over 3,000 random
+    # rotated, stretched hulls: 2.7e-12), or, for meshes of many
     # slivers, within the classic worst-case growth of n roundings (each sliver's determinant
     # really can carry an error of u·R³; only their random signs make the true sum smaller).
-    loose = max(4 * DOCUMENTED, 64 * np.finfo(float).eps / 2 * len(triangles))
+    loose = max(1e-11, 64 * np.finfo(float).eps / 2 * len(triangles))
     assert bound["volume"] <= loose * volume
     assert (bound["inertia"] <= loose * inertia_scale).all()
     if ratios is not None:
