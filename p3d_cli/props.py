@@ -7,7 +7,6 @@ This is the function behind ``p3d props``; the CLI only parses options and forma
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
@@ -121,6 +120,3 @@ def exact_uncertainty(moments: Moments, props) -> dict | None:
     out["mass"] = errors.volume * density + float(np.spacing(abs(props.mass)))
     return out
 
-
-def is_finite_number(x: float) -> bool:
-    return isinstance(x, (int, float)) and math.isfinite(x)
