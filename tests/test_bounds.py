@@ -12,26 +12,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from strategies import rotations, scales
+
 from p3d_cli.bounds import placed_bounds, triangles_bounds
 from p3d_cli.errors import UsageError
-from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_quaternion
+from p3d_cli.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import SHAPES, Box, Cylinder, Sphere
 
 GRID = 181          # samples per angle: spacing 2π/180 around, π/180 from pole to pole
-
-
-@st.composite
-def scales(draw):
-    low = draw(st.floats(-6, 0))
-    span = draw(st.floats(0, 6))
-    t = draw(st.lists(st.floats(0, 1), min_size=3, max_size=3))
-    return 10.0 ** (low + span * np.array(t))
-
-
-@st.composite
-def rotations(draw):
-    q = draw(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda v: np.linalg.norm(v) > 1e-3))
-    return rotation_from_quaternion(*q)
 
 
 def canonical_surface(shape):

@@ -10,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from exact import exact_moments
+from strategies import rotations, scales
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.moments import scale_moments
 from p3d_cli.placed import place_moments
@@ -19,21 +20,6 @@ from p3d_cli.shapes import SHAPES
 
 def stand_in(shape):
     return shape.triangles() if shape.polyhedral else shape.tessellate(24)
-
-
-@st.composite
-def scales(draw):
-    """Three factors within 1e-6..1e6 whose largest ratio is at most 1e6."""
-    low = draw(st.floats(-6, 0))
-    span = draw(st.floats(0, 6))
-    t = draw(st.lists(st.floats(0, 1), min_size=3, max_size=3))
-    return 10.0 ** (low + span * np.array(t))
-
-
-@st.composite
-def rotations(draw):
-    q = draw(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda v: np.linalg.norm(v) > 1e-3))
-    return rotation_from_quaternion(*q)
 
 
 def assert_moments_close(got, want, rtol=1e-9):
