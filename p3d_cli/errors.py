@@ -30,6 +30,9 @@ class P3DError(Exception):
     """
 
     exit_code = 2
+    #: In a batch, an error met on one input normally becomes that input's error record;
+    #: True ends the whole batch instead (see ``p3d_cli.cli.batch.Batch.report``).
+    ends_batch = False
 
     def __init__(self, where: str, what: str, hint: str = "") -> None:
         self.where = where
@@ -57,6 +60,13 @@ class UnknownFormatError(InputError):
 
 class UsageError(P3DError):
     """An option or argument value is invalid."""
+
+
+class FieldError(UsageError):
+    """A ``--field`` that a result does not have: found only once a result exists, but wrong for
+    the whole command line, so it ends the batch."""
+
+    ends_batch = True
 
 
 class SpecError(UsageError):

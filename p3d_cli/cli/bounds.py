@@ -7,7 +7,7 @@ import functools
 import click
 
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch, BatchOptions
+from p3d_cli.cli.batch import Batch, BatchOptions, Report
 from p3d_cli.cli.options import PLACEMENT_HELP, format_option, inputs_argument, json_option, placement_options
 from p3d_cli.placed import input_bounds
 
@@ -40,21 +40,20 @@ Examples:
 @json_option
 def bounds(inputs, fmt, placement, tessellate, as_json):
     run = Batch("p3d bounds", inputs, BatchOptions(jobs=1))
-    compute = functools.partial(input_bounds, placement=placement, tessellate=tessellate, fmt=fmt)
-    for outcome in run.outcomes(compute):
-        if outcome.error is not None:
-            run.error(outcome)
-            if as_json:
-                click.echo(output.dumps({"source": outcome.source, "error": outcome.error.message}))
-            continue
-        result = outcome.result
-        for text in result.warnings:
-            run.note(f"p3d: warning: {result.source}: {text}")
-        run.passed()
-        click.echo(output.dumps(bounds_record(result)) if as_json else bounds_table(result))
+    run.report(functools.partial(bounds_report, as_json=as_json, placement=placement, tessellate=tessellate,
+                                 fmt=fmt),
+               lambda outcome: output.dumps({"source": outcome.source, "error": outcome.error.message})
+               if as_json else None)
     status = run.finish()
     if status:
         raise click.exceptions.Exit(status)
+
+
+def bounds_report(source: str, *, as_json: bool, **options) -> Report:
+    """One input's bounds, formatted."""
+    result = input_bounds(source, **options)
+    notes = tuple(f"p3d: warning: {result.source}: {text}" for text in result.warnings)
+    return Report(output.dumps(bounds_record(result)) if as_json else bounds_table(result), notes)
 
 
 def bounds_record(result) -> dict:

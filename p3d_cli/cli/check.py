@@ -7,7 +7,7 @@ import functools
 import click
 
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch
+from p3d_cli.cli.batch import Batch, Report
 from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.topology import CHECKS, CheckResult, check_source
@@ -28,10 +28,30 @@ _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
 
 def check_file(source: str, *, fmt: str | None, required: tuple[str, ...], min_volume: float | None,
                max_faces: int | None) -> CheckResult:
-    """Load and check one input (module level, so that worker processes can receive it)."""
+    """Load and check one input."""
     from p3d_cli.io import load_mesh
 
     return check_source(load_mesh(source, fmt), source, required, min_volume, max_faces)
+
+
+def check_report(source: str, *, style: str, **limits) -> Report:
+    """One input's verdict in ``style`` (text, json or csv), formatted where it was computed
+    (module level, so that worker processes can receive it)."""
+    result = check_file(source, **limits)
+    if style == "text":
+        text = check_text(result)
+    else:
+        record = check_record(result)
+        text = output.dumps(record) if style == "json" else check_csv_line(record)
+    return Report(text, passed=result.ok)
+
+
+def error_line(outcome, *, style: str) -> str | None:
+    """The record of an input that could not be read: JSON or CSV; nothing in text style."""
+    record = {"source": outcome.source, "ok": False, "error": outcome.error.message}
+    if style == "text":
+        return None
+    return output.dumps(record) if style == "json" else check_csv_line(record)
 
 
 def parse_require(values: tuple[str, ...]) -> tuple[str, ...]:
@@ -95,12 +115,12 @@ def _sample_json(sample):
     return {"faces": list(sample.faces), "vertex": list(sample.point)}
 
 
-def check_row(record: dict) -> dict:
-    """The flat ``--csv`` row of a JSON record (or of an error record)."""
+def check_csv_line(record: dict) -> str:
+    """The ``--csv`` row of a JSON record (or of an error record)."""
     row = {key: record.get(key, "") for key in CSV_COLUMNS}
     if isinstance(row["failed"], list):
         row["failed"] = " ".join(row["failed"])
-    return row
+    return output.csv_line(row[key] for key in CSV_COLUMNS)
 
 
 def check_text(result: CheckResult) -> str:
@@ -185,25 +205,13 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, batch):
     required = parse_require(require)
     if as_json and batch.csv:
         raise UsageError("--json/--csv", "both given", "choose one output format")
+    style = "csv" if batch.csv else "json" if as_json else "text"
     run = Batch("p3d check", inputs, batch)
-    work = functools.partial(check_file, fmt=fmt, required=required, min_volume=min_volume,
+    work = functools.partial(check_report, style=style, fmt=fmt, required=required, min_volume=min_volume,
                              max_faces=max_faces)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
-    for outcome in run.outcomes(work):
-        if outcome.error is not None:
-            run.error(outcome)
-            record = {"source": outcome.source, "ok": False, "error": outcome.error.message}
-        else:
-            result = outcome.result
-            run.passed() if result.ok else run.fail()
-            record = check_record(result)
-        if batch.csv:
-            click.echo(output.csv_line(check_row(record)[k] for k in CSV_COLUMNS))
-        elif as_json:
-            click.echo(output.dumps(record))
-        elif outcome.error is None:
-            click.echo(check_text(outcome.result))
+    run.report(work, functools.partial(error_line, style=style))
     status = run.finish("failed check")
     if status:
         raise click.exceptions.Exit(status)

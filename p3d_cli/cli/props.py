@@ -7,10 +7,10 @@ import functools
 import click
 
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch
+from p3d_cli.cli.batch import Batch, Report
 from p3d_cli.cli.options import VECTOR3, batch_options, density_options, format_option, inputs_argument, json_option, strict_option
 from p3d_cli.cli.options import placement_options
-from p3d_cli.errors import CheckFailedError, UsageError
+from p3d_cli.errors import CheckFailedError, FieldError, UsageError
 from p3d_cli.placed import input_props
 
 
@@ -65,54 +65,66 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
     """
     if density is not None and mass is not None:
         raise UsageError("--mass/--density", "both given", "give one: the other follows from the volume")
-    failed = warned = False
     if method != "montecarlo" and (samples is not None or seed is not None or tolerance is not None):
         raise UsageError("--samples/--seed/--tolerance", "given without --method montecarlo",
                          "add --method montecarlo, or drop them")
 
     if batch.csv and (as_json or fields):
         raise UsageError("--csv", "given with --json or --field", "choose one output format")
+    style = "csv" if batch.csv else "fields" if fields else "json" if as_json else "table"
     run = Batch("p3d props", inputs, batch)
-    compute = functools.partial(compute_props, method=method, samples=samples, seed=seed,
-                                tolerance=tolerance, fmt=fmt, density=density, mass=mass, about=about,
-                                placement=placement, tessellate=tessellate)
+    work = functools.partial(props_report, style=style, fields=fields, strict=strict, method=method,
+                             samples=samples, seed=seed, tolerance=tolerance, fmt=fmt, density=density,
+                             mass=mass, about=about, placement=placement, tessellate=tessellate)
     if batch.csv:
         click.echo(output.csv_line(output.PROPS_CSV_COLUMNS))
-    for outcome in run.outcomes(compute):
-        if outcome.error is not None:
-            failed = True
-            run.error(outcome)
-            if as_json or batch.csv:
-                record = {"source": outcome.source, "error": outcome.error.message}
-                click.echo(output.csv_line(output.props_row(record)) if batch.csv else output.dumps(record))
-            continue
-        result = outcome.result
-        for text in result.warnings:
-            run.note(f"p3d: warning: {result.facts.source}: {text}")
-        warned = warned or bool(result.warnings)
-        run.fail() if strict and result.warnings else run.passed()
-        record = output.props_record(result)
-        if batch.csv:
-            click.echo(output.csv_line(output.props_row(record)))
-        elif fields:
-            values = []
-            for name in fields:
-                try:
-                    values.append(output.bare(output.field_value(record, name)))
-                except KeyError:
-                    raise UsageError("--field", f"no field named {name!r}",
-                                     "fields are: " + ", ".join(record)) from None
-            click.echo("\t".join(values))
-        elif as_json:
-            click.echo(output.dumps(record))
-        else:
-            click.echo(output.props_table(result))
+    run.report(work, functools.partial(error_line, style=style))
     status = run.finish("with warnings (--strict)")
-    if failed:
+    if run.errors:
         raise click.exceptions.Exit(status)
-    if strict and warned:
+    if run.failed:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
+
+
+def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **compute) -> Report:
+    """One input's output in ``style`` (table, json, csv or fields), formatted where it was
+    computed (module level, so that worker processes can receive it).
+
+    Raises
+    ------
+    FieldError
+        A name in ``fields`` that the result does not have.
+    """
+    result = compute_props(src, **compute)
+    notes = tuple(f"p3d: warning: {result.facts.source}: {text}" for text in result.warnings)
+    if style == "table":
+        text = output.props_table(result)
+    else:
+        record = output.props_record(result)
+        if style == "csv":
+            text = output.csv_line(output.props_row(record))
+        elif style == "fields":
+            text = "\t".join(output.bare(field(record, name)) for name in fields)
+        else:
+            text = output.dumps(record)
+    return Report(text, notes, passed=not (strict and result.warnings))
+
+
+def field(record: dict, name: str):
+    """``record``'s field ``name`` (dots for nesting)."""
+    try:
+        return output.field_value(record, name)
+    except KeyError:
+        raise FieldError("--field", f"no field named {name!r}", "fields are: " + ", ".join(record)) from None
+
+
+def error_line(outcome, *, style: str) -> str | None:
+    """The record of an input that could not be done: JSON or CSV; nothing in the other styles."""
+    record = {"source": outcome.source, "error": outcome.error.message}
+    if style == "csv":
+        return output.csv_line(output.props_row(record))
+    return output.dumps(record) if style == "json" else None
 
 
 def compute_props(src, *, method, samples, seed, tolerance, fmt, density, mass, about,

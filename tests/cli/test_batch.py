@@ -133,6 +133,30 @@ def test_props_batch_csv_with_jobs(mixed):
     assert "p3d: 9 files: 8 ok, 1 error" in result.stderr
 
 
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_warnings_and_strict_verdicts_cross_from_workers(tmp_path, jobs):
+    for i in range(3):
+        write_binary_stl(tmp_path / f"good{i}.stl", CUBE * (i + 1))
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    result = run("props", tmp_path, "--json", "--strict", "--jobs", jobs)
+    assert result.exit_code == 1
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [os.path.basename(r["source"]) for r in records] == ["good0.stl", "good1.stl", "good2.stl", "open.stl"]
+    assert [r["volume"] for r in records[:3]] == [1.0, 8.0, 27.0] and records[3]["warnings"]
+    assert result.stderr.count("p3d: warning: ") == len(records[3]["warnings"])
+    assert "p3d: 4 files: 3 ok, 1 with warnings (--strict)" in result.stderr
+    assert "p3d: error: --strict: some result carries a warning" in result.stderr
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_unknown_field_ends_the_batch_as_a_usage_error(mixed, jobs):
+    folder, _, _ = mixed
+    result = run("props", folder, "--field", "volumen", "--jobs", jobs)
+    assert result.exit_code == 2 and result.stdout == ""
+    assert result.stderr.count("no field named 'volumen'") == 1 and "fields are: source," in result.stderr
+    assert "files:" not in result.stderr  # no summary: the command line was wrong, not a file
+
+
 def test_jobs_and_dask_together_is_a_usage_error(tmp_path):
     result = run("check", tmp_path, "--jobs", "2", "--dask", "tcp://127.0.0.1:1")
     assert result.exit_code == 2 and "--jobs/--dask: both given" in result.stderr
