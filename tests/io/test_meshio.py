@@ -39,6 +39,19 @@ def test_extension_and_name_lookup():
     assert is_mesh_path("part.vtu") and not is_mesh_path("notes.txt")
 
 
+def test_companion_files_are_skipped_without_asking_meshio(tmp_path):
+    from p3d_cli import io as p3d_io
+
+    # The skip list must never hide a format meshio reads.
+    assert not [ext for ext in p3d_io._NEVER_MESHES if ext and meshio_backend.knows_extension(ext)]
+    for name in ("part.stl", "part.mtl", "notes.txt", "README", "list.json"):
+        (tmp_path / name).write_bytes(b"")
+    code = ("import sys; from p3d_cli.cli.batch import expand_inputs; "
+            f"print([p.rsplit('/', 1)[1] for p in expand_inputs([{str(tmp_path)!r}])], 'meshio' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["['part.stl']", "False"]
+
+
 def test_tetrahedra_give_exact_volume_centre_and_inertia(tmp_path):
     path = str(tmp_path / "cube.msh")
     meshio.write(path, meshio.Mesh(CUBE_V, [("tetra", CUBE_TETS)]), file_format="gmsh22", binary=False)
