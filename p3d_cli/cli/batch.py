@@ -8,14 +8,16 @@ failing input yields an error outcome and the batch goes on.
 Where the work runs:
 
 - in this process, when there is one input or ``--jobs 1`` (no start-up cost);
-- in ``--jobs N`` worker processes on this machine (``multiprocessing.Pool.imap``: ordered,
-  chunked); the default is the number of cores this process may use;
+- in ``--jobs N`` worker processes on this machine, in chunks, results in order: forked
+  workers (``p3d_cli.cli.workers``), or ``multiprocessing.Pool`` where fork is unsafe; the
+  default is the number of cores this process may use;
 - on an existing Dask cluster with ``--dask ADDRESS`` (optional extra ``p3d-cli[dask]``;
   the workers need p3d installed and must see the same paths).
 
-Standard input is always read here, at its turn. The work function is sent to other
-processes, so it must be picklable: a module-level function, or a ``functools.partial`` of
-one with picklable arguments.
+Standard input is always read here, at its turn. The work function may be sent to other
+processes (Dask, or a pool started by spawn), so it must be picklable: a module-level
+function, or a ``functools.partial`` of one with picklable arguments. Its results are
+pickled back: commands return short ``Report`` texts rather than arrays.
 
 A bug met while working on one input (an exception that is not a ``P3DError``) becomes an
 error outcome with exit status 3 rather than ending the batch; ``P3D_DEBUG=1`` re-raises it.
@@ -23,6 +25,7 @@ error outcome with exit status 3 rather than ending the batch; ``P3D_DEBUG=1`` r
 
 from __future__ import annotations
 
+import functools
 import importlib
 import os
 import signal
@@ -32,6 +35,7 @@ from typing import Callable, Iterable, Iterator
 
 import click
 
+from p3d_cli.cli import workers
 from p3d_cli.errors import InputError, MissingExtraError, P3DError, UsageError
 
 #: Batches with more inputs than this get a progress bar, when stderr is a terminal.
@@ -212,21 +216,55 @@ def _unpack(item: str, packed: tuple) -> Outcome:
     return Outcome(item, None, error)
 
 
+def _run_one(work, item) -> tuple:
+    return _run_packed((work, item))
+
+
+def _died(item: str, reason: str) -> tuple:
+    """The packed error of an input whose worker process died doing it."""
+    return ("error", "p3d_cli.errors", "InputError", item, f"not done: {reason}",
+            "if it ran out of memory, run it alone (--jobs 1) or on a machine with more memory",
+            InputError.exit_code)
+
+
+def _in_processes(items: list[str], work, jobs: int) -> Iterator[Outcome]:
+    tasks = [None if item == "-" else item for item in items]
+    # Chunks amortise the inter-process round trip over small files, but hold results back
+    # until the whole chunk is done: keep several chunks per worker.
+    chunk = max(1, min(16, len(items) // (8 * jobs)))
+    if workers.fork_is_safe():
+        results = workers.imap_forked(functools.partial(_run_one, work), tasks, jobs, chunk, _died)
+    else:
+        results = _in_pool(tasks, work, jobs, chunk)
+    try:
+        for item, packed in zip(items, results):
+            if packed[0] == "skip":
+                packed = _run_packed((work, item))
+            yield _unpack(item, packed)
+    finally:
+        results.close()
+
+
 def _ignore_sigint() -> None:
     # Ctrl-C goes to the whole process group: the parent stops the pool; workers stay quiet.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _pool_context():
+def _in_pool(tasks: list[str | None], work, jobs: int, chunk: int) -> Iterator[tuple]:
+    """``multiprocessing.Pool``, where fork is unsafe (threads) or missing: workers start by
+    forkserver or spawn, so ``work`` travels pickled. A worker killed by the system is not
+    noticed here (``Pool.imap`` waits for it); ``p3d_cli.cli.workers`` does notice."""
     import multiprocessing
-    import threading
 
-    # fork starts workers in milliseconds, but is unsafe once threads exist (a lock held by
-    # another thread stays held in the child); fall back to forkserver then.
     methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
-        return multiprocessing.get_context("fork")
-    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    pool = context.Pool(jobs, initializer=_ignore_sigint)
+    try:
+        yield from pool.imap(_run_packed, [(work, task) for task in tasks], chunk)
+        pool.close()
+        pool.join()
+    finally:
+        pool.terminate()
 
 
 def _serial(items: list[str], work) -> Iterator[Outcome]:
@@ -234,26 +272,11 @@ def _serial(items: list[str], work) -> Iterator[Outcome]:
         yield _unpack(item, _run_packed((work, item)))
 
 
-def _in_pool(items: list[str], work, jobs: int) -> Iterator[Outcome]:
-    tasks = [(work, None if item == "-" else item) for item in items]
-    # Chunks amortise the inter-process round trip over small files, but hold results back
-    # until the whole chunk is done: keep several chunks per worker.
-    chunk = max(1, min(16, len(items) // (8 * jobs)))
-    pool = _pool_context().Pool(jobs, initializer=_ignore_sigint)
-    try:
-        for item, packed in zip(items, pool.imap(_run_packed, tasks, chunk)):
-            if packed[0] == "skip":
-                packed = _run_packed((work, item))
-            yield _unpack(item, packed)
-        pool.close()
-        pool.join()
-    finally:
-        pool.terminate()
-
-
 def _on_dask(items: list[str], work, address: str) -> Iterator[Outcome]:
+    from concurrent.futures import CancelledError
+
     try:
-        from dask.distributed import Client
+        from dask.distributed import Client, KilledWorker
     except ImportError:
         raise MissingExtraError("--dask", "needs dask.distributed, which is not installed",
                                 "pip install 'p3d-cli[dask]'") from None
@@ -267,7 +290,15 @@ def _on_dask(items: list[str], work, address: str) -> Iterator[Outcome]:
         futures = dict(zip((i for i, _ in remote),
                            client.map(_run_packed, [(work, item) for _, item in remote], pure=False)))
         for i, item in enumerate(items):
-            packed = futures[i].result() if i in futures else _run_packed((work, item))
+            if i not in futures:
+                packed = _run_packed((work, item))
+            else:
+                try:
+                    packed = futures[i].result()
+                except KilledWorker as exc:
+                    packed = _died(item, f"every Dask worker that tried it died ({exc.allowed_failures + 1} tried)")
+                except CancelledError:
+                    packed = _died(item, "the Dask cluster cancelled it (a worker or the scheduler was lost)")
             yield _unpack(item, packed)
     finally:
         client.close()
@@ -295,7 +326,7 @@ def run_each(inputs: Iterable[str | InputError], work: Callable[[str], object], 
         results = _on_dask(paths, work, dask)
     else:
         jobs = min(default_jobs() if jobs is None else jobs, len(paths))
-        results = _in_pool(paths, work, jobs) if jobs > 1 else _serial(paths, work)
+        results = _in_processes(paths, work, jobs) if jobs > 1 else _serial(paths, work)
     try:
         for x in ordered:
             yield Outcome(x.where, None, x) if isinstance(x, P3DError) else next(results)

@@ -282,3 +282,32 @@ def test_dask_props_with_standard_input_done_locally(mixed, dask_address):
     records = [json.loads(line) for line in result.stdout.splitlines()]
     assert [r["source"] for r in records] == [str(good), "-"]
     assert records[0]["volume"] == records[1]["volume"] == 27.0
+
+
+def test_dask_losing_a_task_is_that_input_error(monkeypatch):
+    distributed = pytest.importorskip("dask.distributed")
+
+    class Future:
+        def __init__(self, fn, task):
+            self.fn, self.task = fn, task
+
+        def result(self):
+            if self.task[1] == "b":  # as when every worker that tried it died
+                raise distributed.KilledWorker("run-b", None, 3)
+            return self.fn(self.task)
+
+    class Client:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def map(self, fn, tasks, pure):
+            return [Future(fn, task) for task in tasks]
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(distributed, "Client", Client)
+    out = list(run_each(["a", "b", "c"], str.upper, dask="tcp://scheduler:8786"))
+    assert [o.result for o in out] == ["A", None, "C"]
+    assert out[1].error.exit_code == 2
+    assert out[1].error.message.startswith("b: not done: every Dask worker that tried it died (4 tried); ")
