@@ -7,8 +7,10 @@ import functools
 import click
 
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch, BatchOptions, Report
-from p3d_cli.cli.options import PLACEMENT_HELP, format_option, inputs_argument, json_option, placement_options
+from p3d_cli.cli.batch import Batch, Report
+from p3d_cli.cli.options import (PLACEMENT_HELP, batch_options, format_option, inputs_argument, json_option,
+                                 placement_options)
+from p3d_cli.errors import UsageError
 from p3d_cli.placed import input_bounds
 
 
@@ -26,34 +28,68 @@ Inputs: mesh files, - for standard input, or shape specs:
   box:SX,SY,SZ                             half-extents: box:1,2,3 measures 2 x 4 x 6
   sphere:R   cylinder:R,R,H                a sphere keeps sx=sy=sz, a cylinder sx=sy
   ellipsoid:A,B,C   ecylinder:A,B,H        their exact generalisations
-A file named like a spec is reached as ./box.
+A file named like a spec is reached as ./box. Directories are searched for mesh files, and
+--files-from, --jobs, --dask and --csv work as for p3d props (see docs/batch.md).
 
 \b
 Examples:
   p3d bounds part.stl --rotate z:30 --rotate x:90
   p3d bounds cylinder:1,1,2 --rotate 1,1,0:45 --translate 0,0,5 --json
   p3d bounds box:1,2,3 --quat 0.9239,0,0,0.3827
+  p3d bounds exports/ --csv --jobs 4 > boxes.csv
 """)
 @inputs_argument
 @format_option
 @placement_options
 @json_option
-def bounds(inputs, fmt, placement, tessellate, as_json):
-    run = Batch("p3d bounds", inputs, BatchOptions(jobs=1))
-    run.report(functools.partial(bounds_report, as_json=as_json, placement=placement, tessellate=tessellate,
-                                 fmt=fmt),
-               lambda outcome: output.dumps({"source": outcome.source, "error": outcome.error.message})
-               if as_json else None)
+@batch_options
+def bounds(inputs, fmt, placement, tessellate, as_json, batch):
+    if as_json and batch.csv:
+        raise UsageError("--json/--csv", "both given", "choose one output format")
+    style = "csv" if batch.csv else "json" if as_json else "table"
+    run = Batch("p3d bounds", inputs, batch)
+    if batch.csv:
+        click.echo(output.csv_line(CSV_COLUMNS))
+    run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate, fmt=fmt),
+               functools.partial(error_line, style=style))
     status = run.finish()
     if status:
         raise click.exceptions.Exit(status)
 
 
-def bounds_report(source: str, *, as_json: bool, **options) -> Report:
-    """One input's bounds, formatted."""
+#: Columns of ``p3d bounds --csv``.
+CSV_COLUMNS = ("source", "format", "method", "faces", "min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
+               "warnings", "error")
+
+
+def bounds_report(source: str, *, style: str, **options) -> Report:
+    """One input's bounds in ``style`` (table, json or csv), formatted where they were computed
+    (module level, so that worker processes can receive it)."""
     result = input_bounds(source, **options)
     notes = tuple(f"p3d: warning: {result.source}: {text}" for text in result.warnings)
-    return Report(output.dumps(bounds_record(result)) if as_json else bounds_table(result), notes)
+    if style == "table":
+        return Report(bounds_table(result), notes)
+    record = bounds_record(result)
+    return Report(output.dumps(record) if style == "json" else csv_row(record), notes)
+
+
+def csv_row(record: dict) -> str:
+    """The ``--csv`` row of a JSON record (or of an error record)."""
+    row = dict.fromkeys(CSV_COLUMNS)
+    row.update({k: v for k, v in record.items() if k in row})
+    for end in ("min", "max"):
+        if record.get(end) is not None:
+            row.update(zip((f"{end}_x", f"{end}_y", f"{end}_z"), (float(x) for x in record[end])))
+    row["warnings"] = " | ".join(record.get("warnings") or []) or None
+    return output.csv_line(row[k] for k in CSV_COLUMNS)
+
+
+def error_line(outcome, *, style: str) -> str | None:
+    """The record of an input that could not be done: JSON or CSV; nothing in table style."""
+    record = {"source": outcome.source, "error": outcome.error.message}
+    if style == "table":
+        return None
+    return output.dumps(record) if style == "json" else csv_row(record)
 
 
 def bounds_record(result) -> dict:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import math
 import os
@@ -156,3 +158,27 @@ def test_subprocess_entry_point():
                          capture_output=True, text=True, cwd=os.path.dirname(__file__))
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["min"] == [-1, -1, -1]
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_batch_directory_files_from_and_csv(tmp_path, jobs):
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    for i in range(3):
+        write_ascii_stl(folder / f"p{i}.stl", cube_triangles() * (i + 1))
+    listing = tmp_path / "list.txt"
+    listing.write_text(f"{tmp_path / 'missing.stl'}\n")
+    result = run("bounds", str(folder), "box:1,2,3", "--files-from", str(listing), "--csv", "--jobs", jobs)
+    assert result.exit_code == 2
+    rows = list(csv.DictReader(io.StringIO(result.stdout)))
+    assert [os.path.basename(r["source"]) for r in rows] == ["p0.stl", "p1.stl", "p2.stl", "box:1,2,3", "missing.stl"]
+    assert [(r["max_x"], r["max_z"]) for r in rows[:3]] == [("1.0", "1.0"), ("2.0", "2.0"), ("3.0", "3.0")]
+    assert (rows[3]["min_y"], rows[3]["max_z"], rows[3]["error"]) == ("-2.0", "3.0", "")
+    assert rows[4]["error"].endswith("missing.stl: no such file; check the path (primitive specs are box, "
+                                     "wedge, corner, cylinder, sphere)") and rows[4]["min_x"] == ""
+    assert "p3d: 5 files: 4 ok, 1 error" in result.stderr
+
+
+def test_batch_json_and_csv_together_is_a_usage_error():
+    result = run("bounds", "box", "--json", "--csv")
+    assert result.exit_code == 2 and "--json/--csv: both given" in result.stderr
