@@ -1,9 +1,9 @@
 """Running one command over many inputs: in order, in processes or on a Dask cluster.
 
 Inputs are the command's arguments (files, directories searched for mesh files, ``-`` for
-standard input) followed by the lines of ``--files-from LIST``. Every input yields exactly
-one ``Outcome``, in input order, as soon as it and every input before it are done: a
-failing input yields an error outcome and the batch goes on.
+standard input) followed by the lines of ``--files-from LIST`` (``p3d_cli.cli.inputs``).
+Every input yields exactly one ``Outcome``, in input order, as soon as it and every input
+before it are done: a failing input yields an error outcome and the batch goes on.
 
 Where the work runs:
 
@@ -20,7 +20,8 @@ function, or a ``functools.partial`` of one with picklable arguments. Its result
 pickled back: commands return short ``Report`` texts rather than arrays.
 
 A bug met while working on one input (an exception that is not a ``P3DError``) becomes an
-error outcome with exit status 3 rather than ending the batch; ``P3D_DEBUG=1`` re-raises it.
+error outcome with exit status 3 rather than ending the batch; ``P3D_DEBUG=1`` re-raises it
+(in a forked worker: its traceback is shown and the input is reported as not done).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from typing import Callable, Iterable, Iterator
 import click
 
 from p3d_cli.cli import workers
+from p3d_cli.cli.inputs import collect_inputs, expand_inputs
 from p3d_cli.errors import InputError, MissingExtraError, P3DError, UsageError
 
 #: Batches with more inputs than this get a progress bar, when stderr is a terminal.
@@ -85,89 +87,6 @@ class BatchOptions:
     jobs: int | None = None
     dask: str | None = None
     csv: bool = False
-
-
-def expand_inputs(inputs: Iterable[str | InputError]) -> Iterator[str | InputError]:
-    """Inputs as given, with each directory replaced by the mesh files under it (sorted).
-
-    A directory with no mesh files yields an ``InputError`` in its place; errors among the
-    inputs pass through.
-    """
-    from p3d_cli.io import is_mesh_path
-
-    for item in inputs:
-        if isinstance(item, P3DError):
-            yield item
-        elif item != "-" and os.path.isdir(item):
-            found = []
-            for root, dirs, files in os.walk(item):
-                dirs.sort()
-                found += [os.path.join(root, name) for name in sorted(files) if is_mesh_path(name)]
-            if not found:
-                yield InputError(item, "directory holds no mesh files",
-                                 "p3d reads .stl, .obj, .ply, .off and meshio's formats")
-            yield from found
-        else:
-            yield item
-
-
-def read_file_list(files_from: str, stdin=None) -> list[str]:
-    """The paths listed in ``files_from``, one per line (``-``: standard input).
-
-    Surrounding white space is stripped and blank lines are skipped; relative paths are
-    relative to the current directory.
-
-    Raises
-    ------
-    InputError
-        The list cannot be read.
-    """
-    if files_from == "-":
-        stream = stdin if stdin is not None else sys.stdin
-        text = stream.read()
-        if isinstance(text, bytes):
-            text = text.decode("utf-8", "surrogateescape")
-    else:
-        try:
-            with open(files_from, encoding="utf-8", errors="surrogateescape") as f:
-                text = f.read()
-        except FileNotFoundError:
-            raise InputError(files_from, "no such file", "check the --files-from path") from None
-        except IsADirectoryError:
-            raise InputError(files_from, "is a directory",
-                             "--files-from takes a text file of paths; pass a directory as an input") from None
-        except OSError as exc:
-            raise InputError(files_from, f"cannot be read ({exc.strerror or exc})", "check the file") from None
-    return [line.strip() for line in text.splitlines() if line.strip()]
-
-
-def collect_inputs(inputs: Iterable[str], files_from: str | None, command: str) -> list[str | InputError]:
-    """All inputs of a batch, expanded: arguments first, then the ``--files-from`` list.
-
-    Raises
-    ------
-    UsageError
-        Nothing to do, or standard input asked for twice.
-    InputError
-        The list cannot be read.
-    """
-    given = list(inputs)
-    if files_from is not None:
-        if files_from == "-" and "-" in given:
-            raise UsageError("--files-from -", "standard input cannot hold both the list and a mesh",
-                             "write the list to a file, or give the mesh by path")
-        listed = read_file_list(files_from)
-        if not listed:
-            raise UsageError("--files-from", f"{'standard input' if files_from == '-' else files_from} "
-                             "lists no files", "write one path per line")
-        if files_from == "-" and "-" in listed:
-            raise UsageError("--files-from -", "the list names - (standard input), which holds the list",
-                             "give the mesh by path")
-        given += listed
-    if not given:
-        raise UsageError(command, "no input given",
-                         "name mesh files, directories, - for standard input, or --files-from LIST")
-    return list(expand_inputs(given))
 
 
 def default_jobs() -> int:

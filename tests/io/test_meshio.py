@@ -46,7 +46,7 @@ def test_companion_files_are_skipped_without_asking_meshio(tmp_path):
     assert not [ext for ext in p3d_io._NEVER_MESHES if ext and meshio_backend.knows_extension(ext)]
     for name in ("part.stl", "part.mtl", "notes.txt", "README", "list.json"):
         (tmp_path / name).write_bytes(b"")
-    code = ("import sys; from p3d_cli.cli.batch import expand_inputs; "
+    code = ("import sys; from p3d_cli.cli.inputs import expand_inputs; "
             f"print([p.rsplit('/', 1)[1] for p in expand_inputs([{str(tmp_path)!r}])], 'meshio' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.split() == ["['part.stl']", "False"]
