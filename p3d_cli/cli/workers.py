@@ -15,6 +15,7 @@ it needs, so only the inputs (strings) and the results (pickled) cross the pipes
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import select
@@ -80,7 +81,7 @@ def imap_forked(func: Callable[[Item], Result], items: list[Item], jobs: int, ch
         for _ in range(min(jobs, len(schedule.todo))):
             _start(func, workers)
         for worker in list(workers.values()):
-            _assign(worker, schedule)
+            _feed(worker, func, workers, schedule)
         for index in range(len(items)):
             while index not in schedule.done:
                 _wait(func, workers, schedule, died)
@@ -126,14 +127,42 @@ def _serve(func, tasks, results) -> None:
         results.flush()
 
 
-def _assign(worker: _Worker, schedule: _Schedule) -> None:
+def _assign(worker: _Worker, schedule: _Schedule) -> bool:
+    """Send ``worker`` the next chunk, if any; False if the worker turns out to be dead (killed
+    while idle), with the chunk back at the head of the queue."""
     if not schedule.todo:
         worker.chunk = None
-        return
+        return True
     worker.chunk = schedule.todo.popleft()
-    # The child is idle, reading: the write cannot block for long even past the pipe's buffer.
-    pickle.dump(worker.chunk[1], worker.tasks, protocol=pickle.HIGHEST_PROTOCOL)
-    worker.tasks.flush()
+    try:
+        with _no_sigpipe():
+            # The child is idle, reading: the write cannot block for long even past the pipe's buffer.
+            pickle.dump(worker.chunk[1], worker.tasks, protocol=pickle.HIGHEST_PROTOCOL)
+            worker.tasks.flush()
+    except BrokenPipeError:
+        schedule.todo.appendleft(worker.chunk)
+        worker.chunk = None
+        return False
+    return True
+
+
+def _feed(worker: _Worker, func, workers: dict[int, _Worker], schedule: _Schedule) -> None:
+    """``_assign``, replacing the worker (after reaping it) for as long as it is found dead."""
+    while not _assign(worker, schedule):
+        _bury(workers.pop(worker.results.fileno()))
+        _reap(worker.pid)
+        worker = _start(func, workers)
+
+
+@contextlib.contextmanager
+def _no_sigpipe():
+    """Writing to a dead worker's pipe raises BrokenPipeError here rather than killing p3d (the
+    CLI restores the default SIGPIPE action so that ``p3d ... | head`` ends quietly)."""
+    previous = signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGPIPE, previous)
 
 
 def _wait(func, workers: dict[int, _Worker], schedule: _Schedule, died) -> None:
@@ -147,21 +176,25 @@ def _wait(func, workers: dict[int, _Worker], schedule: _Schedule, died) -> None:
             results = pickle.load(worker.results)  # a whole message: the child is writing it
         except (EOFError, pickle.UnpicklingError, OSError):
             _bury(workers.pop(fd))
+            reason = _death(worker.pid)  # and reaped: no zombie left
             if len(chunk) == 1:
-                schedule.done[start] = died(chunk[0], _death(worker.pid))
+                schedule.done[start] = died(chunk[0], reason)
             else:  # again one at a time, so that only the input that kills a worker is lost
                 schedule.todo.extendleft(reversed([(start + k, [item]) for k, item in enumerate(chunk)]))
+            for idle in [w for w in workers.values() if w.chunk is None]:  # the redone inputs
+                _feed(idle, func, workers, schedule)
             if schedule.todo:
-                _assign(_start(func, workers), schedule)
+                _feed(_start(func, workers), func, workers, schedule)
             continue
         schedule.done.update(zip(range(start, start + len(results)), results))
-        _assign(worker, schedule)
+        _feed(worker, func, workers, schedule)
 
 
 def _bury(worker: _Worker) -> None:
     for f in (worker.tasks, worker.results):
         try:
-            f.close()
+            with _no_sigpipe():
+                f.close()
         except OSError:  # the child is gone: what the buffer held is of no use
             pass
 
@@ -191,8 +224,13 @@ def _stop(workers: dict[int, _Worker]) -> None:
                 pass
         _bury(worker)
     for worker in workers.values():
-        try:
-            os.waitpid(worker.pid, 0)
-        except ChildProcessError:
-            pass
+        _reap(worker.pid)
     workers.clear()
+
+
+def _reap(pid: int) -> None:
+    """Wait for worker ``pid`` to end, if it has not been waited for already."""
+    try:
+        os.waitpid(pid, 0)
+    except ChildProcessError:
+        pass

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import subprocess
 import sys
 import textwrap
 import threading
+from collections import deque
 
 import pytest
 
@@ -70,6 +72,24 @@ def test_stopping_early_ends_every_worker():
     for pid in pids:  # gone and reaped: not even a zombie is left
         with pytest.raises(ProcessLookupError):
             os.kill(pid, 0)
+
+
+def test_a_worker_killed_while_idle_does_not_take_p3d_with_it():
+    pool = {}
+    worker = workers._start(square, pool)
+    os.kill(worker.pid, signal.SIGKILL)
+    os.waitid(os.P_PID, worker.pid, os.WEXITED | os.WNOWAIT)  # dead, not yet reaped
+    schedule = workers._Schedule(deque([(0, [1, 2]), (2, [3])]))
+    previous = signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # as in the CLI: writing would kill
+    try:
+        workers._feed(worker, square, pool, schedule)
+    finally:
+        signal.signal(signal.SIGPIPE, previous)
+    assert list(schedule.todo) == [(2, [3])] and worker not in pool.values()
+    (replacement,) = pool.values()
+    assert replacement.chunk == (0, [1, 2]) and replacement.pid != worker.pid
+    assert pickle.load(replacement.results) == [1, 4]
+    workers._stop(pool)
 
 
 def test_the_batch_reports_a_killed_worker_as_an_input_error():
