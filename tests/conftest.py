@@ -49,6 +49,16 @@ CUBE_FACES = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0
                        [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
 
 
+def check_reference(props, ref: dict) -> None:
+    """Mass properties against one entry of the real meshes' reference.json, to 1e-12 (volume
+    relative, centre relative to the bounding diagonal, inertia in the Frobenius norm)."""
+    assert abs(props.volume - ref["volume"]) <= 1e-12 * abs(ref["volume"])
+    diagonal = np.linalg.norm(np.subtract(ref["bounds_max"], ref["bounds_min"]))
+    assert np.linalg.norm(props.center_of_mass - ref["center_mass"]) <= 1e-12 * diagonal
+    inertia = np.array(ref["inertia_com"])
+    assert np.linalg.norm(props.inertia - inertia) <= 1e-12 * np.linalg.norm(inertia)
+
+
 def cube_triangles() -> np.ndarray:
     """The unit cube [0, 1]³ as 12 outward-wound triangles, (12, 3, 3) float64."""
     return CUBE_VERTICES[CUBE_FACES]

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, obj
 from p3d_cli.io.raw import open_input
@@ -245,18 +246,9 @@ def test_fast_and_careful_paths_agree(tmp_path):
 
 # --- real meshes -------------------------------------------------------------------------
 
-def check_reference(result, ref):
-    p = result.properties
-    assert abs(p.volume - ref["volume"]) <= 1e-12 * abs(ref["volume"])
-    diagonal = np.linalg.norm(np.subtract(ref["bounds_max"], ref["bounds_min"]))
-    assert np.linalg.norm(p.center_of_mass - ref["center_mass"]) <= 1e-12 * diagonal
-    inertia = np.array(ref["inertia_com"])
-    assert np.linalg.norm(p.inertia - inertia) <= 1e-12 * np.linalg.norm(inertia)
-
-
 def test_real_obj_matches_reference(real_meshes, reference):
     name = "common3d__spot_quadrangulated.obj"
     path = str(real_meshes / name)
     mesh = load_mesh(path)
     assert mesh.format == "obj" and mesh.face_count == reference[name]["faces"]
-    check_reference(mesh_props(path), reference[name])
+    check_reference(mesh_props(path).properties, reference[name])

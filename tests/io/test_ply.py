@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, ply
 from p3d_cli.props import mesh_props
@@ -291,15 +292,6 @@ def test_trailing_bytes_warn(tmp_path):
 
 # --- real meshes -------------------------------------------------------------------------
 
-def check_reference(result, ref):
-    p = result.properties
-    assert abs(p.volume - ref["volume"]) <= 1e-12 * abs(ref["volume"])
-    diagonal = np.linalg.norm(np.subtract(ref["bounds_max"], ref["bounds_min"]))
-    assert np.linalg.norm(p.center_of_mass - ref["center_mass"]) <= 1e-12 * diagonal
-    inertia = np.array(ref["inertia_com"])
-    assert np.linalg.norm(p.inertia - inertia) <= 1e-12 * np.linalg.norm(inertia)
-
-
 @pytest.mark.parametrize("name, dtype", [("trimesh__fuze.ply", "float32"), ("common3d__horse.ply", "float32"),
                                          ("trimesh__bunny.ply", "float64")])
 def test_real_ply_matches_reference(real_meshes, reference, name, dtype):
@@ -307,7 +299,7 @@ def test_real_ply_matches_reference(real_meshes, reference, name, dtype):
     mesh = load_mesh(path)
     assert mesh.format == "ply" and mesh.coordinate_dtype == dtype
     assert mesh.face_count == reference[name]["faces"]
-    check_reference(mesh_props(path), reference[name])
+    check_reference(mesh_props(path).properties, reference[name])
 
 
 def test_header_words_in_comments_and_non_ascii_comments(tmp_path):
