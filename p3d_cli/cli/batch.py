@@ -36,7 +36,6 @@ from typing import Callable, Iterable, Iterator
 
 import click
 
-from p3d_cli.cli import workers
 from p3d_cli.cli.inputs import collect_inputs, expand_inputs
 from p3d_cli.errors import InputError, MissingExtraError, P3DError, UsageError
 
@@ -147,6 +146,8 @@ def _died(item: str, reason: str) -> tuple:
 
 
 def _in_processes(items: list[str], work, jobs: int) -> Iterator[Outcome]:
+    from p3d_cli.cli import workers  # here: a one-file run need not pay for it at start-up
+
     tasks = [None if item == "-" else item for item in items]
     # Chunks amortise the inter-process round trip over small files, but hold results back
     # until the whole chunk is done: keep several chunks per worker.
