@@ -1,3 +1,110 @@
-"""p3d: exact mass properties, bounds and constraint solves for meshes and shapes."""
+"""p3d: exact mass properties, bounds and constraint solves for meshes and shapes.
+
+The command line (``p3d props``, ``p3d bounds``, ``p3d check``, ``p3d solve``) calls exactly these
+functions::
+
+    import p3d_cli as p3d
+
+    result = p3d.props("part.stl", density=7850)          # a path, spec, shape, array or (V, F)
+    result.properties.mass, result.properties.inertia
+    p3d.bounds("box:1,2,3", p3d.Placement(rotation=p3d.rotation_from_axis_degrees("z", 30)))
+    p3d.check("part.stl").ok
+
+Names are imported on first use (as scikit-image's ``lazy.attach`` does), so ``import p3d_cli``
+costs almost nothing and ``p3d props tiny.stl`` starts as fast as before. See docs/api.md.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it.
+_API = {
+    # measuring
+    "props": "p3d_cli.measure",
+    "bounds": "p3d_cli.measure",
+    "check": "p3d_cli.measure",
+    # inputs
+    "load_mesh": "p3d_cli.io",
+    "parse_shape": "p3d_cli.shapes",
+    "as_solid": "p3d_cli.solid",
+    "Solid": "p3d_cli.solid",
+    "MeshSource": "p3d_cli.io.source",
+    "FORMATS": "p3d_cli.io.formats",
+    "SHAPES": "p3d_cli.shapes",
+    "Box": "p3d_cli.shapes",
+    "Wedge": "p3d_cli.shapes",
+    "Corner": "p3d_cli.shapes",
+    "Cylinder": "p3d_cli.shapes",
+    "Sphere": "p3d_cli.shapes",
+    "Ellipsoid": "p3d_cli.shapes",
+    "EllipticCylinder": "p3d_cli.shapes",
+    # placing
+    "Placement": "p3d_cli.placement",
+    "rotation_from_axis_degrees": "p3d_cli.rotation",
+    "rotation_from_quaternion": "p3d_cli.rotation",
+    "quaternion_matrix": "p3d_cli.rotation",
+    "compose_rotations": "p3d_cli.rotation",
+    # from moments to mass properties
+    "mass_properties": "p3d_cli.inertia",
+    # results
+    "PropsResult": "p3d_cli.results",
+    "BoundsResult": "p3d_cli.results",
+    "MassProperties": "p3d_cli.results",
+    "MeshFacts": "p3d_cli.results",
+    "Moments": "p3d_cli.results",
+    "Bounds": "p3d_cli.results",
+    "CheckResult": "p3d_cli.mesh.topology",
+    # constraint scenes
+    "load_scene": "p3d_cli.constraints",
+    "parse_scene": "p3d_cli.constraints",
+    "solve_scene": "p3d_cli.constraints",
+    "SolveResult": "p3d_cli.constraints",
+    # errors
+    "P3DError": "p3d_cli.errors",
+    "InputError": "p3d_cli.errors",
+    "FormatError": "p3d_cli.errors",
+    "UnknownFormatError": "p3d_cli.errors",
+    "UsageError": "p3d_cli.errors",
+    "SpecError": "p3d_cli.errors",
+    "SceneError": "p3d_cli.errors",
+    "MissingExtraError": "p3d_cli.errors",
+    "CheckFailedError": "p3d_cli.errors",
+}
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str) -> Any:
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'p3d_cli' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # the next look-up is a plain attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))
+
+
+if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at run time
+    from p3d_cli.constraints import SolveResult, load_scene, parse_scene, solve_scene
+    from p3d_cli.errors import (CheckFailedError, FormatError, InputError, MissingExtraError, P3DError,
+                                SceneError, SpecError, UnknownFormatError, UsageError)
+    from p3d_cli.inertia import mass_properties
+    from p3d_cli.io import load_mesh
+    from p3d_cli.io.formats import FORMATS
+    from p3d_cli.io.source import MeshSource
+    from p3d_cli.measure import bounds, check, props
+    from p3d_cli.mesh.topology import CheckResult
+    from p3d_cli.placement import Placement
+    from p3d_cli.results import BoundsResult, Bounds, MassProperties, MeshFacts, Moments, PropsResult
+    from p3d_cli.rotation import (compose_rotations, quaternion_matrix, rotation_from_axis_degrees,
+                                  rotation_from_quaternion)
+    from p3d_cli.shapes import (SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge,
+                                parse_shape)
+    from p3d_cli.solid import Solid, as_solid

@@ -40,10 +40,22 @@ class P3DError(Exception):
         self.hint = hint
         super().__init__(self.message)
 
+    def __reduce__(self):
+        # Rebuilt from (where, what, hint) rather than from ``args`` (the joined message), so
+        # that an error crosses into and out of worker processes and Dask as itself.
+        return _rebuild, (type(self), self.where, self.what, self.hint, self.__dict__.copy())
+
     @property
     def message(self) -> str:
         text = f"{self.where}: {self.what}" if self.where else self.what
         return f"{text}; {self.hint}" if self.hint else text
+
+
+def _rebuild(cls, where: str, what: str, hint: str, state: dict) -> P3DError:
+    error = cls.__new__(cls)
+    P3DError.__init__(error, where, what, hint)
+    error.__dict__.update(state)
+    return error
 
 
 class InputError(P3DError):
@@ -85,3 +97,9 @@ class CheckFailedError(P3DError):
     """A result failed a requirement (``--strict``, ``p3d check``)."""
 
     exit_code = 1
+
+
+class InternalError(P3DError):
+    """A bug met while working on one input of a batch: reported in that input's place."""
+
+    exit_code = 3

@@ -70,24 +70,3 @@ def translate_moments(moments: Moments, offset) -> Moments:
     if moments.is_empty:
         return moments
     return Moments(moments.volume, moments.center + t, moments.central, moments.errors)
-
-
-def combine_moments(parts) -> Moments:
-    """Moments of a union of disjoint solids (parallel-axis theorem on each part).
-
-    Parameters
-    ----------
-    parts : iterable of Moments
-    """
-    parts = [p for p in parts if not p.is_empty]
-    if not parts:
-        return Moments(0.0, None, None)
-    volume = sum(p.volume for p in parts)
-    if volume == 0.0:
-        return Moments(0.0, None, None)
-    center = sum(p.volume * p.center for p in parts) / volume
-    central = np.zeros((3, 3))
-    for p in parts:
-        d = p.center - center
-        central = central + p.central + p.volume * np.outer(d, d)
-    return Moments(volume, center, central)

@@ -31,8 +31,12 @@ from typing import Callable
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.massprops import mass_properties
+from p3d_cli.exact import mesh_facts, mesh_warnings
+from p3d_cli.inertia import density_for, mass_properties
+from p3d_cli.mesh.analysis import analyze
+from p3d_cli.placement import IDENTITY, Placement
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
+from p3d_cli.solid import Solid
 
 #: Points drawn per chunk (the random stream is consumed chunk by chunk, so the chunk size is
 #: part of what "the same seed gives the same numbers" means: do not change it lightly).
@@ -118,9 +122,7 @@ def _reported(m, box_volume, half, density, mass) -> np.ndarray:
     """``volume, mass, centre (3), inertia (9)`` from the mean vector (centre without the
     constant box centre, which has no error)."""
     volume = box_volume * m[0]
-    rho = 1.0 if density is None else density
-    if mass is not None:
-        rho = mass / abs(volume)
+    rho = density_for(volume, density, mass)
     central = _central(m, box_volume) * np.outer(half, half)
     inertia = rho * (np.trace(central) * np.eye(3) - central)
     return np.concatenate([[volume, rho * volume], half * m[1:4] / m[0], inertia.reshape(-1)])
@@ -155,7 +157,7 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
     """
     samples = int(samples)
     if samples < 2:
-        raise UsageError("--samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+        raise UsageError("samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
     rng = np.random.default_rng(seed)
     half, centre = 0.5 * bounds.size, bounds.center
     total = np.zeros(10)
@@ -187,8 +189,8 @@ def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
     ``s / (p √N)``, so ``N = s² / (p² tolerance²)``, clipped to [MIN_SAMPLES, MAX_SAMPLES].
     """
     if not (tolerance > 0 and math.isfinite(tolerance)):
-        raise UsageError("--tolerance", f"{tolerance!r} is not a positive relative error",
-                         "give e.g. --tolerance 1e-3 for 0.1 %")
+        raise UsageError("tolerance", f"{tolerance!r} is not a positive relative error",
+                         "give e.g. tolerance=1e-3 for 0.1 %")
     pilot = sample(inside, bounds, PILOT_SAMPLES, seed=(int(seed), 1))
     p, var = pilot.mean[0], pilot.covariance[0, 0]
     if not p > 0:
@@ -215,26 +217,24 @@ def montecarlo_moments(inside: Callable, bounds: Bounds, *, samples: int | None 
     return sample(inside, bounds, samples, seed)
 
 
-def montecarlo_props(source: str, *, samples: int | None = None, seed: int | None = None,
-                     tolerance: float | None = None, fmt: str | None = None,
-                     density: float | None = None, mass: float | None = None, about=None,
-                     stdin=None, placement=None) -> PropsResult:
-    """Monte Carlo mass properties of a mesh file or a shape spec.
+def montecarlo_props(solid: Solid, placement: Placement = IDENTITY, *, samples: int | None = None,
+                     seed: int | None = None, tolerance: float | None = None,
+                     density: float | None = None, mass: float | None = None, about=None) -> PropsResult:
+    """Monte Carlo mass properties of a resolved mesh or shape.
 
     Parameters
     ----------
-    source : str
-        Path, ``-`` or a shape spec (``sphere:2``).
+    solid : Solid
+    placement : Placement
+        Scale, rotate and move the solid before sampling.
     samples : int, optional
         Points to draw (default ``DEFAULT_SAMPLES``); ignored when ``tolerance`` is given.
     seed : int, optional
         Random seed (default ``DEFAULT_SEED``): the same seed gives the same numbers.
     tolerance : float, optional
         Target relative standard error of the volume; picks the sample count.
-    fmt, density, mass, about, stdin
-        As for ``p3d_cli.props.mesh_props``.
-    placement : p3d_cli.placed.Placement, optional
-        Scale, rotate and move the solid before sampling.
+    density, mass, about
+        As for ``p3d_cli.exact.exact_props``.
 
     Returns
     -------
@@ -243,16 +243,13 @@ def montecarlo_props(source: str, *, samples: int | None = None, seed: int | Non
 
     Raises
     ------
-    InputError, UsageError, SpecError
+    InputError, UsageError
     """
     seed = DEFAULT_SEED if seed is None else int(seed)
-    from p3d_cli.placed import resolve_spec
-
-    shape = resolve_spec(source)
-    if shape is not None:
-        inside, bounds, facts, warnings = _shape_setup(shape, source, placement)
+    if solid.shape is not None:
+        inside, bounds, facts, warnings = _shape_setup(solid, placement)
     else:
-        inside, bounds, facts, warnings = _mesh_setup(source, fmt, stdin, placement)
+        inside, bounds, facts, warnings = _mesh_setup(solid, placement)
     if bounds is None or not (np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size))):
         estimate = None
         moments = Moments(0.0, None, None)
@@ -263,45 +260,28 @@ def montecarlo_props(source: str, *, samples: int | None = None, seed: int | Non
         warnings.append("no Monte Carlo sample fell inside the solid: centre of mass and inertia "
                         "are undefined; use more samples or check the mesh")
         if mass is not None:
-            raise UsageError("--mass", "the Monte Carlo estimate found no volume, so no density "
-                             "follows from a mass", "give --density, or more --samples")
+            raise UsageError("mass", "the Monte Carlo estimate found no volume, so no density "
+                             "follows from a mass", "give density=, or more samples=")
     props = mass_properties(moments, density=density, mass=mass, about=about)
     if estimate is None:
         uncertainty = {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
-    details = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
-    if placement is not None and not placement.is_identity:
+    details: dict = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
+    if not placement.is_identity:
         details["placement"] = placement.describe()
     return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty, details)
 
 
-def _shape_setup(shape, source, placement):
-    from p3d_cli.placed import spec_warnings
-
-    warnings = spec_warnings(source)
-    if placement is None or placement.is_identity:
-        bounds = shape.bounds()
-        inside = shape.inside
-    else:
-        from p3d_cli.bounds import placed_shape
-        scaled = placed_shape(shape, placement.scale)
-        rot = np.eye(3) if placement.rotation is None else placement.rotation
-        shift = np.zeros(3) if placement.translation is None else placement.translation
-        bounds = scaled.bounds(placement.rotation, placement.translation)
-        # World point p = R q + t  <=>  q = Rᵀ (p - t); row vectors: q = (p - t) R.
-        inside = lambda p: scaled.inside((p - shift) @ rot)  # noqa: E731
-    facts = MeshFacts(source, "primitive", 0, None, bounds)
-    return inside, bounds, facts, warnings
+def _shape_setup(solid: Solid, placement: Placement):
+    scaled = placement.shape(solid.shape)
+    bounds = scaled.bounds(placement.rotation, placement.translation)
+    facts = MeshFacts(solid.source, "primitive", 0, None, bounds)
+    return placement.inside(scaled.inside), bounds, facts, list(solid.warnings)
 
 
-def _mesh_setup(source, fmt, stdin, placement):
-    from p3d_cli.io import load_mesh
-    from p3d_cli.mesh.analysis import analyze
-    from p3d_cli.props import mesh_warnings
-
-    mesh = load_mesh(source, fmt, stdin=stdin)
-    where = "<stdin>" if source == "-" else source
+def _mesh_setup(solid: Solid, placement: Placement):
+    mesh = solid.mesh
     if mesh.tetrahedra is not None:
         tets = np.asarray(mesh.tetrahedra)
         # Every face of every tetrahedron: shared inner faces are crossed twice, which parity
@@ -310,9 +290,8 @@ def _mesh_setup(source, fmt, stdin, placement):
     else:
         triangles = mesh.triangles()    # read once; the analysis below reuses the array
         mesh = dataclasses.replace(mesh, read_blocks=lambda: iter([triangles]))
-    found = analyze(mesh, where)
-    facts = MeshFacts(source, mesh.format, found.face_count, found.closed, found.bounds,
-                      mesh.coordinate_dtype)
+    found = analyze(mesh, mesh.where)
+    facts = mesh_facts(solid, found)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
     if not found.moments.is_empty and found.moments.volume < 0:
         warnings.append("Monte Carlo's inside test ignores the winding, so its volume and mass "
@@ -320,21 +299,12 @@ def _mesh_setup(source, fmt, stdin, placement):
     if facts.closed is False:
         warnings.append("Monte Carlo on an open mesh: a point whose up and down rays disagree "
                         "(the ray escapes through a hole) counts as half inside")
-    triangles = np.asarray(triangles, dtype=np.float64)
-    if placement is not None and not placement.is_identity:
-        flat = triangles.reshape(-1, 3)
-        if placement.scale is not None:
-            flat = flat * placement.scale
-        if placement.rotation is not None:
-            flat = flat @ placement.rotation.T
-        if placement.translation is not None:
-            flat = flat + placement.translation
-        triangles = flat.reshape(-1, 3, 3)
-    lo = triangles.reshape(-1, 3).min(axis=0)
-    hi = triangles.reshape(-1, 3).max(axis=0)
-    bounds = Bounds(lo, hi)
+    flat = np.asarray(triangles, dtype=np.float64).reshape(-1, 3)
+    if not placement.is_identity:
+        flat = placement.points(flat)
+    bounds = Bounds(flat.min(axis=0), flat.max(axis=0))
     facts = dataclasses.replace(facts, bounds=bounds)
-    return triangles_inside(triangles), bounds, facts, warnings
+    return triangles_inside(flat.reshape(-1, 3, 3)), bounds, facts, warnings
 
 
 __all__ = ["Estimate", "sample", "samples_for_tolerance", "montecarlo_moments", "montecarlo_props",

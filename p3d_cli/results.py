@@ -6,7 +6,8 @@ Conventions, stated once for every output:
   ``c = ∫ x dV / V`` and central second moments ``C = ∫ (x - c)(x - c)ᵀ dV``. They are
   the convention-free quantities that the design note's eq. 8-9 scale.
 - Inertia is the standard positive tensor ``I = ∫ (|r|² E - r rᵀ) dm``: ``Ixx = ∫ (y² + z²) dm``,
-  ``Ixy = -∫ x y dm`` (FACTS.md; the note's eq. 3 has the opposite sign).
+  ``Ixy = -∫ x y dm`` (docs/method.md, "Inertia sign": the Physics3D note's eq. 3 has the
+  opposite sign).
 """
 
 from __future__ import annotations
@@ -181,3 +182,29 @@ class PropsResult:
     warnings: tuple[str, ...] = field(default_factory=tuple)
     uncertainty: dict | None = None
     details: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class BoundsResult:
+    """One input's answer to ``p3d bounds``.
+
+    Attributes
+    ----------
+    source : str
+        The path or spec as the user gave it.
+    format : str
+        The mesh format, ``primitive`` or ``tessellated``.
+    method : str
+        ``vertices`` (projection of every vertex) or ``closed form``.
+    bounds : Bounds
+    faces : int
+        Triangle (or tetrahedron) count; 0 for a primitive.
+    warnings : tuple of str
+    """
+
+    source: str
+    format: str
+    method: str
+    bounds: Bounds
+    faces: int = 0
+    warnings: tuple[str, ...] = field(default_factory=tuple)

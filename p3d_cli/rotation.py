@@ -1,5 +1,8 @@
 """Rotations: from an axis and an angle in degrees, from a quaternion, and composed.
 
+This is the one module of rotation maths: ``--rotate``/``--quat``, shape placement and the
+constraint solver's body orientations all use these functions.
+
 Convention (stated in ``p3d bounds --help`` and docs/shapes.md): rotations are active and
 about the world origin, ``x -> R x``. Repeated turns are each applied after the previous one
 about the world (fixed) axes, so ``--rotate z:90 --rotate x:90`` gives ``R = R_x R_z``; in
@@ -52,21 +55,48 @@ def rotation_from_axis_degrees(axis, degrees: float) -> np.ndarray:
     """
     if isinstance(axis, str):
         if axis.lower() not in AXES:
-            raise UsageError("--rotate", f"unknown axis {axis!r}", "use x, y, z or a vector such as 1,1,0")
+            raise UsageError("rotate", f"unknown axis {axis!r}", "use x, y, z or a vector such as 1,1,0")
         u = np.array(AXES[axis.lower()])
     else:
         u = np.asarray(axis, dtype=np.float64).reshape(3)
     norm = float(np.linalg.norm(u))
     if not math.isfinite(norm) or norm == 0.0:
-        raise UsageError("--rotate", f"axis {tuple(float(x) for x in u)} has no direction",
+        raise UsageError("rotate", f"axis {tuple(float(x) for x in u)} has no direction",
                          "give a non-zero axis vector such as 1,1,0")
     if not math.isfinite(degrees):
-        raise UsageError("--rotate", f"angle {degrees!r} is not finite", "give the angle in degrees")
+        raise UsageError("rotate", f"angle {degrees!r} is not finite", "give the angle in degrees")
     u = u / norm
     c, s = cos_sin_degrees(degrees)
     # Rodrigues: R = c E + s [u]x + (1 - c) u uᵀ.
     ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
     return c * np.eye(3) + s * ux + (1.0 - c) * np.outer(u, u)
+
+
+def quaternion_matrix(q) -> np.ndarray:
+    """Rotation matrix of unit quaternions ``[w, x, y, z]``: the one copy of this formula.
+
+    Parameters
+    ----------
+    q : (4,) or (n, 4) array_like of float
+        Unit length (not normalised here: callers that take user input normalise first).
+
+    Returns
+    -------
+    (3, 3) or (n, 3, 3) float64
+    """
+    q = np.asarray(q, dtype=np.float64)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - w * z)
+    out[..., 0, 2] = 2 * (x * z + w * y)
+    out[..., 1, 0] = 2 * (x * y + w * z)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - w * x)
+    out[..., 2, 0] = 2 * (x * z - w * y)
+    out[..., 2, 1] = 2 * (y * z + w * x)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
 
 
 def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:
@@ -80,16 +110,11 @@ def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarr
     q = np.array([w, x, y, z], dtype=np.float64)
     norm = float(np.linalg.norm(q))
     if not math.isfinite(norm):
-        raise UsageError("--quat", f"{tuple(q.tolist())} is not finite", "give four finite numbers W,X,Y,Z")
+        raise UsageError("quat", f"{tuple(q.tolist())} is not finite", "give four finite numbers W,X,Y,Z")
     if norm == 0.0:
-        raise UsageError("--quat", "the zero quaternion is no rotation",
+        raise UsageError("quat", "the zero quaternion is no rotation",
                          "give W,X,Y,Z not all zero (1,0,0,0 is the identity)")
-    w, x, y, z = q / norm
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return quaternion_matrix(q / norm)
 
 
 def compose_rotations(rotations: Iterable[np.ndarray]) -> np.ndarray:
@@ -111,20 +136,20 @@ def parse_turn(text: str) -> np.ndarray:
     hint = "write AXIS:DEGREES with AXIS x, y, z or a vector, e.g. z:90 or 1,1,0:45"
     axis_text, sep, angle_text = str(text).rpartition(":")
     if not sep or not axis_text.strip():
-        raise UsageError("--rotate", f"{text!r} has no axis", hint)
+        raise UsageError("rotate", f"{text!r} has no axis", hint)
     try:
         degrees = float(angle_text)
     except ValueError:
-        raise UsageError("--rotate", f"angle {angle_text!r} is not a number", hint) from None
+        raise UsageError("rotate", f"angle {angle_text!r} is not a number", hint) from None
     axis_text = axis_text.strip()
     if axis_text.lower() in AXES:
         return rotation_from_axis_degrees(axis_text, degrees)
     try:
         axis = [float(p) for p in axis_text.split(",")]
     except ValueError:
-        raise UsageError("--rotate", f"axis {axis_text!r} is neither x, y, z nor a vector", hint) from None
+        raise UsageError("rotate", f"axis {axis_text!r} is neither x, y, z nor a vector", hint) from None
     if len(axis) != 3:
-        raise UsageError("--rotate", f"axis {axis_text!r} needs three components", hint)
+        raise UsageError("rotate", f"axis {axis_text!r} needs three components", hint)
     return rotation_from_axis_degrees(axis, degrees)
 
 
@@ -134,7 +159,7 @@ def parse_quaternion(text: str) -> np.ndarray:
     try:
         values = [float(p) for p in str(text).split(",")]
     except ValueError:
-        raise UsageError("--quat", f"{text!r} is not four numbers", hint) from None
+        raise UsageError("quat", f"{text!r} is not four numbers", hint) from None
     if len(values) != 4:
-        raise UsageError("--quat", f"{text!r} has {len(values)} numbers, not 4", hint)
+        raise UsageError("quat", f"{text!r} has {len(values)} numbers, not 4", hint)
     return rotation_from_quaternion(*values)

@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 from strategies import rotations, scales
 
-from p3d_cli.bounds import placed_bounds, triangles_bounds
+from p3d_cli.bounding import triangles_bounds
+from p3d_cli.placement import placed_bounds
 from p3d_cli.errors import UsageError
 from p3d_cli.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import SHAPES, Box, Cylinder, Sphere
@@ -94,5 +95,5 @@ def test_examples():
 
 @pytest.mark.parametrize("bad", [[0, 1, 1], [-1, 1, 1], [1, 1], [np.inf, 1, 1]])
 def test_bad_scales_refused(bad):
-    with pytest.raises(UsageError, match="--scale"):
+    with pytest.raises(UsageError, match="^scale: "):
         placed_bounds(Box(), bad)

@@ -26,10 +26,10 @@ from hypothesis import strategies as st
 from conftest import write_ascii_stl, write_binary_stl
 from exact import exact_moments
 from p3d_cli.cli.main import cli
-from p3d_cli.massprops import mass_properties
+from p3d_cli.inertia import mass_properties
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.montecarlo import montecarlo_props
-from p3d_cli.props import exact_uncertainty, mesh_props
+import p3d_cli as p3d
+from p3d_cli.exact import exact_uncertainty
 
 DOCUMENTED = 1e-13
 #: Rotated thin parts: relative error per aspect² (docs/accuracy.md).
@@ -246,7 +246,7 @@ def test_float32_far_from_origin_is_widened_and_warned_about(tmp_path):
     tri = place(BOX_V * [10.0, 6.0, 2.0], BOX_F, offset=(1e6, -2e6, 5e5)).astype(np.float32)
     path = tmp_path / "far.stl"
     write_binary_stl(path, tri)
-    result = mesh_props(str(path))
+    result = p3d.props(str(path))
     assert result.facts.coordinate_dtype == "float32"
     assert any("float32" in w and "far from the origin" in w for w in result.warnings)
     ref = exact_moments(tri.astype(np.float64))
@@ -264,7 +264,7 @@ def test_float32_near_the_origin_is_not_warned_about(tmp_path):
     v, f = hull(2)
     path = tmp_path / "near.stl"
     write_binary_stl(path, place(v, f))
-    result = mesh_props(str(path))
+    result = p3d.props(str(path))
     assert not any("float32" in w for w in result.warnings)
 
 
@@ -275,7 +275,7 @@ def test_float32_snapped_part_is_exact_for_what_the_file_holds(tmp_path):
     tri32 = place(v * 20.0, f, offset=(1e6, 1e6, 1e6)).astype(np.float32)
     path = tmp_path / "snapped.stl"
     write_binary_stl(path, tri32)
-    result = mesh_props(str(path))
+    result = p3d.props(str(path))
     assert any("float32" in w for w in result.warnings)
     ref = exact_moments(tri32.astype(np.float64))
     ev, ec, ei = true_errors(result.properties, ref)
@@ -292,7 +292,7 @@ def test_montecarlo_far_away_and_at_extreme_scales(tmp_path, scale, offset):
     tri = place(v, f, scale=scale, offset=(offset * scale, -offset * scale, 0.0))
     path = tmp_path / "part.stl"
     write_ascii_stl(path, tri)
-    result = montecarlo_props(str(path), samples=50_000, seed=2)
+    result = p3d.props(str(path), method="montecarlo", samples=50_000, seed=2)
     ref = mass_properties(triangle_moments(tri))
     u = result.uncertainty
     assert abs(result.properties.volume - ref.volume) <= 5 * u["volume"]

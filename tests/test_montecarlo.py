@@ -15,6 +15,8 @@ import json
 
 import numpy as np
 import pytest
+
+import p3d_cli as p3d
 import trimesh
 from click.testing import CliRunner
 from hypothesis import given, settings
@@ -23,10 +25,10 @@ from scipy import stats
 
 from conftest import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.cli.main import cli
-from p3d_cli.massprops import inertia_from_second_moments, mass_properties
+from p3d_cli.inertia import inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.mesh.winding import face_grid, inside
-from p3d_cli.montecarlo import montecarlo_props, sample, samples_for_tolerance, triangles_inside
+from p3d_cli.montecarlo import sample, samples_for_tolerance, triangles_inside
 from p3d_cli.results import Bounds
 from p3d_cli.shapes import parse_spec
 
@@ -139,7 +141,7 @@ def test_inside_is_graceful_on_an_open_mesh():
 def test_mesh_estimate_within_five_standard_errors(tmp_path, name, tri):
     path = tmp_path / "part.stl"
     write_ascii_stl(path, tri)
-    result = montecarlo_props(str(path), samples=200_000, seed=11)
+    result = p3d.props(str(path), method="montecarlo", samples=200_000, seed=11)
     assert result.method == "montecarlo"
     check_against_exact(result, triangle_moments(tri))
 
@@ -147,7 +149,7 @@ def test_mesh_estimate_within_five_standard_errors(tmp_path, name, tri):
 @pytest.mark.parametrize("spec", ["sphere:2", "cylinder:1,1,3", "box:1,2,3", "wedge:1,2,0.5",
                                   "corner:2,1,1", "ellipsoid:1,2,3", "ecylinder:1,3,0.5"])
 def test_primitive_estimate_within_five_standard_errors(spec):
-    result = montecarlo_props(spec, samples=200_000, seed=3, density=2.5)
+    result = p3d.props(spec, method="montecarlo", samples=200_000, seed=3, density=2.5)
     exact = parse_spec(spec).moments()
     assert result.facts.format == "primitive"
     p, u = result.properties, result.uncertainty
@@ -158,9 +160,9 @@ def test_primitive_estimate_within_five_standard_errors(spec):
 
 
 def test_same_seed_same_numbers_other_seed_other_numbers():
-    a = montecarlo_props("ellipsoid:1,2,3", samples=30_000, seed=42)
-    b = montecarlo_props("ellipsoid:1,2,3", samples=30_000, seed=42)
-    c = montecarlo_props("ellipsoid:1,2,3", samples=30_000, seed=43)
+    a = p3d.props("ellipsoid:1,2,3", method="montecarlo", samples=30_000, seed=42)
+    b = p3d.props("ellipsoid:1,2,3", method="montecarlo", samples=30_000, seed=42)
+    c = p3d.props("ellipsoid:1,2,3", method="montecarlo", samples=30_000, seed=43)
     assert a.properties.volume == b.properties.volume
     np.testing.assert_array_equal(a.properties.inertia, b.properties.inertia)
     np.testing.assert_array_equal(a.uncertainty["inertia"], b.uncertainty["inertia"])
@@ -173,7 +175,7 @@ def test_inward_wound_mesh_gives_positive_volume_and_says_so(tmp_path):
     write_ascii_stl(path, tri)
     exact = triangle_moments(tri)
     assert exact.volume < 0
-    result = montecarlo_props(str(path), samples=100_000, seed=1)
+    result = p3d.props(str(path), method="montecarlo", samples=100_000, seed=1)
     assert result.properties.volume > 0
     assert_within(result.properties.volume, -exact.volume, result.uncertainty["volume"])
     assert any("ignores the winding" in w for w in result.warnings)
@@ -183,7 +185,7 @@ def test_inward_wound_mesh_gives_positive_volume_and_says_so(tmp_path):
 def test_open_mesh_does_not_crash_and_warns(tmp_path):
     path = tmp_path / "open.stl"
     write_ascii_stl(path, icosphere(2)[3:])
-    result = montecarlo_props(str(path), samples=20_000, seed=1)
+    result = p3d.props(str(path), method="montecarlo", samples=20_000, seed=1)
     assert np.isfinite(result.properties.volume) and result.properties.volume > 0
     assert any("open mesh" in w for w in result.warnings)
 
@@ -229,7 +231,7 @@ def test_tolerance_picks_enough_samples():
     n = samples_for_tolerance(shape.inside, shape.bounds(), 3e-3, seed=0)
     p = np.pi / 6
     assert n == pytest.approx((1 - p) / p / 3e-3 ** 2, rel=0.1)
-    result = montecarlo_props("sphere:1", tolerance=3e-3, seed=0)
+    result = p3d.props("sphere:1", method="montecarlo", tolerance=3e-3, seed=0)
     rel = result.uncertainty["volume"] / result.properties.volume
     assert rel == pytest.approx(3e-3, rel=0.1)
 
@@ -305,7 +307,7 @@ def test_cli_refuses_sampling_options_without_montecarlo():
 
 @pytest.mark.parametrize("source", ["wedge:1,2,3", "cylinder:1,1,2", "mesh"])
 def test_placed_inputs_agree_with_the_exact_placed_result(tmp_path, source):
-    from p3d_cli.placed import Placement, input_props
+    from p3d_cli.placement import Placement
 
     if source == "mesh":
         source = str(tmp_path / "part.stl")
@@ -313,8 +315,8 @@ def test_placed_inputs_agree_with_the_exact_placed_result(tmp_path, source):
     c, s = np.cos(0.7), np.sin(0.7)
     rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
     placement = Placement(scale=np.array([1.0, 2.0, 0.5]), rotation=rot, translation=np.array([5.0, -3.0, 1e6]))
-    exact = input_props(source, placement)
-    result = montecarlo_props(source, samples=100_000, seed=5, placement=placement)
+    exact = p3d.props(source, placement)
+    result = p3d.props(source, placement, method="montecarlo", samples=100_000, seed=5)
     p, u = result.properties, result.uncertainty
     assert_within(p.volume, exact.properties.volume, u["volume"])
     assert_within(p.center_of_mass, exact.properties.center_of_mass, u["center_of_mass"])

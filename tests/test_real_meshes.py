@@ -17,9 +17,9 @@ import pytest
 from conftest import REAL_MESHES
 from exact import exact_moments
 from p3d_cli.io import load_mesh
-from p3d_cli.massprops import mass_properties
+from p3d_cli.inertia import mass_properties
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 try:
     FILES = [e["file"] for e in json.loads((REAL_MESHES / "reference.json").read_text())]
@@ -41,7 +41,7 @@ def check_against(props, volume, center, inertia, diagonal, rel=REL):
 @pytest.mark.parametrize("name", FILES)
 def test_reference_values(name, real_meshes, reference):
     ref = reference[name]
-    result = mesh_props(str(real_meshes / name))
+    result = p3d.props(str(real_meshes / name))
     facts, props = result.facts, result.properties
     assert facts.faces == ref["faces"]
     assert facts.closed == ref["watertight"]

@@ -6,12 +6,13 @@ import functools
 
 import click
 
+from p3d_cli import measure
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch, Report
+from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import (PLACEMENT_HELP, batch_options, format_option, inputs_argument, json_option,
                                  placement_options)
+from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import UsageError
-from p3d_cli.placed import input_bounds
 
 
 @click.command(help=f"""Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation
@@ -50,11 +51,10 @@ def bounds(inputs, fmt, placement, tessellate, as_json, batch):
     run = Batch("p3d bounds", inputs, batch)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
-    run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate, fmt=fmt),
+    run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate,
+                                 format=fmt),
                functools.partial(error_line, style=style))
-    status = run.finish()
-    if status:
-        raise click.exceptions.Exit(status)
+    return run.finish()
 
 
 #: Columns of ``p3d bounds --csv``.
@@ -65,7 +65,7 @@ CSV_COLUMNS = ("source", "format", "method", "faces", "min_x", "min_y", "min_z",
 def bounds_report(source: str, *, style: str, **options) -> Report:
     """One input's bounds in ``style`` (table, json or csv), formatted where they were computed
     (module level, so that worker processes can receive it)."""
-    result = input_bounds(source, **options)
+    result = measure.bounds(source, **options)
     notes = tuple(f"p3d: warning: {result.source}: {text}" for text in result.warnings)
     if style == "table":
         return Report(bounds_table(result), notes)
@@ -86,7 +86,7 @@ def csv_row(record: dict) -> str:
 
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done: JSON or CSV; nothing in table style."""
-    record = {"source": outcome.source, "error": outcome.error.message}
+    record = {"source": outcome.source, "error": error_message(outcome.error)}
     if style == "table":
         return None
     return output.dumps(record) if style == "json" else csv_row(record)

@@ -6,11 +6,13 @@ import functools
 
 import click
 
+from p3d_cli import measure
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch, Report
+from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
+from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import UsageError
-from p3d_cli.mesh.topology import CHECKS, CheckResult, check_source
+from p3d_cli.mesh.topology import CHECKS, CheckResult
 
 #: Columns of ``--csv``, in order (the flat keys of the JSON record, then ``error``).
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
@@ -26,18 +28,10 @@ _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("duplicate_faces", "duplicate face", "duplicate_face_samples"))
 
 
-def check_file(source: str, *, fmt: str | None, required: tuple[str, ...], min_volume: float | None,
-               max_faces: int | None) -> CheckResult:
-    """Load and check one input."""
-    from p3d_cli.io import load_mesh
-
-    return check_source(load_mesh(source, fmt), source, required, min_volume, max_faces)
-
-
 def check_report(source: str, *, style: str, **limits) -> Report:
     """One input's verdict in ``style`` (text, json or csv), formatted where it was computed
     (module level, so that worker processes can receive it)."""
-    result = check_file(source, **limits)
+    result = measure.check(source, **limits)
     if style == "text":
         text = check_text(result)
     else:
@@ -48,7 +42,7 @@ def check_report(source: str, *, style: str, **limits) -> Report:
 
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be read: JSON or CSV; nothing in text style."""
-    record = {"source": outcome.source, "ok": False, "error": outcome.error.message}
+    record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
     if style == "text":
         return None
     return output.dumps(record) if style == "json" else check_csv_line(record)
@@ -207,11 +201,9 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, batch):
         raise UsageError("--json/--csv", "both given", "choose one output format")
     style = "csv" if batch.csv else "json" if as_json else "text"
     run = Batch("p3d check", inputs, batch)
-    work = functools.partial(check_report, style=style, fmt=fmt, required=required, min_volume=min_volume,
+    work = functools.partial(check_report, style=style, format=fmt, require=required, min_volume=min_volume,
                              max_faces=max_faces)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))
-    status = run.finish("failed check")
-    if status:
-        raise click.exceptions.Exit(status)
+    return run.finish("failed check")

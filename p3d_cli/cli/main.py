@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import signal
 import sys
 from collections.abc import MutableMapping
@@ -55,10 +56,52 @@ _keep_freed_memory()
 import click  # noqa: E402
 
 from p3d_cli import __version__  # noqa: E402
-from p3d_cli.cli.main_support import error_line  # noqa: E402
 from p3d_cli.errors import P3DError  # noqa: E402
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+
+#: Library parameter names -> the command-line flags that set them. Library errors name
+#: parameters (``density, mass: both given``); the command line reports them by flag.
+FLAGS = {
+    "about": "--about", "density": "--density", "mass": "--mass", "method": "--method",
+    "samples": "--samples", "seed": "--seed", "tolerance": "--tolerance", "tessellate": "--tessellate",
+    "format": "--format", "scale": "--scale", "rotate": "--rotate", "quat": "--quat",
+    "translate": "--translate", "require": "--require", "files_from": "--files-from",
+    "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt",
+}
+
+
+def error_line(text: str) -> None:
+    """Print one diagnostic line to stderr in p3d's format: ``p3d: error: <text>``."""
+    click.echo(f"p3d: error: {text}", err=True)
+
+
+_PARAMETER = re.compile(r"\b([a-z_]+)=(\S?)")
+
+
+def _as_flags(text: str) -> str:
+    """``method=montecarlo`` -> ``--method montecarlo``, ``density=`` -> ``--density``."""
+    def flag(match: re.Match) -> str:
+        name, value = match.group(1), match.group(2)
+        if name not in FLAGS:
+            return match.group(0)
+        return f"{FLAGS[name]} {value}" if value else FLAGS[name]
+    return _PARAMETER.sub(flag, text)
+
+
+def error_message(error: P3DError) -> str:
+    """The message of a p3d error as the command line shows it: the parameters the library
+    names (``where`` a list of parameter names; ``name=`` in the text) become flags."""
+    where = error.where
+    names = [name.strip() for name in where.split(",")]
+    if where and all(name in FLAGS for name in names):
+        where = "/".join(FLAGS[n] for n in names)
+    return P3DError(where, _as_flags(error.what), _as_flags(error.hint)).message
+
+
+def exit_status(error: P3DError) -> int:
+    """The exit status of a p3d error (its class's code; 2 at least for an input not done)."""
+    return error.exit_code
 
 HELP = f"""Exact mass properties, bounds and constraint solves for meshes and shapes.
 
@@ -89,7 +132,7 @@ class P3DGroup(click.Group):
             signal.signal(signal.SIGPIPE, signal.SIG_DFL)
         try:
             status = super().main(args, prog_name or "p3d", complete_var, standalone_mode=False, **extra)
-        except click.exceptions.Exit as exc:
+        except click.exceptions.Exit as exc:  # --version and --help end this way
             status = exc.exit_code
         except click.Abort:
             error_line("interrupted")
@@ -100,8 +143,8 @@ class P3DGroup(click.Group):
         except click.ClickException as exc:
             status = _usage_error(exc)
         except P3DError as exc:
-            error_line(exc.message)
-            status = exc.exit_code
+            error_line(error_message(exc))
+            status = exit_status(exc)
         except KeyboardInterrupt:
             status = 130
         except Exception as exc:  # noqa: BLE001 - the last guard: a bug still gets one line

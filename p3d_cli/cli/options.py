@@ -79,10 +79,10 @@ def strict_option(f):
 
 def batch_options(f):
     """``--files-from``, ``--jobs``, ``--dask``, ``--csv``, handed to the command as one
-    ``batch: BatchOptions`` argument (see ``p3d_cli.cli.batch``)."""
+    ``batch: BatchOptions`` argument (see ``p3d_cli.cli.reporting``)."""
     import functools
 
-    from p3d_cli.cli.batch import BatchOptions
+    from p3d_cli.cli.reporting import BatchOptions
 
     @functools.wraps(f)
     def command(*args, files_from, jobs, dask, as_csv, **kwargs):
@@ -111,7 +111,7 @@ PLACEMENT_HELP = ("Placement order: --scale (in the solid's own frame), then the
 
 def placement_options(f):
     """``--scale``, ``--rotate``, ``--quat``, ``--translate``, ``--tessellate``, handed to the
-    command as ``placement: p3d_cli.placed.Placement`` and ``tessellate: int | None``."""
+    command as ``placement: p3d_cli.placement.Placement`` and ``tessellate: int | None``."""
     import functools
 
     @functools.wraps(f)
@@ -136,8 +136,8 @@ def placement_options(f):
                                 "(R = Rn...R2 R1).")(command)
     command = click.option("--scale", type=VECTOR3, default=None, metavar="SX,SY,SZ",
                            help="Scale the solid by SX,SY,SZ > 0 along its own axes, about the "
-                                "origin (applied first; mass properties by the design note's "
-                                "eq. 9). A sphere or cylinder scaled unevenly becomes the ellipsoid "
+                                "origin (applied first; mass properties by eq. 9 of the "
+                                "Physics3D note, exact for any diagonal scale). A sphere or cylinder scaled unevenly becomes the ellipsoid "
                                 "or elliptic cylinder.")(command)
     return command
 
@@ -151,7 +151,7 @@ def make_placement(scale, turns, quat, translate):
         A malformed turn or quaternion, a non-positive scale, or --rotate with --quat.
     """
     from p3d_cli.errors import UsageError
-    from p3d_cli.placed import Placement
+    from p3d_cli.placement import Placement
     from p3d_cli.rotation import compose_rotations, parse_quaternion, parse_turn
 
     if turns and quat is not None:

@@ -6,12 +6,16 @@ import functools
 
 import click
 
+import numpy as np
+
 from p3d_cli.cli import output
-from p3d_cli.cli.batch import Batch, Report
-from p3d_cli.cli.options import VECTOR3, batch_options, density_options, format_option, inputs_argument, json_option, strict_option
-from p3d_cli.cli.options import placement_options
+from p3d_cli.cli.main import error_message
+from p3d_cli.cli.options import (VECTOR3, batch_options, density_options, format_option, inputs_argument,
+                                 json_option, placement_options, strict_option)
+from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
-from p3d_cli.placed import input_props
+from p3d_cli import measure
+from p3d_cli.results import PropsResult
 
 
 @click.command()
@@ -63,31 +67,25 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
     (scale first, then rotation about the world origin, then translation); the centre of mass
     and inertia reported are the placed solid's (I' = R I Rᵀ).
     """
-    if density is not None and mass is not None:
-        raise UsageError("--mass/--density", "both given", "give one: the other follows from the volume")
-    if method != "montecarlo" and (samples is not None or seed is not None or tolerance is not None):
-        raise UsageError("--samples/--seed/--tolerance", "given without --method montecarlo",
-                         "add --method montecarlo, or drop them")
-
     if batch.csv and (as_json or fields):
         raise UsageError("--csv", "given with --json or --field", "choose one output format")
     style = "csv" if batch.csv else "fields" if fields else "json" if as_json else "table"
+    options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
+                   tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt)
+    measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
-    work = functools.partial(props_report, style=style, fields=fields, strict=strict, method=method,
-                             samples=samples, seed=seed, tolerance=tolerance, fmt=fmt, density=density,
-                             mass=mass, about=about, placement=placement, tessellate=tessellate)
+    work = functools.partial(props_report, style=style, fields=fields, strict=strict, **options)
     if batch.csv:
-        click.echo(output.csv_line(output.PROPS_CSV_COLUMNS))
+        click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))
     status = run.finish("with warnings (--strict)")
-    if run.errors:
-        raise click.exceptions.Exit(status)
-    if run.failed:
+    if run.failed and not run.errors:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
+    return status
 
 
-def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **compute) -> Report:
+def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **options) -> Report:
     """One input's output in ``style`` (table, json, csv or fields), formatted where it was
     computed (module level, so that worker processes can receive it).
 
@@ -96,14 +94,14 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **co
     FieldError
         A name in ``fields`` that the result does not have.
     """
-    result = compute_props(src, **compute)
+    result = measure.props(src, **options)
     notes = tuple(f"p3d: warning: {result.facts.source}: {text}" for text in result.warnings)
     if style == "table":
-        text = output.props_table(result)
+        text = props_table(result)
     else:
-        record = output.props_record(result)
+        record = props_record(result)
         if style == "csv":
-            text = output.csv_line(output.props_row(record))
+            text = output.csv_line(props_row(record))
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
@@ -121,21 +119,91 @@ def field(record: dict, name: str):
 
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done: JSON or CSV; nothing in the other styles."""
-    record = {"source": outcome.source, "error": outcome.error.message}
+    record = {"source": outcome.source, "error": error_message(outcome.error)}
     if style == "csv":
-        return output.csv_line(output.props_row(record))
+        return output.csv_line(props_row(record))
     return output.dumps(record) if style == "json" else None
 
 
-def compute_props(src, *, method, samples, seed, tolerance, fmt, density, mass, about,
-                  placement=None, tessellate=None):
-    """One input's ``PropsResult`` (module level, so that worker processes can receive it)."""
-    if method == "montecarlo":
-        if tessellate is not None:
-            raise UsageError("--tessellate", "given with --method montecarlo",
-                             "Monte Carlo samples the exact shape; drop one of them")
-        from p3d_cli.montecarlo import montecarlo_props
-        return montecarlo_props(src, samples=samples, seed=seed, tolerance=tolerance, fmt=fmt,
-                                density=density, mass=mass, about=about, placement=placement)
-    return input_props(src, placement, tessellate=tessellate, fmt=fmt, density=density, mass=mass,
-                       about=about)
+INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"
+
+
+def props_record(result: PropsResult) -> dict:
+    """The JSON object of ``p3d props`` for one input (stable keys)."""
+    p, f = result.properties, result.facts
+    record = {
+        "source": f.source,
+        "format": f.format,
+        "method": result.method,
+        "faces": f.faces,
+        "closed": f.closed,
+        "volume": p.volume,
+        "mass": p.mass,
+        "density": p.density,
+        "center_of_mass": p.center_of_mass,
+        "inertia": p.inertia,
+        "inertia_origin": p.inertia_origin,
+        "principal_moments": p.principal_moments,
+        "principal_axes": p.principal_axes,
+        "second_moments": p.second_moments,
+        "bounds": None if f.bounds is None else {"min": f.bounds.min, "max": f.bounds.max},
+        "coordinate_dtype": f.coordinate_dtype,
+        "inertia_convention": INERTIA_CONVENTION,
+        "warnings": list(result.warnings),
+        "uncertainty": result.uncertainty,
+    }
+    if p.about is not None:
+        record["about"] = p.about
+        record["inertia_about"] = p.inertia_about
+    record.update(result.details)
+    return record
+
+
+def props_table(result: PropsResult) -> str:
+    """A readable block for one input."""
+    p, f = result.properties, result.facts
+    closed = {True: "yes", False: "NO", None: "n/a"}[f.closed]
+    lines = [
+        f"{f.source}  ({f.format}, {f.faces} faces, closed: {closed}, method: {result.method})",
+        f"  volume            {output.number(p.volume)}",
+        f"  density           {output.number(p.density)}",
+        f"  mass              {output.number(p.mass)}",
+        f"  center of mass    {output.vector(p.center_of_mass)}",
+    ]
+    if p.inertia is None:
+        lines.append("  inertia           - (no volume)")
+    else:
+        lines.append("  inertia about the centre of mass (" + INERTIA_CONVENTION + ")")
+        lines += [f"                    {output.vector(row)}" for row in p.inertia]
+        lines.append("  inertia about the origin")
+        lines += [f"                    {output.vector(row)}" for row in p.inertia_origin]
+        if p.inertia_about is not None:
+            lines.append(f"  inertia about ({', '.join(output.number(x) for x in p.about)})")
+            lines += [f"                    {output.vector(row)}" for row in p.inertia_about]
+        lines.append(f"  principal moments {output.vector(p.principal_moments)}")
+        lines.append("  principal axes (rows; right-handed)")
+        lines += [f"                    {output.vector(row)}" for row in p.principal_axes]
+    if f.bounds is not None:
+        lines.append(f"  bounds min        {output.vector(f.bounds.min)}")
+        lines.append(f"  bounds max        {output.vector(f.bounds.max)}")
+    return "\n".join(lines)
+
+
+#: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention.
+CSV_COLUMNS = ("source", "format", "method", "faces", "closed", "volume", "mass", "density",
+                     "com_x", "com_y", "com_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz",
+                     "warnings", "error")
+
+
+def props_row(record: dict) -> list:
+    """The ``--csv`` cells of a ``props_record`` (or of an error record), in column order."""
+    row = dict.fromkeys(CSV_COLUMNS)
+    row.update({k: v for k, v in record.items() if k in row})
+    com, inertia = record.get("center_of_mass"), record.get("inertia")
+    if com is not None:
+        row["com_x"], row["com_y"], row["com_z"] = (float(x) for x in com)
+    if inertia is not None:
+        i = np.asarray(inertia)
+        row.update(ixx=i[0, 0], iyy=i[1, 1], izz=i[2, 2], ixy=i[0, 1], ixz=i[0, 2], iyz=i[1, 2])
+    row["warnings"] = " | ".join(record.get("warnings") or []) or None
+    return [row[k] for k in CSV_COLUMNS]

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.errors import P3DError, SceneError
-from p3d_cli.massprops import mass_properties
+from p3d_cli.inertia import mass_properties
 from p3d_cli.results import Moments
 
 
@@ -66,16 +66,16 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     SceneError
         Unreadable or corrupt mesh, or a solid with no positive volume.
     """
-    from p3d_cli.io import load_mesh
-    from p3d_cli.mesh.analysis import analyze
+    from p3d_cli.exact import solid_moments
+    from p3d_cli.solid import Solid, as_solid
 
     shape = parse_shape_spec(spec_or_path, where)
     if shape is not None:
-        moments = shape.moments()
+        moments = solid_moments(Solid(spec_or_path, shape=shape))
     else:
         path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
         try:
-            moments = analyze(load_mesh(path), path).moments
+            moments = solid_moments(as_solid(path))
         except P3DError as exc:
             raise SceneError(where, f"cannot use mesh {spec_or_path!r}: {exc.message}",
                              "fix or re-export the mesh") from None

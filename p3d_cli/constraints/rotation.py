@@ -2,39 +2,15 @@
 
 A body's orientation ``q`` maps body-frame vectors to world-frame ones: ``v_world = R(q) v_body``.
 A world-frame angular velocity ``ω`` rotates the body by ``exp(ω dt)`` applied on the left
-(``q ← exp(ω dt / 2) ⊗ q``), because ``ω`` is expressed in the world frame.
+(``q ← exp(ω dt / 2) ⊗ q``), because ``ω`` is expressed in the world frame. The rotation
+matrix of a quaternion is ``p3d_cli.rotation.quaternion_matrix`` (here as ``quat_to_matrix``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-
-def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a unit quaternion.
-
-    Parameters
-    ----------
-    q : (4,) or (n, 4) float64
-        ``[w, x, y, z]``, unit length.
-
-    Returns
-    -------
-    (3, 3) or (n, 3, 3) float64
-    """
-    q = np.asarray(q, dtype=np.float64)
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    out[..., 0, 1] = 2 * (x * y - w * z)
-    out[..., 0, 2] = 2 * (x * z + w * y)
-    out[..., 1, 0] = 2 * (x * y + w * z)
-    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    out[..., 1, 2] = 2 * (y * z - w * x)
-    out[..., 2, 0] = 2 * (x * z - w * y)
-    out[..., 2, 1] = 2 * (y * z + w * x)
-    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
+from p3d_cli.rotation import quaternion_matrix as quat_to_matrix  # noqa: F401 - the one copy
 
 
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -95,3 +71,4 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+

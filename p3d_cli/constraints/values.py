@@ -12,6 +12,7 @@ import numpy as np
 
 from p3d_cli.constraints.rotation import quat_from_axis_angle
 from p3d_cli.errors import SceneError
+from p3d_cli.inertia import breaks_triangle_inequality
 
 
 def is_number(value) -> bool:
@@ -86,7 +87,7 @@ def inertia(value, where: str) -> np.ndarray:
         raise SceneError(where, f"is not positive definite (principal moments {_join(principal)})",
                          "every principal moment of a solid is > 0 (p3d uses the positive tensor, "
                          "Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm)")
-    if principal[0] + principal[1] < principal[2] * (1 - 1e-9):
+    if breaks_triangle_inequality(principal):
         raise SceneError(where, f"breaks the triangle inequality: principal moments {_join(principal)} "
                          f"have {principal[0]:.6g} + {principal[1]:.6g} < {principal[2]:.6g}",
                          "no solid has such an inertia; check the units and the diagonal")

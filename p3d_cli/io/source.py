@@ -7,6 +7,8 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from p3d_cli.errors import InputError
+
 #: Triangles handed to the integrals per block: large enough that numpy's per-call overhead
 #: vanishes, small enough that a block's float64 columns (~1 MB) and the integrals' temporaries
 #: stay in cache between the dozens of passes over them. Measured on a 1M-triangle STL: 16k
@@ -33,6 +35,9 @@ class MeshSource:
         For volume meshes: the tetrahedra, whose integrals are used directly.
     warnings : tuple of str
         Things the loader noticed that the user should hear about (trailing bytes, ...).
+    where : str
+        The input's name in messages: its path, ``<stdin>``, or ``<array>`` for arrays given
+        from Python (set by ``p3d_cli.io.load_mesh``).
     """
 
     format: str
@@ -41,6 +46,7 @@ class MeshSource:
     read_blocks: Callable[[], Iterator[np.ndarray]]
     tetrahedra: np.ndarray | None = None
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    where: str = "<array>"
 
     def triangles(self) -> np.ndarray:
         """All triangles in one ``(n, 3, 3)`` array (for callers that need them at once)."""
@@ -48,6 +54,33 @@ class MeshSource:
         if not blocks:
             return np.zeros((0, 3, 3))
         return np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
+
+    def finite_blocks(self) -> Iterator[np.ndarray]:
+        """``read_blocks()``, refusing the first NaN or infinite coordinate (with its face index).
+
+        Raises
+        ------
+        InputError
+        """
+        seen = 0
+        for block in self.read_blocks():
+            bad = first_nonfinite(block)
+            if bad is not None:
+                raise nonfinite_error(self.where, seen + bad)
+            seen += len(block)
+            yield block
+
+
+def first_nonfinite(cells: np.ndarray) -> int | None:
+    """Index of the first cell (triangle or tetrahedron, ``(n, k, 3)``) with a NaN or infinite
+    coordinate, or None when all are finite."""
+    finite = np.isfinite(cells).reshape(len(cells), -1).all(axis=1)
+    return None if finite.all() else int(np.flatnonzero(~finite)[0])
+
+
+def nonfinite_error(where: str, index: int, cell: str = "face") -> InputError:
+    """The one message for a NaN or infinite coordinate in cell ``index``."""
+    return InputError(where, f"{cell} {index} has a NaN or infinite coordinate", "repair or re-export the mesh")
 
 
 def indexed_source(fmt: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,

@@ -1,8 +1,8 @@
 """Shape classes: one module per class, and the one registry naming them (``SHAPES``).
 
 A spec names a shape where a mesh path would go: ``NAME`` (unit scale) or
-``NAME:SX,SY,SZ`` with the design note's scale factors, the half-extents of the canonical
-solid in [-1, 1]³ (FACTS.md): ``box:1,2,3`` measures 2 × 4 × 6. ``sphere:R`` gives a radius.
+``NAME:SX,SY,SZ`` with the Physics3D note's scale factors, the half-extents of the canonical
+solid in [-1, 1]³ (docs/method.md, "Scale factors"): ``box:1,2,3`` measures 2 × 4 × 6. ``sphere:R`` gives a radius.
 
 The note's scale rules keep circles circular: a sphere needs sx = sy = sz and a cylinder
 (axis z) sx = sy. Breaking them is refused, naming the rule and the exact generalisation p3d
@@ -97,6 +97,21 @@ def parse_spec(text: str) -> Shape | None:
     return _build(text, name, factors)
 
 
+def parse_shape(text: str) -> Shape:
+    """The shape a spec names (``"box:1,2,3"``, ``"sphere:0.5"``).
+
+    Raises
+    ------
+    SpecError
+        ``text`` is not a spec (names no shape), or is a malformed one.
+    """
+    shape = parse_spec(text)
+    if shape is None:
+        name = text.split(":", 1)[0]
+        raise SpecError(text, f"no shape named {name!r}", "shapes are: " + ", ".join(SHAPES))
+    return shape
+
+
 def _numbers(text: str, name: str, body: str) -> list[float]:
     hint = f"write {FORMS[name]}; factors are half-extents of the canonical [-1, 1]³ shape"
     values = []
@@ -138,5 +153,5 @@ def _join(values) -> str:
     return ",".join(f"{v:g}" for v in values)
 
 
-__all__ = ["SHAPES", "FORMS", "Shape", "parse_spec", "looks_like_spec", "Box", "Wedge", "Corner",
+__all__ = ["SHAPES", "FORMS", "Shape", "parse_shape", "parse_spec", "looks_like_spec", "Box", "Wedge", "Corner",
            "Cylinder", "Sphere", "Ellipsoid", "EllipticCylinder"]

@@ -23,12 +23,11 @@ from p3d_cli.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
-from p3d_cli.shapes.sphere import check_segments
+from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
+from p3d_cli.shapes.unit_cylinder import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_cylinder_triangles
 
-#: Canonical constants, as rational multiples of π.
-VOLUME_PER_PI = F(2)
-CENTER = (F(0), F(0), F(0))
-CENTRAL_PER_PI = ((F(1, 2), F(0), F(0)), (F(0), F(1, 2), F(0)), (F(0), F(0), F(2, 3)))
+__all__ = ["Cylinder", "CENTER", "CENTRAL_PER_PI", "VOLUME_PER_PI"]
+
 
 
 @dataclass(frozen=True)
@@ -61,7 +60,6 @@ class Cylinder:
         s = self.scale * np.asarray(scale, dtype=np.float64)
         if s[0] == s[1]:
             return Cylinder(float(s[0]), float(s[2]))
-        from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
         return EllipticCylinder(*map(float, s))
 
     def moments(self) -> Moments:
@@ -85,29 +83,3 @@ class Cylinder:
     def tessellate(self, n: int) -> np.ndarray:
         """An inscribed ``n``-gon prism (see ``unit_cylinder_triangles``), scaled."""
         return unit_cylinder_triangles(n) * self.scale
-
-
-def unit_cylinder_triangles(n: int) -> np.ndarray:
-    """The regular ``n``-gon prism inscribed in the canonical cylinder.
-
-    Its volume is ``n sin(2π/n)`` against ``2π``: relative error ``(2π/n)²/6 + O(n⁻⁴)``.
-
-    Returns
-    -------
-    (4 n, 3, 3) float64
-        Sides as two triangles per segment, caps fanned from their centres; counter-clockwise
-        seen from outside.
-    """
-    n = check_segments(n)
-    phi = 2 * np.pi * np.arange(n) / n
-    ring = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-    bottom = np.hstack([ring, np.full((n, 1), -1.0)])
-    top = np.hstack([ring, np.full((n, 1), 1.0)])
-    j, jn = np.arange(n), (np.arange(n) + 1) % n
-    cb = np.broadcast_to([0.0, 0.0, -1.0], (n, 3))
-    ct = np.broadcast_to([0.0, 0.0, 1.0], (n, 3))
-    sides_a = np.stack([bottom[j], bottom[jn], top[jn]], axis=1)
-    sides_b = np.stack([bottom[j], top[jn], top[j]], axis=1)
-    caps_top = np.stack([ct, top[j], top[jn]], axis=1)
-    caps_bottom = np.stack([cb, bottom[jn], bottom[j]], axis=1)
-    return np.concatenate([sides_a, sides_b, caps_top, caps_bottom])

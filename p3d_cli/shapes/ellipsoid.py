@@ -18,7 +18,7 @@ from p3d_cli.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
-from p3d_cli.shapes.sphere import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_sphere_triangles
+from p3d_cli.shapes.unit_ball import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_sphere_triangles
 
 
 @dataclass(frozen=True)

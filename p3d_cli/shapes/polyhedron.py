@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from p3d_cli.errors import UsageError
 from p3d_cli.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes.closed_form import canonical_moments
@@ -115,3 +116,15 @@ class ScaledPolyhedron:
     def bounds(self, rotation=None, translation=None) -> Bounds:
         """Exact axis-aligned box of ``R x + t`` over the solid (eq. 10)."""
         return projected_bounds(self.vertices(), rotation, translation)
+
+
+#: Fewest segments a tessellation accepts (a triangle's worth around the axis).
+MIN_SEGMENTS = 3
+
+
+def check_segments(n) -> int:
+    """``n`` as a tessellation's segment count, or ``UsageError``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < MIN_SEGMENTS:
+        raise UsageError("tessellate", f"{n!r} is not a segment count",
+                         f"give a whole number of at least {MIN_SEGMENTS}")
+    return int(n)

@@ -13,19 +13,14 @@ from fractions import Fraction as F
 
 import numpy as np
 
-from p3d_cli.errors import UsageError
 from p3d_cli.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
+from p3d_cli.shapes.ellipsoid import Ellipsoid
+from p3d_cli.shapes.unit_ball import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_sphere_triangles
 
-#: Canonical constants, as rational multiples of π.
-VOLUME_PER_PI = F(4, 3)
-CENTER = (F(0), F(0), F(0))
-CENTRAL_PER_PI = ((F(4, 15), F(0), F(0)), (F(0), F(4, 15), F(0)), (F(0), F(0), F(4, 15)))
-
-#: Fewest segments ``tessellate`` accepts (a triangle's worth around the axis).
-MIN_SEGMENTS = 3
+__all__ = ["Sphere", "CENTER", "CENTRAL_PER_PI", "VOLUME_PER_PI"]
 
 
 @dataclass(frozen=True)
@@ -55,7 +50,6 @@ class Sphere:
         s = self.scale * np.asarray(scale, dtype=np.float64)
         if s[0] == s[1] == s[2]:
             return Sphere(float(s[0]))
-        from p3d_cli.shapes.ellipsoid import Ellipsoid
         return Ellipsoid(*map(float, s))
 
     def moments(self) -> Moments:
@@ -77,47 +71,3 @@ class Sphere:
         See ``unit_sphere_triangles``.
         """
         return unit_sphere_triangles(n) * self.scale
-
-
-def check_segments(n) -> int:
-    """``n`` as a segment count, or ``UsageError``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < MIN_SEGMENTS:
-        raise UsageError("--tessellate", f"{n!r} is not a segment count",
-                         f"give a whole number of at least {MIN_SEGMENTS}")
-    return int(n)
-
-
-def unit_sphere_triangles(n: int) -> np.ndarray:
-    """A latitude-longitude polyhedron inscribed in the unit sphere.
-
-    ``n`` segments around the z axis and ``max(2, n // 2)`` stacks from pole to pole, so
-    every edge is about ``2π/n`` long; all vertices lie on the sphere and the volume error
-    falls as ``O(1/n²)``.
-
-    Returns
-    -------
-    (2 n (stacks - 1), 3, 3) float64
-        Counter-clockwise seen from outside.
-    """
-    n = check_segments(n)
-    stacks = max(2, n // 2)
-    theta = np.pi * np.arange(stacks + 1) / stacks
-    phi = 2 * np.pi * np.arange(n) / n
-    # Ring k is the circle at polar angle theta[k]; rings 0 and `stacks` are the poles
-    # (n copies of one point, which makes the cap quads degenerate; those are dropped).
-    rings = np.stack([np.outer(np.sin(theta), np.cos(phi)),
-                      np.outer(np.sin(theta), np.sin(phi)),
-                      np.repeat(np.cos(theta)[:, None], n, axis=1)], axis=-1)
-    rings[0] = (0.0, 0.0, 1.0)
-    rings[-1] = (0.0, 0.0, -1.0)
-    j = np.arange(n)
-    jn = (j + 1) % n
-    tris = []
-    for k in range(stacks):
-        upper, lower = rings[k], rings[k + 1]
-        # Quad (u_j, l_j, l_j+1, u_j+1) runs down then east: its normal points outward.
-        if k != stacks - 1:
-            tris.append(np.stack([upper[j], lower[j], lower[jn]], axis=1))
-        if k != 0:
-            tris.append(np.stack([upper[j], lower[jn], upper[jn]], axis=1))
-    return np.concatenate(tris)

@@ -16,9 +16,9 @@ import pytest
 from click.testing import CliRunner
 
 from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli import batch as batch_module
-from p3d_cli.cli.batch import run_each
-from p3d_cli.cli.check import check_file
+from p3d_cli.cli import reporting as batch_module
+from p3d_cli.batch import run_each
+from p3d_cli.measure import check as check_file
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
 
@@ -211,7 +211,7 @@ def test_debug_reraises_bugs(monkeypatch):
 
 
 def test_errors_cross_the_process_boundary_as_themselves(tmp_path):
-    work = functools.partial(check_file, fmt=None, required=(), min_volume=None, max_faces=None)
+    work = functools.partial(check_file, format=None, require=(), min_volume=None, max_faces=None)
     missing = str(tmp_path / "missing.stl")
     out = list(run_each([missing, missing], work, jobs=2))
     for o in out:

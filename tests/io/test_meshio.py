@@ -14,7 +14,7 @@ import pytest
 from p3d_cli.errors import FormatError, InputError, MissingExtraError
 from p3d_cli.io import detect_format, is_mesh_path, load_mesh, meshio_backend
 from p3d_cli.io.raw import open_input
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 meshio = pytest.importorskip("meshio")
 
@@ -43,10 +43,10 @@ def test_companion_files_are_skipped_without_asking_meshio(tmp_path):
     from p3d_cli import io as p3d_io
 
     # The skip list must never hide a format meshio reads.
-    assert not [ext for ext in p3d_io._NEVER_MESHES if ext and meshio_backend.knows_extension(ext)]
+    assert not [ext for ext in p3d_io.NEVER_MESHES if ext and meshio_backend.knows_extension(ext)]
     for name in ("part.stl", "part.mtl", "notes.txt", "README", "list.json"):
         (tmp_path / name).write_bytes(b"")
-    code = ("import sys; from p3d_cli.cli.inputs import expand_inputs; "
+    code = ("import sys; from p3d_cli.batch.inputs import expand_inputs; "
             f"print([p.rsplit('/', 1)[1] for p in expand_inputs([{str(tmp_path)!r}])], 'meshio' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.split() == ["['part.stl']", "False"]
@@ -59,7 +59,7 @@ def test_tetrahedra_give_exact_volume_centre_and_inertia(tmp_path):
     assert mesh.format == "meshio:gmsh" and mesh.face_count == 6
     assert mesh.tetrahedra.shape == (6, 4, 3) and mesh.tetrahedra.dtype == np.float64
     assert list(mesh.read_blocks()) == []
-    props = mesh_props(path).properties
+    props = p3d.props(path).properties
     assert props.volume == pytest.approx(1.0, rel=1e-15)
     np.testing.assert_allclose(props.center_of_mass, [0.5] * 3, rtol=0, atol=1e-15)
     np.testing.assert_allclose(props.inertia, np.eye(3) / 6, rtol=0, atol=1e-15)
@@ -69,7 +69,7 @@ def test_two_tetrahedra_vtu_exact(tmp_path):
     points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1.0]])
     path = str(tmp_path / "two.vtu")
     meshio.write(path, meshio.Mesh(points, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 3, 4]]))]))
-    props = mesh_props(path).properties
+    props = p3d.props(path).properties
     # Volumes 1/6 and 1/3, centroids (1/4, 1/4, 1/4) and (1/2, 1/2, 1/2).
     volume = Fraction(1, 6) + Fraction(1, 3)
     centre = (Fraction(1, 6) * Fraction(1, 4) + Fraction(1, 3) * Fraction(1, 2)) / volume
@@ -86,7 +86,7 @@ def test_surface_quads_and_triangles_are_fan_split(tmp_path):
     tris = mesh.triangles()
     expected = [CUBE_V[[q[0], q[i], q[i + 1]]] for q in CUBE_QUADS[:4] for i in (1, 2)]
     np.testing.assert_array_equal(tris[:8], np.array(expected))
-    assert mesh_props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
+    assert p3d.props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
 def test_polygon_cells(tmp_path):
@@ -100,7 +100,7 @@ def test_polygon_cells(tmp_path):
     assert loaded.face_count == 4 + 6
     np.testing.assert_array_equal(loaded.triangles()[:4], points[[[5, 4, 3], [5, 3, 2], [5, 2, 1], [5, 1, 0]]])
     area = 6 * np.sqrt(3) / 4
-    assert mesh_props(path).properties.volume == pytest.approx(area / 3, rel=1e-14)
+    assert p3d.props(path).properties.volume == pytest.approx(area / 3, rel=1e-14)
 
 
 def test_float32_points_reported(tmp_path):
@@ -112,7 +112,7 @@ def test_float32_points_reported(tmp_path):
 def test_stdin_goes_through_a_temporary_file(tmp_path):
     path = tmp_path / "cube.vtu"
     meshio.write(str(path), meshio.Mesh(CUBE_V, [("tetra", CUBE_TETS)]))
-    result = mesh_props("-", fmt="vtu", stdin=io.BytesIO(path.read_bytes()))
+    result = p3d.props("-", format="vtu", stdin=io.BytesIO(path.read_bytes()))
     assert result.properties.volume == pytest.approx(1.0, rel=1e-15)
     raw = open_input("-", io.BytesIO(path.read_bytes()))
     assert detect_format(raw, "gmsh") == "meshio:gmsh"

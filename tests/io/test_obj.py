@@ -11,7 +11,7 @@ from conftest import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, obj
 from p3d_cli.io.raw import open_input
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 # A unit cube [0, 1]^3 as six outward quads (1-based, as OBJ writes them).
 CUBE_V = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
@@ -57,7 +57,7 @@ def test_quads_split_as_fans_from_first_vertex(tmp_path):
 
 
 def test_cube_volume_and_inertia_exact(tmp_path):
-    props = mesh_props(write(tmp_path, cube_text())).properties
+    props = p3d.props(write(tmp_path, cube_text())).properties
     assert props.volume == pytest.approx(1.0, rel=1e-15)
     np.testing.assert_allclose(props.center_of_mass, [0.5, 0.5, 0.5], rtol=0, atol=1e-15)
     np.testing.assert_allclose(props.inertia, np.eye(3) / 6, rtol=0, atol=1e-15)
@@ -251,4 +251,4 @@ def test_real_obj_matches_reference(real_meshes, reference):
     path = str(real_meshes / name)
     mesh = load_mesh(path)
     assert mesh.format == "obj" and mesh.face_count == reference[name]["faces"]
-    check_reference(mesh_props(path).properties, reference[name])
+    check_reference(p3d.props(path).properties, reference[name])

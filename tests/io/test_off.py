@@ -10,7 +10,7 @@ import pytest
 from conftest import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 CUBE_V = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
 CUBE_QUADS = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
@@ -50,7 +50,7 @@ def test_variants_read_the_same_cube(tmp_path, text):
     mesh = load_mesh(path)
     assert mesh.format == "off" and mesh.coordinate_dtype == "float64" and mesh.face_count == 12
     np.testing.assert_array_equal(mesh.triangles(), expected_triangles())
-    props = mesh_props(path).properties
+    props = p3d.props(path).properties
     assert props.volume == pytest.approx(1.0, rel=1e-15)
     np.testing.assert_allclose(props.inertia, np.eye(3) / 6, rtol=0, atol=1e-15)
 
@@ -75,7 +75,7 @@ def test_pentagon_fan_order(tmp_path):
     np.testing.assert_array_equal(ours[3:], np.array([v[[i, (i + 1) % 5, 5]] for i in range(5)]))
     # A closed pyramid over a regular pentagon: volume = base area * height / 3.
     area = 5 / 2 * np.sin(2 * np.pi / 5)
-    assert mesh_props(path).properties.volume == pytest.approx(area / 3, rel=1e-14)
+    assert p3d.props(path).properties.volume == pytest.approx(area / 3, rel=1e-14)
 
 
 def test_decimal_text_is_float64(tmp_path):
@@ -93,7 +93,7 @@ def test_extra_lines_after_faces_warn(tmp_path):
 
 def raises(tmp_path, text, kind=FormatError):
     with pytest.raises(kind) as info:
-        load_mesh(write(tmp_path, text), fmt="off")
+        load_mesh(write(tmp_path, text), format="off")
     assert info.value.hint
     return info.value
 
@@ -152,4 +152,4 @@ def test_real_off_matches_reference(real_meshes, reference):
     mesh = load_mesh(path)
     ref = reference[name]
     assert mesh.format == "off" and mesh.face_count == ref["faces"]
-    check_reference(mesh_props(path).properties, ref)
+    check_reference(p3d.props(path).properties, ref)

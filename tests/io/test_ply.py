@@ -13,7 +13,7 @@ import pytest
 from conftest import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, ply
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 CUBE_V = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
 CUBE_QUADS = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
@@ -78,7 +78,7 @@ def test_cube_every_format_and_float_type(tmp_path, fmt, vtype):
     v = np.array(CUBE_V, dtype=float)
     expected = np.array([v[[q[0], q[i], q[i + 1]]] for q in CUBE_QUADS for i in (1, 2)])
     np.testing.assert_array_equal(tris, expected)
-    props = mesh_props(path).properties
+    props = p3d.props(path).properties
     assert props.volume == pytest.approx(1.0, rel=1e-15)
     np.testing.assert_allclose(props.inertia, np.eye(3) / 6, rtol=0, atol=1e-15)
 
@@ -99,7 +99,7 @@ def test_extra_elements_properties_and_face_lists(tmp_path, fmt):
     mesh = load_mesh(write(tmp_path, ply_bytes(fmt, elements)))
     assert mesh.face_count == 12
     assert mesh.coordinate_dtype == "float64"  # x and z are double, y is int16: no float32
-    props = mesh_props(write(tmp_path, ply_bytes(fmt, elements), "b.ply")).properties
+    props = p3d.props(write(tmp_path, ply_bytes(fmt, elements), "b.ply")).properties
     assert props.volume == pytest.approx(1.0, rel=1e-15)
     np.testing.assert_allclose(props.center_of_mass, [0.5] * 3, rtol=0, atol=1e-15)
 
@@ -109,7 +109,7 @@ def test_float32_when_any_axis_is_float(tmp_path):
     elements[0] = ("vertex", [("double", "x"), ("float", "y"), ("double", "z")], elements[0][2])
     mesh = load_mesh(write(tmp_path, ply_bytes("binary_little_endian", elements)))
     assert mesh.coordinate_dtype == "float32"
-    assert mesh_props(write(tmp_path, ply_bytes("binary_little_endian", elements), "b.ply")
+    assert p3d.props(write(tmp_path, ply_bytes("binary_little_endian", elements), "b.ply")
                       ).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
@@ -127,7 +127,7 @@ def test_mixed_polygon_sizes_take_the_record_walk(tmp_path, fmt):
     v = np.array(CUBE_V, dtype=float)
     expected = [v[list(t)] for t in bottom] + [v[[q[0], q[i], q[i + 1]]] for q in quads for i in (1, 2)]
     np.testing.assert_array_equal(tris, np.array(expected))
-    assert mesh_props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
+    assert p3d.props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
 def test_hexagon_fan_matches_trimesh(tmp_path):
@@ -162,7 +162,7 @@ def test_crlf_header_and_ascii(tmp_path):
     data = ply_bytes("ascii", cube_elements()).replace(b"\n", b"\r\n")
     mesh = load_mesh(write(tmp_path, data))
     assert mesh.face_count == 12
-    assert mesh_props(write(tmp_path, data, "b.ply")).properties.volume == pytest.approx(1.0, rel=1e-15)
+    assert p3d.props(write(tmp_path, data, "b.ply")).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
 def test_ascii_records_split_over_lines_still_read(tmp_path):
@@ -178,7 +178,7 @@ def test_ascii_records_split_over_lines_still_read(tmp_path):
 
 def raises(tmp_path, data, kind=FormatError):
     with pytest.raises(kind) as info:
-        load_mesh(write(tmp_path, data), fmt="ply")
+        load_mesh(write(tmp_path, data), format="ply")
     assert info.value.hint
     return info.value
 
@@ -299,7 +299,7 @@ def test_real_ply_matches_reference(real_meshes, reference, name, dtype):
     mesh = load_mesh(path)
     assert mesh.format == "ply" and mesh.coordinate_dtype == dtype
     assert mesh.face_count == reference[name]["faces"]
-    check_reference(mesh_props(path).properties, reference[name])
+    check_reference(p3d.props(path).properties, reference[name])
 
 
 def test_header_words_in_comments_and_non_ascii_comments(tmp_path):

@@ -8,7 +8,7 @@ import pytest
 from conftest import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh
-from p3d_cli.props import mesh_props
+import p3d_cli as p3d
 
 
 def test_binary_with_solid_header_is_read_as_binary(tmp_path):
@@ -25,7 +25,7 @@ def test_binary_trailing_bytes_warn(tmp_path):
     write_binary_stl(path, cube_triangles())
     with open(path, "ab") as f:
         f.write(b"\0" * 7)
-    result = mesh_props(str(path))
+    result = p3d.props(str(path))
     assert result.properties.volume == pytest.approx(1.0)
     assert any("7 trailing bytes" in w for w in result.warnings)
 
@@ -78,7 +78,7 @@ def test_ascii_several_solids_and_odd_names(tmp_path):
     text = path.read_text()
     write_ascii_stl(path, b, name="second")
     path.write_text(text + path.read_text().replace("\n", "\r\n"))
-    result = mesh_props(str(path))
+    result = p3d.props(str(path))
     assert result.facts.faces == 24
     assert result.properties.volume == pytest.approx(2.0, rel=1e-14)
     np.testing.assert_allclose(result.properties.center_of_mass, [3.0, 0.5, 0.5], rtol=1e-14)
@@ -124,7 +124,7 @@ def test_nan_coordinate_names_the_face(tmp_path):
     path = tmp_path / "nan.stl"
     write_binary_stl(path, tri)
     with pytest.raises(InputError, match="face 5 has a NaN or infinite coordinate"):
-        mesh_props(str(path))
+        p3d.props(str(path))
 
 
 def test_stdin_is_read(tmp_path):
@@ -132,7 +132,7 @@ def test_stdin_is_read(tmp_path):
 
     path = tmp_path / "c.stl"
     write_binary_stl(path, cube_triangles())
-    result = mesh_props("-", stdin=io.BytesIO(path.read_bytes()))
+    result = p3d.props("-", stdin=io.BytesIO(path.read_bytes()))
     assert result.properties.volume == pytest.approx(1.0)
     assert result.facts.format == "stl-binary"
 
@@ -147,6 +147,6 @@ def test_off_variants_are_recognised_by_content_on_stdin():
     plain = "4 4 0\n" + "\n".join(points) + "\n" + faces
     coloured = "4 4 0\n" + "\n".join(p + " 255 0 0 255" for p in points) + "\n" + faces
     for text in ("OFF\n" + plain, "# made by hand\n\nOFF\n" + plain, "COFF\n" + coloured):
-        result = mesh_props("-", stdin=_io.BytesIO(text.encode()))
+        result = p3d.props("-", stdin=_io.BytesIO(text.encode()))
         assert result.facts.format == "off", text[:20]
         assert result.properties.volume == pytest.approx(1 / 6), text[:20]

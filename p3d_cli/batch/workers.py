@@ -1,6 +1,6 @@
 """Worker processes started by ``fork``, each fed chunks of inputs over its own pipe.
 
-``p3d_cli.cli.batch`` uses this for ``--jobs N`` wherever ``fork`` is safe (POSIX, and a
+``p3d_cli.batch.runner`` uses this for ``--jobs N`` wherever ``fork`` is safe (POSIX, and a
 parent with no other thread), rather than ``multiprocessing.Pool``, for two reasons:
 
 - A worker killed by the operating system (the out-of-memory killer, on a huge mesh) leaves

@@ -13,8 +13,9 @@ from collections import deque
 
 import pytest
 
-from p3d_cli.cli import batch, workers
-from p3d_cli.cli.batch import run_each
+from p3d_cli.batch import runner as batch
+from p3d_cli.batch import workers
+from p3d_cli.batch import run_each
 
 # imap_forked forks whatever threads this process has (earlier tests may leave some behind);
 # the work here takes no lock, so that is safe. The batch decides with fork_is_safe().
@@ -96,8 +97,8 @@ def test_the_batch_reports_a_killed_worker_as_an_input_error():
     # In a fresh interpreter: with no other thread there, the batch forks its own workers.
     code = textwrap.dedent("""
         import os, signal
-        from p3d_cli.cli import workers
-        from p3d_cli.cli.batch import run_each
+        from p3d_cli.batch import workers
+        from p3d_cli.batch import run_each
 
         def work(text):
             if text == "7":

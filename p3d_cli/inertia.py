@@ -1,4 +1,9 @@
-"""Mass properties (mass, centre of mass, inertia tensors, principal frame) from ``Moments``."""
+"""Mass properties (mass, centre of mass, inertia tensors, principal frame) from ``Moments``.
+
+The one copy of each rule about mass and inertia: the density/mass rule (``density_for``), the
+inertia of second moments, the parallel-axis theorem, the principal frame and the triangle
+inequality every solid's principal moments obey (``breaks_triangle_inequality``).
+"""
 
 from __future__ import annotations
 
@@ -18,7 +23,7 @@ def inertia_from_second_moments(second: np.ndarray) -> np.ndarray:
     Returns
     -------
     (3, 3) float64
-        ``Ixx = ∫ (y² + z²) dm``, ``Ixy = -∫ x y dm`` (FACTS.md, "Inertia sign").
+        ``Ixx = ∫ (y² + z²) dm``, ``Ixy = -∫ x y dm`` (docs/method.md, "Inertia sign").
     """
     return np.trace(second) * np.eye(3) - second
 
@@ -88,6 +93,40 @@ def _world_basis_of(span: np.ndarray) -> np.ndarray:
     return np.array(basis)
 
 
+def density_for(volume: float, density: float | None = None, mass: float | None = None) -> float:
+    """The density of a uniform solid: ``density``, else ``mass / |volume|``, else 1.
+
+    Raises
+    ------
+    UsageError
+        Both ``density`` and ``mass`` given, or ``mass`` given for a solid with no volume.
+    """
+    if density is not None and mass is not None:
+        raise UsageError("mass, density", "both given; they are exclusive",
+                         "give one: the other follows from the volume")
+    if mass is not None:
+        if volume == 0.0:
+            raise UsageError("mass", "the input encloses no volume, so no density follows from a mass",
+                             "give density= instead")
+        return mass / abs(volume)
+    return 1.0 if density is None else density
+
+
+def breaks_triangle_inequality(principal, rtol: float = 1e-9) -> bool:
+    """True when ascending principal moments break ``I1 + I2 >= I3`` (beyond ``rtol``), or the
+    smallest is negative: no solid has such an inertia (a bad mesh or bad data does).
+
+    Parameters
+    ----------
+    principal : (3,) array_like of float, ascending
+    rtol : float
+        Relative slack for rounding, of the largest moment.
+    """
+    p = np.asarray(principal, dtype=np.float64)
+    scale = max(float(np.abs(p).max()), 1e-300)
+    return bool(p[0] < -rtol * scale or p[0] + p[1] < p[2] * (1 - rtol))
+
+
 def mass_properties(moments: Moments, *, density: float | None = None, mass: float | None = None,
                     about=None) -> MassProperties:
     """Mass properties of a uniform solid from its volume moments.
@@ -108,15 +147,7 @@ def mass_properties(moments: Moments, *, density: float | None = None, mass: flo
     UsageError
         Both ``density`` and ``mass`` given, or ``mass`` given for a solid with no volume.
     """
-    if density is not None and mass is not None:
-        raise UsageError("--mass/--density", "both given", "give one: the other is derived from the volume")
-    if mass is not None:
-        if moments.volume == 0.0:
-            raise UsageError("--mass", "the input encloses no volume, so no density follows from a mass",
-                             "give --density instead")
-        density = mass / abs(moments.volume)
-    if density is None:
-        density = 1.0
+    density = density_for(moments.volume, density, mass)
     total = density * moments.volume
     about_point = None if about is None else np.asarray(about, dtype=np.float64).reshape(3)
     if moments.is_empty:

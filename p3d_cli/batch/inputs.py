@@ -1,7 +1,7 @@
-"""The inputs of a batch: arguments, directories searched for mesh files, ``--files-from``.
+"""The inputs of a batch: names given, directories searched for mesh files, a list file.
 
-Inputs are the command's arguments (files, directories, ``-`` for standard input) followed
-by the lines of ``--files-from LIST``. A directory becomes the mesh files under it, sorted,
+Inputs are the names given (files, directories, ``-`` for standard input) followed by the
+lines of a list file (``files_from``; ``p3d --files-from LIST``). A directory becomes the mesh files under it, sorted,
 found by extension (``p3d_cli.io.is_mesh_path``); an input that cannot be found or listed
 becomes an ``InputError`` in its place, so that the batch reports it at its turn.
 """
@@ -60,10 +60,10 @@ def read_file_list(files_from: str, stdin=None) -> list[str]:
             with open(files_from, encoding="utf-8", errors="surrogateescape") as f:
                 text = f.read()
         except FileNotFoundError:
-            raise InputError(files_from, "no such file", "check the --files-from path") from None
+            raise InputError(files_from, "no such file", "check the path of the list") from None
         except IsADirectoryError:
             raise InputError(files_from, "is a directory",
-                             "--files-from takes a text file of paths; pass a directory as an input") from None
+                             "the list is a text file of paths; pass a directory as an input") from None
         except OSError as exc:
             raise InputError(files_from, f"cannot be read ({exc.strerror or exc})", "check the file") from None
     return [line.strip() for line in text.splitlines() if line.strip()]
@@ -82,17 +82,17 @@ def collect_inputs(inputs: Iterable[str], files_from: str | None, command: str) 
     given = list(inputs)
     if files_from is not None:
         if files_from == "-" and "-" in given:
-            raise UsageError("--files-from -", "standard input cannot hold both the list and a mesh",
+            raise UsageError("files_from", "standard input cannot hold both the list and a mesh (-)",
                              "write the list to a file, or give the mesh by path")
         listed = read_file_list(files_from)
         if not listed:
-            raise UsageError("--files-from", f"{'standard input' if files_from == '-' else files_from} "
+            raise UsageError("files_from", f"{'standard input' if files_from == '-' else files_from} "
                              "lists no files", "write one path per line")
         if files_from == "-" and "-" in listed:
-            raise UsageError("--files-from -", "the list names - (standard input), which holds the list",
+            raise UsageError("files_from", "the list on standard input names - (standard input), which holds the list",
                              "give the mesh by path")
         given += listed
     if not given:
         raise UsageError(command, "no input given",
-                         "name mesh files, directories, - for standard input, or --files-from LIST")
+                         "name mesh files, directories, - for standard input, or a list of files")
     return list(expand_inputs(given))

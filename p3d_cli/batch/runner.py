@@ -1,0 +1,195 @@
+"""Running one piece of work over many inputs: in order, in processes or on a Dask cluster.
+
+Every input yields exactly one ``Outcome``, in input order, as soon as it and every input
+before it are done: a failing input yields an error outcome and the batch goes on.
+
+Where the work runs:
+
+- in this process, when there is one input or ``jobs=1`` (no start-up cost);
+- in ``jobs`` worker processes on this machine, in chunks, results in order: forked
+  workers (``p3d_cli.batch.workers``), or ``multiprocessing.Pool`` where fork is unsafe; the
+  default is the number of cores this process may use;
+- on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``p3d-cli[dask]``;
+  the workers need p3d installed and must see the same paths).
+
+Standard input is always read here, at its turn. The work function may be sent to other
+processes (Dask, or a pool started by spawn), so it must be picklable: a module-level
+function, or a ``functools.partial`` of one with picklable arguments. Its results and p3d's
+errors are pickled back as themselves.
+
+A bug met while working on one input (an exception that is not a ``P3DError``) becomes that
+input's ``InternalError`` (exit status 3) rather than ending the batch; ``P3D_DEBUG=1``
+re-raises it (in a forked worker: its traceback is shown and the input is reported as not done).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import signal
+from dataclasses import dataclass
+from typing import Callable, Iterable, Iterator
+
+from p3d_cli.batch.inputs import expand_inputs
+from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One input's result or its error."""
+
+    source: str
+    result: object = None
+    error: P3DError | None = None
+
+
+def default_jobs() -> int:
+    """The number of cores this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def _run_packed(task: tuple) -> tuple:
+    """Run ``work(item)``: ``("ok", result)`` or ``("error", P3DError)``, which both cross a
+    process boundary as themselves (p3d's errors pickle)."""
+    work, item = task
+    if item is None:  # standard input: done by the parent, at its turn
+        return ("skip",)
+    try:
+        return ("ok", work(item))
+    except P3DError as exc:
+        return ("error", exc)
+    except Exception as exc:  # noqa: BLE001 - a bug on one input must not end a batch of 10,000
+        if os.environ.get("P3D_DEBUG"):
+            raise
+        return ("error", InternalError(item, f"internal error: {type(exc).__name__}: {exc}",
+                                       "this is a bug in p3d, please report it (set P3D_DEBUG=1 to see "
+                                       "the traceback)"))
+
+
+def _unpack(item: str, packed: tuple) -> Outcome:
+    if packed[0] == "ok":
+        return Outcome(item, packed[1])
+    return Outcome(item, None, packed[1])
+
+
+def _run_one(work, item) -> tuple:
+    return _run_packed((work, item))
+
+
+def _died(item: str, reason: str) -> tuple:
+    """The packed error of an input whose worker process died doing it."""
+    return ("error", InputError(item, f"not done: {reason}",
+                                "if it ran out of memory, run it alone (one job) or on a machine with "
+                                "more memory"))
+
+
+def _in_processes(items: list[str], work, jobs: int) -> Iterator[Outcome]:
+    from p3d_cli.batch import workers  # here: a one-file run need not pay for it at start-up
+
+    tasks = [None if item == "-" else item for item in items]
+    # Chunks amortise the inter-process round trip over small files, but hold results back
+    # until the whole chunk is done: keep several chunks per worker.
+    chunk = max(1, min(16, len(items) // (8 * jobs)))
+    if workers.fork_is_safe():
+        results = workers.imap_forked(functools.partial(_run_one, work), tasks, jobs, chunk, _died)
+    else:
+        results = _in_pool(tasks, work, jobs, chunk)
+    try:
+        for item, packed in zip(items, results):
+            if packed[0] == "skip":
+                packed = _run_packed((work, item))
+            yield _unpack(item, packed)
+    finally:
+        results.close()
+
+
+def _ignore_sigint() -> None:
+    # Ctrl-C goes to the whole process group: the parent stops the pool; workers stay quiet.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _in_pool(tasks: list[str | None], work, jobs: int, chunk: int) -> Iterator[tuple]:
+    """``multiprocessing.Pool``, where fork is unsafe (threads) or missing: workers start by
+    forkserver or spawn, so ``work`` travels pickled. A worker killed by the system is not
+    noticed here (``Pool.imap`` waits for it); ``p3d_cli.cli.workers`` does notice."""
+    import multiprocessing
+
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    pool = context.Pool(jobs, initializer=_ignore_sigint)
+    try:
+        yield from pool.imap(_run_packed, [(work, task) for task in tasks], chunk)
+        pool.close()
+        pool.join()
+    finally:
+        pool.terminate()
+
+
+def _serial(items: list[str], work) -> Iterator[Outcome]:
+    for item in items:
+        yield _unpack(item, _run_packed((work, item)))
+
+
+def _on_dask(items: list[str], work, address: str) -> Iterator[Outcome]:
+    from concurrent.futures import CancelledError
+
+    try:
+        from dask.distributed import Client, KilledWorker
+    except ImportError:
+        raise MissingExtraError("dask", "needs dask.distributed, which is not installed",
+                                "pip install 'p3d-cli[dask]'") from None
+    try:
+        client = Client(address, timeout="10s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise UsageError("dask", f"cannot connect to a Dask scheduler at {address!r} ({exc})",
+                         "give the scheduler's address, e.g. tcp://host:8786") from None
+    try:
+        remote = [(i, item) for i, item in enumerate(items) if item != "-"]
+        futures = dict(zip((i for i, _ in remote),
+                           client.map(_run_packed, [(work, item) for _, item in remote], pure=False)))
+        for i, item in enumerate(items):
+            if i not in futures:
+                packed = _run_packed((work, item))
+            else:
+                try:
+                    packed = futures[i].result()
+                except KilledWorker as exc:
+                    packed = _died(item, f"every Dask worker that tried it died ({exc.allowed_failures + 1} tried)")
+                except CancelledError:
+                    packed = _died(item, "the Dask cluster cancelled it (a worker or the scheduler was lost)")
+            yield _unpack(item, packed)
+    finally:
+        client.close()
+
+
+def run_each(inputs: Iterable[str | InputError], work: Callable[[str], object], *,
+             jobs: int | None = 1, dask: str | None = None) -> Iterator[Outcome]:
+    """Apply ``work`` to each input, yielding outcomes in input order as they are ready.
+
+    Parameters
+    ----------
+    inputs : iterable of str or InputError
+        Paths (directories are expanded here), ``-``, or errors from ``collect_inputs``
+        standing in for an input: these become error outcomes in their place.
+    work : callable
+        ``work(path) -> result``; picklable when ``jobs > 1`` or ``dask`` is given.
+    jobs : int or None
+        Worker processes; None for one per core; 1 runs everything in this process.
+    dask : str, optional
+        A Dask scheduler address: run there instead.
+    """
+    ordered = list(expand_inputs(inputs))
+    paths = [x for x in ordered if isinstance(x, str)]
+    if dask is not None and paths:
+        results = _on_dask(paths, work, dask)
+    else:
+        jobs = min(default_jobs() if jobs is None else jobs, len(paths))
+        results = _in_processes(paths, work, jobs) if jobs > 1 else _serial(paths, work)
+    try:
+        for x in ordered:
+            yield Outcome(x.where, None, x) if isinstance(x, P3DError) else next(results)
+    finally:
+        results.close()  # stops the pool or the Dask client when the caller stops early

@@ -1,0 +1,59 @@
+"""Axis-aligned bounds of triangles, projected through a linear map: exact, streamed.
+
+Every class is exact: the polyhedral shapes and meshes by projecting their vertices (the
+box around a convex hull is attained at vertices, the note's eq. 10), the round shapes by
+their closed forms (``p3d_cli.shapes``). A mesh is projected as it is: no convex hull is
+built, because projecting all corners is one linear pass, already cheaper than any hull
+algorithm's O(n log n) pass over the same vertices. Measured on a 1.3M-triangle sphere: 0.08 s
+to project every corner, against 8 s to merge vertices and 22 s for scipy's ConvexHull
+(docs/shapes.md). A hull would pay off only when one mesh is bounded under many rotations,
+which one ``p3d bounds`` run never does.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+import numpy as np
+
+from p3d_cli.results import Bounds
+from p3d_cli.shapes.polyhedron import projected_bounds
+
+
+#: Triangles projected at a time when one big array is given.
+_BLOCK = 1 << 16
+
+
+def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rotation=None,
+                     translation=None) -> Bounds:
+    """Exact bounds of ``R (S p) + t`` over every corner of the triangles.
+
+    Parameters
+    ----------
+    blocks : (n, 3, 3) array, or an iterable of such blocks (float32 or float64)
+        A streamed mesh is never held whole: each block is projected and dropped.
+    scale : (3,) array_like, optional
+        Already checked (``p3d_cli.placement.check_scale``).
+    rotation : (3, 3) array_like, optional
+    translation : (3,) array_like, optional
+    """
+    if isinstance(blocks, np.ndarray):
+        # Blocks that fit in cache project several times faster than one huge array.
+        array = blocks
+        blocks = (array[i:i + _BLOCK] for i in range(0, max(len(array), 1), _BLOCK))
+    m = np.eye(3) if scale is None else np.diag(np.asarray(scale, dtype=np.float64).reshape(3))
+    if rotation is not None:
+        m = np.asarray(rotation, dtype=np.float64) @ m
+    lo = hi = None
+    for block in blocks:
+        if len(block) == 0:
+            continue
+        b = projected_bounds(np.asarray(block, dtype=np.float64).reshape(-1, 3), m)
+        lo = b.min if lo is None else np.minimum(lo, b.min)
+        hi = b.max if hi is None else np.maximum(hi, b.max)
+    if lo is None:
+        raise ValueError("no triangles to bound")
+    if translation is not None:
+        t = np.asarray(translation, dtype=np.float64).reshape(3)
+        lo, hi = lo + t, hi + t
+    return Bounds(lo, hi)

@@ -1,0 +1,176 @@
+"""The exact method: closed forms for shapes, the divergence theorem for meshes.
+
+``exact_props`` takes a resolved ``Solid`` and returns its ``PropsResult``, with a-priori
+rounding bounds (``exact_uncertainty``) and plain-words warnings for results that are not a
+clean solid's (``mesh_warnings``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from p3d_cli.errors import UsageError
+from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
+from p3d_cli.mesh.analysis import MeshAnalysis, analyze
+from p3d_cli.mesh.integrals import triangle_moments
+from p3d_cli.placement import IDENTITY, Placement, watch_bounds
+from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
+from p3d_cli.shapes import SHAPES
+from p3d_cli.solid import Solid
+
+#: A float32 file whose coordinate spacing exceeds this fraction of the part's size is
+#: coarse: the file itself, not the arithmetic, limits the accuracy (docs/method.md,
+#: "Float32 input").
+COARSE_FLOAT32 = 1e-6
+
+
+def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: int | None = None,
+                density: float | None = None, mass: float | None = None, about=None) -> PropsResult:
+    """Mass properties of a shape (closed forms, or its tessellated stand-in) or of a mesh.
+
+    Parameters
+    ----------
+    solid : Solid
+    placement : Placement
+        Scale, rotate and move the solid: its moments are placed by eq. 9 and ``R C Rᵀ`` from
+        the unplaced integrals, and the bounds become the placed solid's.
+    tessellate : int, optional
+        Replace a round shape by an inscribed polyhedron of this many segments (a polyhedral
+        shape is replaced by its own faces, which changes nothing). Not for meshes.
+    density, mass : float, optional
+        Exclusive; default density 1.
+    about : (3,) array_like, optional
+        Extra reference point for the inertia.
+
+    Raises
+    ------
+    UsageError, InputError
+    """
+    details: dict = {} if placement.is_identity else {"placement": placement.describe()}
+    if solid.shape is None:
+        refuse_tessellate(solid, tessellate)
+        result = _mesh_props(solid, placement, density, mass, about)
+    elif tessellate is not None:
+        details["tessellate"] = tessellate
+        triangles = shape_triangles(solid.shape, tessellate)
+        moments = placement.moments(triangle_moments(triangles))
+        props = mass_properties(moments, density=density, mass=mass, about=about)
+        facts = MeshFacts(solid.source, "tessellated", len(triangles), True, placement.triangles_bounds(triangles))
+        result = PropsResult(facts, props, "exact", solid.warnings, exact_uncertainty(moments, props))
+    else:
+        moments = placement.moments(solid.shape.moments())
+        props = mass_properties(moments, density=density, mass=mass, about=about)
+        facts = MeshFacts(solid.source, "primitive", 0, None, placement.shape_bounds(solid.shape))
+        result = PropsResult(facts, props, "exact", solid.warnings, None)
+    return dataclasses.replace(result, details={**result.details, **details})
+
+
+def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> PropsResult:
+    mesh = solid.mesh
+    placed_bounds = None
+    if not placement.is_identity:
+        mesh, placed_bounds = watch_bounds(mesh, placement)
+    found = analyze(mesh, mesh.where)
+    facts = mesh_facts(solid, found)
+    warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
+    if found.inverted_tetrahedra:
+        warnings.append(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed inside "
+                        "out (negative orientation); each was counted with its positive volume")
+    moments = found.moments
+    if placed_bounds is not None:
+        moments = placement.moments(moments)
+        facts = dataclasses.replace(facts, bounds=placed_bounds())
+    props = mass_properties(moments, density=density, mass=mass, about=about)
+    return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
+
+
+def solid_moments(solid: Solid) -> Moments:
+    """The unplaced volume moments of a shape (closed forms) or a mesh (one analysis pass)."""
+    if solid.shape is not None:
+        return solid.shape.moments()
+    return analyze(solid.mesh, solid.mesh.where).moments
+
+
+def mesh_facts(solid: Solid, found: MeshAnalysis) -> MeshFacts:
+    """What the analysis of ``solid``'s mesh found, for the record."""
+    mesh = solid.mesh
+    return MeshFacts(solid.source, mesh.format, found.face_count, found.closed, found.bounds,
+                     mesh.coordinate_dtype)
+
+
+def shape_triangles(shape, tessellate: int) -> np.ndarray:
+    """The polyhedron standing in for ``shape``: its own faces, or ``tessellate`` segments."""
+    if shape.polyhedral:
+        return shape.triangles()
+    return shape.tessellate(tessellate)
+
+
+def refuse_tessellate(solid: Solid, tessellate: int | None) -> None:
+    """``tessellate`` applies to shapes only: a mesh is already polyhedral."""
+    if tessellate is not None:
+        round_names = ", ".join(n for n, c in SHAPES.items() if not c.polyhedral)
+        raise UsageError("tessellate", f"{solid.source} is a mesh, already polyhedral",
+                         f"tessellate= applies to shape specs ({round_names})")
+
+
+def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[str]:
+    """Plain-words warnings for results that are not a clean solid's."""
+    out = []
+    if facts.closed is False:
+        out.append("mesh is not closed (some edge is not shared by exactly two faces in opposite "
+                   "directions, vertices matched by exact coordinates): an open surface has no "
+                   "well-defined volume, and these numbers depend on the formula and the origin")
+    if moments.is_empty:
+        out.append("mesh encloses no volume (flat or degenerate): centre of mass and inertia are undefined")
+    elif moments.volume < 0:
+        what = "closed but wound inward" if facts.closed else "wound mostly inward"
+        out.append(f"signed volume is negative: the mesh is {what} (faces point into the solid); "
+                   "mass and inertia carry the same negative sign; reverse the face winding to fix")
+    elif facts.closed:
+        principal = np.linalg.eigvalsh(inertia_from_second_moments(moments.central))
+        if breaks_triangle_inequality(principal):
+            out.append("inertia is not a solid's (a principal moment is negative or breaks the "
+                       "triangle inequality): the mesh probably intersects itself")
+    coarse = _coarse_float32(facts)
+    if coarse:
+        out.append(coarse)
+    return out
+
+
+def _coarse_float32(facts: MeshFacts) -> str | None:
+    if facts.coordinate_dtype != "float32" or facts.bounds is None:
+        return None
+    extent = float(np.abs(np.concatenate([facts.bounds.min, facts.bounds.max])).max())
+    size = facts.bounds.diagonal
+    spacing = extent * 2.0 ** -23
+    if size > 0 and spacing > COARSE_FLOAT32 * size:
+        return (f"coordinates are float32 and the part lies far from the origin: the file "
+                f"resolves only {spacing:.3g} ({spacing / size:.2g} of the part's size); the "
+                "file's precision, not p3d's arithmetic, limits these results; export in "
+                "float64 (ASCII or double PLY) or nearer the origin")
+    return None
+
+
+def exact_uncertainty(moments: Moments, props: MassProperties) -> dict | None:
+    """A-priori rounding bounds of the exact method, mapped to the reported quantities."""
+    errors = moments.errors
+    if errors is None:
+        return None
+    out: dict = {"volume": errors.volume}
+    if moments.is_empty:
+        out.update(center_of_mass=None, inertia=None)
+        return out
+    density = abs(props.density)
+    central = errors.central * density
+    inertia = np.abs(np.trace(central)) * np.eye(3) + central
+    # The last roundings happen after the sums: the centre is ``origin + offset`` (half an ulp
+    # of the centre, which dominates far from the world origin: nothing finer is representable),
+    # and mass, second moments and ``tr(S) E - S`` round a few more times.
+    eps = np.finfo(np.float64).eps
+    second = np.abs(props.second_moments)
+    out["center_of_mass"] = errors.center + np.spacing(np.abs(props.center_of_mass))
+    out["inertia"] = inertia + 4 * eps * (np.trace(second) * np.eye(3) + second)
+    out["mass"] = errors.volume * density + float(np.spacing(abs(props.mass)))
+    return out

@@ -1,0 +1,176 @@
+"""The one registry of mesh formats: a record per format, read by detection, directory search,
+``format=`` (``--format``) and the error hints alike.
+
+A record names the format, its extensions and aliases, the module that reads it (imported on
+first use, so ``p3d props part.stl`` pays for the STL reader alone) and how its content is
+recognised. Adding a format is one record here and one module under ``p3d_cli/io/``.
+
+Detection, in order: an explicit format name; a header that names its format outright (``ply``,
+``OFF``), trusted over the extension; the extension of a format p3d reads itself; then the
+content sniffers, in registry order (binary STL by size or ``solid`` text, any extension meshio
+reads, OBJ statements for inputs without an extension).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Callable
+
+from p3d_cli.errors import UnknownFormatError
+from p3d_cli.io.raw import RawInput
+
+#: Bytes read from the start of an input to recognise its format.
+HEAD = 512
+
+#: OFF and its variants (colours, normals, texture coordinates, other dimensions).
+_OFF_KEYWORD = re.compile(rb"(ST)?C?N?4?n?OFF")
+
+
+def _first_word(head: bytes) -> bytes:
+    """The first word of the text after blank lines and ``#`` comments (b"" if none)."""
+    for line in head.split(b"\n"):
+        words = line.split(b"#", 1)[0].split()
+        if words:
+            return words[0]
+    return b""
+
+
+@dataclass(frozen=True)
+class Format:
+    """What p3d knows about one format.
+
+    Attributes
+    ----------
+    name : str
+        The ``format=`` value and the start of ``MeshSource.format``.
+    extensions : tuple of str
+        Lower-case, with the dot.
+    module : str
+        The reader module; its ``load(raw, *args)`` returns a ``MeshSource``.
+    description : str
+        For help and hints.
+    aliases : tuple of str
+        Other names accepted for ``format=``.
+    header : callable, optional
+        ``header(head: bytes) -> bool``: the content names this format outright.
+    sniff : callable, optional
+        ``sniff(raw: RawInput, ext: str) -> str | None``: the format name (this one's, or a
+        sub-format such as ``meshio:vtu``) when the content or extension suggests it.
+    """
+
+    name: str
+    extensions: tuple[str, ...]
+    module: str
+    description: str
+    aliases: tuple[str, ...] = ()
+    header: Callable[[bytes], bool] | None = None
+    sniff: Callable[[RawInput, str], str | None] | None = None
+
+    def reader(self) -> ModuleType:
+        """The reader module, imported on first use."""
+        return importlib.import_module(self.module)
+
+
+def _meshio() -> ModuleType:
+    return importlib.import_module("p3d_cli.io.meshio_backend")
+
+
+def _sniff_stl(raw: RawInput, ext: str) -> str | None:
+    return "stl" if importlib.import_module("p3d_cli.io.stl").looks_like_stl(raw) else None
+
+
+def _sniff_meshio(raw: RawInput, ext: str) -> str | None:
+    if ext and _meshio().knows_extension(ext):
+        return "meshio:" + _meshio().format_for_extension(ext)
+    return None
+
+
+def _sniff_obj(raw: RawInput, ext: str) -> str | None:
+    return "obj" if importlib.import_module("p3d_cli.io.obj").looks_like_obj(raw.head(HEAD)) else None
+
+
+#: Every format, in sniffing order. ``meshio`` stands for every other format meshio reads.
+FORMATS: dict[str, Format] = {f.name: f for f in (
+    Format("stl", (".stl",), "p3d_cli.io.stl", "STL, binary or ASCII", sniff=_sniff_stl),
+    Format("ply", (".ply",), "p3d_cli.io.ply", "PLY, ASCII or binary",
+           header=lambda head: head.lstrip().startswith(b"ply")),
+    Format("off", (".off",), "p3d_cli.io.off", "OFF and its variants (COFF, NOFF, ...)",
+           header=lambda head: _OFF_KEYWORD.fullmatch(_first_word(head)) is not None),
+    Format("meshio", (), "p3d_cli.io.meshio_backend", "any other format meshio reads (VTU, Gmsh, ...)",
+           sniff=_sniff_meshio),
+    Format("obj", (".obj",), "p3d_cli.io.obj", "Wavefront OBJ", sniff=_sniff_obj),
+)}
+
+#: Extension -> the format p3d reads it with itself.
+EXTENSIONS = {ext: f.name for f in FORMATS.values() for ext in f.extensions}
+
+#: Files that sit beside meshes in export folders and that no reader takes: a directory search
+#: skips them without importing meshio to ask (0.1-0.3 s, more than a small batch's work).
+NEVER_MESHES = frozenset({"", ".txt", ".md", ".rst", ".csv", ".tsv", ".json", ".jsonl", ".yaml", ".yml",
+                          ".log", ".mtl", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pdf",
+                          ".step", ".stp", ".iges", ".igs", ".3mf", ".zip", ".py", ".html"})
+
+
+def format_names() -> str:
+    """The ``format=`` values, for hints: p3d's own, then meshio's."""
+    own = sorted(name for name in FORMATS if name != "meshio")
+    return ", ".join(own) + ", or a format name meshio knows (vtu, gmsh, ...)"
+
+
+def is_mesh_path(path: str) -> bool:
+    """True when the file name has an extension p3d reads (used to search directories)."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext in EXTENSIONS:
+        return True
+    return ext not in NEVER_MESHES and _meshio().knows_extension(ext)
+
+
+def _named(override: str) -> str:
+    name = override.lower()
+    for f in FORMATS.values():
+        if f.name != "meshio" and (name == f.name or name in f.aliases):
+            return f.name
+    if _meshio().knows_format(name):
+        return "meshio:" + name
+    raise UnknownFormatError("format", f"unknown format {override!r}", "use one of " + format_names())
+
+
+def detect_format(raw: RawInput, override: str | None = None) -> str:
+    """The format to read ``raw`` with: ``override``, else the content's, else the extension's.
+
+    Returns
+    -------
+    str
+        A key of ``FORMATS``, or ``meshio:<name>`` for a meshio format.
+
+    Raises
+    ------
+    UnknownFormatError
+        ``override`` names no format, or nothing identifies the input's format.
+    """
+    if override:
+        return _named(override)
+    head = raw.head(HEAD)
+    for f in FORMATS.values():
+        if f.header is not None and f.header(head):
+            return f.name
+    ext = os.path.splitext(raw.path or "")[1].lower()
+    if ext in EXTENSIONS:
+        return EXTENSIONS[ext]
+    for f in FORMATS.values():
+        found = f.sniff(raw, ext) if f.sniff is not None else None
+        if found is not None:
+            return found
+    what = f"cannot tell the format of {'this extension' if ext else 'an input without an extension'}"
+    raise UnknownFormatError(raw.where, what, "give the format (" + format_names() + ")")
+
+
+def read(raw: RawInput, name: str):
+    """Read ``raw`` as format ``name`` (a ``detect_format`` answer) with its record's module."""
+    family, _, sub = name.partition(":")
+    reader = FORMATS[family].reader()
+    return reader.load(raw, sub) if sub else reader.load(raw)

@@ -1,0 +1,191 @@
+"""The library's three measurements, one call each: ``props``, ``bounds`` and ``check``.
+
+Each takes "a thing" (a path, ``-``, a shape spec, a shape object, an ``(n, 3, 3)`` triangle
+array, a ``(vertices, faces)`` pair, or a loaded ``MeshSource``), resolves it once
+(``p3d_cli.solid.as_solid``) and returns a frozen result. The command line calls exactly
+these: ``p3d props`` is parse → ``props(...)`` → format.
+"""
+
+from __future__ import annotations
+
+from typing import Any, BinaryIO, Iterable
+
+from p3d_cli.errors import InputError, UsageError
+from p3d_cli.placement import IDENTITY, Placement
+from p3d_cli.results import BoundsResult, PropsResult
+from p3d_cli.solid import Solid, as_solid
+
+#: The values of ``props(method=...)``.
+METHODS = ("exact", "montecarlo")
+
+
+def props(thing: Any, placement: Placement | None = None, *, method: str = "exact",
+          density: float | None = None, mass: float | None = None, about=None,
+          tessellate: int | None = None, samples: int | None = None, seed: int | None = None,
+          tolerance: float | None = None, format: str | None = None,
+          stdin: BinaryIO | None = None) -> PropsResult:
+    """Volume, mass, centre of mass, inertia and principal frame of a mesh or shape.
+
+    Parameters
+    ----------
+    thing : str, os.PathLike, Shape, array_like, (vertices, faces) or MeshSource
+        What to measure (see ``p3d_cli.solid.as_solid``).
+    placement : Placement, optional
+        Scale, then rotate about the world origin, then translate the solid first.
+    method : {"exact", "montecarlo"}
+        ``exact``: divergence theorem or closed forms, with rounding-error bounds in
+        ``uncertainty``. ``montecarlo``: sample the bounding box with an inside test, with
+        standard errors (an independent check of a mesh you distrust).
+    density, mass : float, optional
+        Exclusive: mass per unit volume (default 1), or the total mass.
+    about : (3,) array_like, optional
+        Also give the inertia about this point.
+    tessellate : int, optional
+        Exact method only: measure a round shape's inscribed polyhedron of this many segments.
+    samples, seed, tolerance : optional
+        Monte Carlo only: point count (default 100,000), random seed (default 0), or a target
+        relative standard error of the volume that picks the count.
+    format : str, optional
+        Format name for a path, instead of guessing from content and extension.
+    stdin : binary stream, optional
+        What ``-`` reads.
+
+    Returns
+    -------
+    PropsResult
+
+    Raises
+    ------
+    P3DError
+        ``UsageError`` for bad parameters, ``SpecError`` for a malformed spec, ``InputError``
+        for an input that cannot be read.
+
+    Examples
+    --------
+    >>> import p3d_cli as p3d
+    >>> p3d.props("box:1,2,3").properties.volume
+    48.0
+    """
+    placement = IDENTITY if placement is None else placement
+    check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
+    solid = as_solid(thing, format=format, stdin=stdin)
+    if method == "montecarlo":
+        from p3d_cli.montecarlo import montecarlo_props
+
+        return montecarlo_props(solid, placement, samples=samples, seed=seed, tolerance=tolerance,
+                                density=density, mass=mass, about=about)
+    from p3d_cli.exact import exact_props
+
+    return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about)
+
+
+def check_props_options(method, density, mass, tessellate, samples, seed, tolerance) -> None:
+    """Refuse option combinations before any input is read."""
+    if method not in METHODS:
+        raise UsageError("method", f"unknown method {method!r}", "use exact or montecarlo")
+    if density is not None and mass is not None:
+        raise UsageError("mass, density", "both given; they are exclusive",
+                         "give one: the other follows from the volume")
+    if method == "exact" and (samples is not None or seed is not None or tolerance is not None):
+        raise UsageError("samples, seed, tolerance", "given without method=montecarlo",
+                         "add method=montecarlo, or drop them")
+    if method == "montecarlo" and tessellate is not None:
+        raise UsageError("tessellate", "given with method=montecarlo",
+                         "Monte Carlo samples the exact shape; drop one of them")
+
+
+def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | None = None,
+           format: str | None = None, stdin: BinaryIO | None = None) -> BoundsResult:
+    """Exact axis-aligned bounds of a mesh or shape after placement.
+
+    Meshes and polyhedral shapes by projecting every vertex; round shapes by closed forms.
+
+    Parameters
+    ----------
+    thing, placement, tessellate, format, stdin
+        As for ``props``.
+
+    Returns
+    -------
+    BoundsResult
+
+    Raises
+    ------
+    P3DError
+
+    Examples
+    --------
+    >>> import p3d_cli as p3d
+    >>> p3d.bounds("box:1,2,3").bounds.max.tolist()
+    [1.0, 2.0, 3.0]
+    """
+    placement = IDENTITY if placement is None else placement
+    solid = as_solid(thing, format=format, stdin=stdin)
+    if solid.shape is not None:
+        if tessellate is not None:
+            from p3d_cli.exact import shape_triangles
+
+            triangles = shape_triangles(solid.shape, tessellate)
+            return BoundsResult(solid.source, "tessellated", "vertices", placement.triangles_bounds(triangles),
+                                len(triangles), solid.warnings)
+        method = "vertices" if solid.shape.polyhedral else "closed form"
+        return BoundsResult(solid.source, "primitive", method, placement.shape_bounds(solid.shape), 0,
+                            solid.warnings)
+    from p3d_cli.exact import refuse_tessellate
+
+    refuse_tessellate(solid, tessellate)
+    return _mesh_bounds(solid, placement)
+
+
+def _mesh_bounds(solid: Solid, placement: Placement) -> BoundsResult:
+    import numpy as np
+
+    mesh = solid.mesh
+    if mesh.tetrahedra is not None:
+        blocks: Iterable = (np.asarray(mesh.tetrahedra),)
+    else:
+        blocks = mesh.finite_blocks()
+    try:
+        box = placement.triangles_bounds(blocks)
+    except ValueError:
+        raise InputError(mesh.where, "the mesh has no faces", "export it again with its faces") from None
+    return BoundsResult(solid.source, mesh.format, "vertices", box, mesh.face_count, tuple(mesh.warnings))
+
+
+def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,
+          max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None):
+    """Is a mesh a clean solid? Closed, oriented, outward, manifold, no degenerate or duplicate faces.
+
+    Parameters
+    ----------
+    thing : str, os.PathLike, array_like, (vertices, faces) or MeshSource
+        A mesh (shapes are clean solids by construction and are refused).
+    require : iterable of str, optional
+        The checks that must pass (``p3d_cli.mesh.topology.CHECKS``; default all).
+    min_volume : float, optional
+        Also fail a mesh whose signed volume is below this.
+    max_faces : int, optional
+        Also fail a mesh with more faces than this.
+    format, stdin
+        As for ``props``.
+
+    Returns
+    -------
+    CheckResult
+        ``ok``, the failed checks, and the counts and sample locations of every problem.
+
+    Raises
+    ------
+    P3DError
+    """
+    from p3d_cli.mesh.topology import CHECKS, check_source
+
+    required = tuple(CHECKS) if require is None else tuple(require)
+    unknown = [name for name in required if name not in CHECKS]
+    if unknown:
+        raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
+    solid = as_solid(thing, format=format, stdin=stdin)
+    if solid.mesh is None:
+        raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
+                         "check mesh files")
+    return check_source(solid.mesh, solid.source, required, min_volume, max_faces)
