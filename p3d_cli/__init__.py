@@ -93,8 +93,17 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at run time
     from p3d_cli.constraints import SolveResult, load_scene, parse_scene, solve_scene
-    from p3d_cli.errors import (CheckFailedError, FormatError, InputError, MissingExtraError, P3DError,
-                                SceneError, SpecError, UnknownFormatError, UsageError)
+    from p3d_cli.errors import (
+        CheckFailedError,
+        FormatError,
+        InputError,
+        MissingExtraError,
+        P3DError,
+        SceneError,
+        SpecError,
+        UnknownFormatError,
+        UsageError,
+    )
     from p3d_cli.inertia import mass_properties
     from p3d_cli.io import load_mesh
     from p3d_cli.io.formats import FORMATS
@@ -102,9 +111,12 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.measure import bounds, check, props
     from p3d_cli.mesh.topology import CheckResult
     from p3d_cli.placement import Placement
-    from p3d_cli.results import BoundsResult, Bounds, MassProperties, MeshFacts, Moments, PropsResult
-    from p3d_cli.rotation import (compose_rotations, quaternion_matrix, rotation_from_axis_degrees,
-                                  rotation_from_quaternion)
-    from p3d_cli.shapes import (SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge,
-                                parse_shape)
+    from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
+    from p3d_cli.rotation import (
+        compose_rotations,
+        quaternion_matrix,
+        rotation_from_axis_degrees,
+        rotation_from_quaternion,
+    )
+    from p3d_cli.shapes import SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge, parse_shape
     from p3d_cli.solid import Solid, as_solid

@@ -1,7 +1,7 @@
 """Axis-aligned bounds of triangles, projected through a linear map: exact, streamed.
 
 Every class is exact: the polyhedral shapes and meshes by projecting their vertices (the
-box around a convex hull is attained at vertices, the note's eq. 10), the round shapes by
+box around a convex hull is attained at vertices, the Physics3D note's eq. 10), the round shapes by
 their closed forms (``p3d_cli.shapes``). A mesh is projected as it is: no convex hull is
 built, because projecting all corners is one linear pass, already cheaper than any hull
 algorithm's O(n log n) pass over the same vertices. Measured on a 1.3M-triangle sphere: 0.08 s
@@ -18,7 +18,6 @@ import numpy as np
 
 from p3d_cli.results import Bounds
 from p3d_cli.shapes.polyhedron import projected_bounds
-
 
 #: Triangles projected at a time when one big array is given.
 _BLOCK = 1 << 16

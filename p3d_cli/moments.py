@@ -1,7 +1,7 @@
 """Pure functions on ``Moments``: placing a solid (scale, rotate, translate).
 
 Central second moments ``C = ∫ (x - c)(x - c)ᵀ dV`` make these exact and stable:
-a diagonal scale ``S`` maps ``C`` to ``det(S) · S C S`` (the design note's eq. 8-9, written
+a diagonal scale ``S`` maps ``C`` to ``det(S) · S C S`` (the Physics3D note's eq. 8-9, written
 for the convention-free second moments), a rotation ``R`` maps it to ``R C Rᵀ``, and a
 translation leaves it unchanged; only the centre moves.
 """

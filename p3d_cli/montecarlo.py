@@ -70,7 +70,7 @@ class Estimate:
 
     bounds: Bounds
     samples: int
-    seed: int
+    seed: int | tuple[int, int]
     mean: np.ndarray
     covariance: np.ndarray
 
@@ -140,7 +140,7 @@ def _jacobian(f: Callable, x: np.ndarray, step: float) -> np.ndarray:
 
 
 def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: int,
-           seed: int = DEFAULT_SEED) -> Estimate:
+           seed: int | tuple[int, int] = DEFAULT_SEED) -> Estimate:
     """Draw ``samples`` points uniformly in ``bounds`` and average the inside indicator.
 
     Parameters
@@ -149,7 +149,8 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
         ``inside(points (k, 3) float64 world) -> (k,) bool or float`` indicator in [0, 1].
     bounds : Bounds
     samples : int
-    seed : int
+    seed : int, or a pair of ints
+        numpy's ``default_rng`` seed (a pair gives an independent stream, e.g. for a pilot run).
 
     Returns
     -------

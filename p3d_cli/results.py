@@ -4,7 +4,7 @@ Conventions, stated once for every output:
 
 - ``Moments`` are volume integrals (density-free): signed volume ``V = ∫ dV``, centre
   ``c = ∫ x dV / V`` and central second moments ``C = ∫ (x - c)(x - c)ᵀ dV``. They are
-  the convention-free quantities that the design note's eq. 8-9 scale.
+  the convention-free quantities that the Physics3D note's eq. 8-9 scale (docs/method.md, "Moments").
 - Inertia is the standard positive tensor ``I = ∫ (|r|² E - r rᵀ) dm``: ``Ixx = ∫ (y² + z²) dm``,
   ``Ixy = -∫ x y dm`` (docs/method.md, "Inertia sign": the Physics3D note's eq. 3 has the
   opposite sign).

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Any, BinaryIO, Union
+from typing import Any, BinaryIO, TypeGuard, Union
 
 import numpy as np
 
@@ -79,7 +79,7 @@ def as_solid(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = 
         from p3d_cli.io import load_mesh
 
         return Solid(thing, mesh=load_mesh(thing, format, stdin=stdin))
-    if isinstance(thing, tuple(SHAPES.values())):
+    if is_shape(thing):
         return Solid(thing.spec(), shape=thing)
     if isinstance(thing, (tuple, list)) and len(thing) == 2:
         return Solid("<array>", mesh=indexed_mesh(*thing))
@@ -88,6 +88,11 @@ def as_solid(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = 
     raise UsageError("thing", f"cannot measure a {type(thing).__name__}",
                      "give a path, a shape spec or shape, an (n, 3, 3) triangle array or a "
                      "(vertices, faces) pair")
+
+
+def is_shape(thing: Any) -> TypeGuard[Shape]:
+    """True for an instance of a registered shape class."""
+    return isinstance(thing, tuple(SHAPES.values()))
 
 
 def triangle_mesh(triangles) -> MeshSource:

@@ -85,7 +85,7 @@ def test_examples():
     np.testing.assert_array_equal(b.max, [12, 1, 3])
     b = placed_bounds(Sphere(2.0), None, rotation_from_axis_degrees("x", 33), [0, 0, 1])
     np.testing.assert_array_equal(b.max, [2, 2, 3])
-    # A cylinder on its side: the note's "TODO" closed form, |a_i| h + r sqrt(1 - a_i²).
+    # A cylinder on its side: the closed form the Physics3D note left as a TODO (docs/method.md, "Rotated bounds"), |a_i| h + r sqrt(1 - a_i²).
     b = placed_bounds(Cylinder(1.0, 3.0), None, rotation_from_axis_degrees("y", 90))
     np.testing.assert_array_equal(b.max, [3, 1, 1])
     # Non-uniform --scale turns a sphere into the ellipsoid, whose bounds are exact too.

@@ -32,3 +32,12 @@ def test_readme_examples_run():
                               capture_output=True, text=True, check=False)
         assert done.returncode == 0, f"{line}\n{done.stderr}"
         assert done.stdout.strip(), line
+
+
+def test_readme_python_example_runs():
+    blocks = re.findall(r"```python\n(.*?)\n```", README, re.S)
+    assert blocks, "the README shows the Python API"
+    for code in blocks:
+        done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=False)
+        assert done.returncode == 0, f"{code}\n{done.stderr}"
+        assert "both given; they are exclusive" in done.stdout and "--" not in done.stdout

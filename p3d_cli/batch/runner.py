@@ -28,7 +28,7 @@ import functools
 import os
 import signal
 from dataclasses import dataclass
-from typing import Callable, Iterable, Iterator
+from typing import Callable, Generator, Iterable
 
 from p3d_cli.batch.inputs import expand_inputs
 from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError
@@ -79,14 +79,14 @@ def _run_one(work, item) -> tuple:
     return _run_packed((work, item))
 
 
-def _died(item: str, reason: str) -> tuple:
+def _died(item: str | None, reason: str) -> tuple:
     """The packed error of an input whose worker process died doing it."""
-    return ("error", InputError(item, f"not done: {reason}",
+    return ("error", InputError(item or "<stdin>", f"not done: {reason}",
                                 "if it ran out of memory, run it alone (one job) or on a machine with "
                                 "more memory"))
 
 
-def _in_processes(items: list[str], work, jobs: int) -> Iterator[Outcome]:
+def _in_processes(items: list[str], work, jobs: int) -> Generator[Outcome, None, None]:
     from p3d_cli.batch import workers  # here: a one-file run need not pay for it at start-up
 
     tasks = [None if item == "-" else item for item in items]
@@ -111,7 +111,7 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _in_pool(tasks: list[str | None], work, jobs: int, chunk: int) -> Iterator[tuple]:
+def _in_pool(tasks: list[str | None], work, jobs: int, chunk: int) -> Generator[tuple, None, None]:
     """``multiprocessing.Pool``, where fork is unsafe (threads) or missing: workers start by
     forkserver or spawn, so ``work`` travels pickled. A worker killed by the system is not
     noticed here (``Pool.imap`` waits for it); ``p3d_cli.cli.workers`` does notice."""
@@ -128,12 +128,12 @@ def _in_pool(tasks: list[str | None], work, jobs: int, chunk: int) -> Iterator[t
         pool.terminate()
 
 
-def _serial(items: list[str], work) -> Iterator[Outcome]:
+def _serial(items: list[str], work) -> Generator[Outcome, None, None]:
     for item in items:
         yield _unpack(item, _run_packed((work, item)))
 
 
-def _on_dask(items: list[str], work, address: str) -> Iterator[Outcome]:
+def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, None]:
     from concurrent.futures import CancelledError
 
     try:
@@ -166,7 +166,7 @@ def _on_dask(items: list[str], work, address: str) -> Iterator[Outcome]:
 
 
 def run_each(inputs: Iterable[str | InputError], work: Callable[[str], object], *,
-             jobs: int | None = 1, dask: str | None = None) -> Iterator[Outcome]:
+             jobs: int | None = 1, dask: str | None = None) -> Generator[Outcome, None, None]:
     """Apply ``work`` to each input, yielding outcomes in input order as they are ready.
 
     Parameters

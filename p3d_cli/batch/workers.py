@@ -23,7 +23,7 @@ import signal
 import sys
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, TypeVar
+from typing import BinaryIO, Callable, Generator, TypeVar
 
 Item = TypeVar("Item")
 Result = TypeVar("Result")
@@ -40,8 +40,8 @@ def fork_is_safe() -> bool:
 @dataclass
 class _Worker:
     pid: int
-    tasks: object  # binary file: the parent writes pickled chunks
-    results: object  # binary file: the parent reads pickled lists of results
+    tasks: BinaryIO  # the parent writes pickled chunks
+    results: BinaryIO  # the parent reads pickled lists of results
     chunk: tuple[int, list] | None = None  # (index of its first item, the items) being done
 
 
@@ -54,7 +54,7 @@ class _Schedule:
 
 
 def imap_forked(func: Callable[[Item], Result], items: list[Item], jobs: int, chunk: int,
-                died: Callable[[Item, str], Result]) -> Iterator[Result]:
+                died: Callable[[Item, str], Result]) -> Generator[Result, None, None]:
     """``func(item)`` for each item, in input order, computed in ``jobs`` forked processes.
 
     Parameters
@@ -100,8 +100,10 @@ def _start(func, workers: dict[int, _Worker]) -> _Worker:
         try:
             signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
             for other in workers.values():  # else a sibling's pipes would never see end-of-file
-                other.tasks.close(), other.results.close()
-            os.close(task_write), os.close(result_read)
+                other.tasks.close()
+                other.results.close()
+            os.close(task_write)
+            os.close(result_read)
             _serve(func, os.fdopen(task_read, "rb"), os.fdopen(result_write, "wb"))
             status = 0
         except BaseException:  # noqa: BLE001 - shown, then the parent reports the inputs
@@ -110,7 +112,8 @@ def _start(func, workers: dict[int, _Worker]) -> _Worker:
             traceback.print_exc()
         finally:
             os._exit(status)  # never the parent's exit handlers or buffers
-    os.close(task_read), os.close(result_write)
+    os.close(task_read)
+    os.close(result_write)
     worker = _Worker(pid, os.fdopen(task_write, "wb"), os.fdopen(result_read, "rb"))
     workers[worker.results.fileno()] = worker
     return worker

@@ -9,8 +9,14 @@ import click
 from p3d_cli import measure
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
-from p3d_cli.cli.options import (PLACEMENT_HELP, batch_options, format_option, inputs_argument, json_option,
-                                 placement_options)
+from p3d_cli.cli.options import (
+    PLACEMENT_HELP,
+    batch_options,
+    format_option,
+    inputs_argument,
+    json_option,
+    placement_options,
+)
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import UsageError
 

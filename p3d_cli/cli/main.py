@@ -103,7 +103,7 @@ def exit_status(error: P3DError) -> int:
     """The exit status of a p3d error (its class's code; 2 at least for an input not done)."""
     return error.exit_code
 
-HELP = f"""Exact mass properties, bounds and constraint solves for meshes and shapes.
+HELP = """Exact mass properties, bounds and constraint solves for meshes and shapes.
 
 \b
 Inputs are mesh files (STL binary/ASCII, OBJ, PLY, OFF, and any format meshio reads),

@@ -137,8 +137,9 @@ def placement_options(f):
     command = click.option("--scale", type=VECTOR3, default=None, metavar="SX,SY,SZ",
                            help="Scale the solid by SX,SY,SZ > 0 along its own axes, about the "
                                 "origin (applied first; mass properties by eq. 9 of the "
-                                "Physics3D note, exact for any diagonal scale). A sphere or cylinder scaled unevenly becomes the ellipsoid "
-                                "or elliptic cylinder.")(command)
+                                "Physics3D note, exact for any diagonal scale). A sphere or "
+                                "cylinder scaled unevenly becomes the ellipsoid or elliptic "
+                                "cylinder.")(command)
     return command
 
 

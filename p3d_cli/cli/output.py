@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+
 def jsonable(value):
     """Plain Python values for ``json``: arrays become (nested) lists of floats."""
     if isinstance(value, np.ndarray):

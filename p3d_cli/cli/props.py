@@ -5,16 +5,23 @@ from __future__ import annotations
 import functools
 
 import click
-
 import numpy as np
 
+from p3d_cli import measure
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
-from p3d_cli.cli.options import (VECTOR3, batch_options, density_options, format_option, inputs_argument,
-                                 json_option, placement_options, strict_option)
+from p3d_cli.cli.options import (
+    VECTOR3,
+    batch_options,
+    density_options,
+    format_option,
+    inputs_argument,
+    json_option,
+    placement_options,
+    strict_option,
+)
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
-from p3d_cli import measure
 from p3d_cli.results import PropsResult
 
 

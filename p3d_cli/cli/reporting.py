@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Callable, Generator
 
 import click
 
@@ -77,7 +77,7 @@ class Batch:
         self.status = 0
         self._bar = None
 
-    def outcomes(self, work: Callable[[str], object]) -> Iterator[Outcome]:
+    def outcomes(self, work: Callable[[str], object]) -> Generator[Outcome, None, None]:
         """``run_each`` over the inputs, with a progress bar on a terminal's stderr."""
         results = run_each(self.items, work, jobs=self.options.jobs, dask=self.options.dask)
         self._bar = _progress_bar(len(self.items))
@@ -108,6 +108,7 @@ class Batch:
                 text = error_text(outcome)
             else:
                 report = outcome.result
+                assert isinstance(report, Report)  # the command's work function returns one
                 for line in report.notes:
                     self.note(line)
                 self.passed() if report.passed else self.fail()

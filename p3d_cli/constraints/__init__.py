@@ -1,4 +1,4 @@
-"""Constraints between rigid bodies (the design note's section 2) and ``p3d solve``.
+"""Constraints between rigid bodies (the Physics3D note's section 2; docs/method.md, "Constraints") and ``p3d solve``.
 
 - ``scene``: the YAML scene format, validated into frozen values (``load_scene``).
 - ``bodies``: mass properties, resolved only when needed.

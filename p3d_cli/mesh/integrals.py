@@ -1,8 +1,8 @@
-"""Volume integrals of closed triangle meshes and tetrahedral meshes (design note section 1.3).
+"""Volume integrals of closed triangle meshes and tetrahedral meshes (the Physics3D note's section 1.3).
 
 Every triangle ``(a, b, c)`` spans, with a local origin ``o``, the signed tetrahedron
 ``(o, a, b, c)``; by the divergence theorem the sum of these tetrahedra's integrals is the
-solid's integral, whatever ``o`` is, for a closed consistently wound mesh (FACTS.md). For a
+solid's integral, whatever ``o`` is, for a closed consistently wound mesh (docs/method.md, "Divergence theorem"). For a
 tetrahedron with vertices ``p0 = 0, p1, p2, p3`` and ``D = det[p1 p2 p3]`` (Tonon 2004, the
 standard simplex integrals):
 
@@ -15,7 +15,7 @@ These are algebraically the note's eq. 12-16 (with the eq. 12 typo fixed), summe
 Precision: the local origin ``o`` is placed inside the part's bounding box, so the summed
 terms have the part's size, not its distance from the world origin, and the second moments are
 shifted to the centre of mass once at the end. A part translated by 1e8 then keeps the relative
-accuracy it has at the origin (FACTS.md, "Precision far from the origin"). Terms are summed
+accuracy it has at the origin (docs/method.md, "Precision far from the origin"). Terms are summed
 pairwise within a block (``numpy.sum``) and the block totals with ``math.fsum``.
 """
 
@@ -263,7 +263,7 @@ def _radius(local: np.ndarray) -> np.ndarray:
 def columns(points: np.ndarray) -> np.ndarray:
     """A fresh float64 copy of ``points`` ``(n, k, 3)`` as ``(k, 3, n)``: vertex slot, axis, element.
 
-    Float32 input is widened (exactly) first (FACTS.md: widen before any arithmetic). Always a
+    Float32 input is widened (exactly) first (docs/method.md, "Float32 input": widen before any arithmetic). Always a
     new array, so callers may shift it in place.
     """
     points = np.asarray(points)

@@ -32,7 +32,7 @@ from p3d_cli.shapes.wedge import Wedge
 Shape = Union[Box, Wedge, Corner, Cylinder, Sphere, Ellipsoid, EllipticCylinder]
 
 #: Spec name -> shape class.
-SHAPES = {
+SHAPES: dict[str, type[Shape]] = {
     "box": Box,
     "wedge": Wedge,
     "corner": Corner,

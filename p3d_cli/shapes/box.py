@@ -1,4 +1,4 @@
-"""Box: the canonical cube [-1, 1]³ scaled to half-extents (sx, sy, sz) (FACTS.md)."""
+"""Box: the canonical cube [-1, 1]³ scaled to half-extents (sx, sy, sz) (docs/method.md, "Scale factors")."""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ Each shape module states its canonical solid's volume, centre and central second
 derivation beside them. ``tests/shapes`` checks the polyhedral ones against the polyhedral
 formulas evaluated in rational arithmetic, and the round ones against refined tessellations.
 A scaled shape's moments are these constants mapped by ``p3d_cli.moments.scale_moments``
-(the note's eq. 4, 5 and 9, exact for any diagonal scale).
+(the Physics3D note's eq. 4, 5 and 9, exact for any diagonal scale).
 """
 
 from __future__ import annotations

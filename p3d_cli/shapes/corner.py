@@ -1,7 +1,8 @@
-"""Corner: the tetrahedron (-1,-1,-1) (-1,-1,1) (-1,1,-1) (1,-1,-1), scaled (FACTS.md).
+"""Corner: the tetrahedron (-1,-1,-1) (-1,-1,1) (-1,1,-1) (1,-1,-1), scaled (docs/method.md,
+"Wedge and corner vertices").
 
-Physics3D's built-in corner constants are wrong (integer division; FACTS.md); these are
-derived from the geometry and checked in exact rational arithmetic by
+Physics3D's built-in corner constants are wrong (integer division; docs/method.md, "Physics3D's
+wedge and corner constants"); these are derived from the geometry and checked in exact rational arithmetic by
 ``tests/shapes/test_corner.py``.
 
 Derivation. A tetrahedron with corners vᵢ has V = |det(v1-v0, v2-v0, v3-v0)|/6, centroid the
@@ -21,7 +22,7 @@ import numpy as np
 
 from p3d_cli.shapes import polyhedron
 
-#: The four corners as FACTS.md lists them.
+#: The four corners (docs/method.md, "Wedge and corner vertices").
 VERTICES = ((-1, -1, -1), (-1, -1, 1), (-1, 1, -1), (1, -1, -1))
 #: Faces counter-clockwise seen from outside: x = -1, y = -1, z = -1, the slope x + y + z = -1.
 FACES = ((0, 1, 2), (0, 3, 1), (0, 2, 3), (1, 3, 2))

@@ -1,10 +1,10 @@
-"""Cylinder: radius r about the z axis, z in [-h, h] (the note's rule sx = sy = r, sz = h).
+"""Cylinder: radius r about the z axis, z in [-h, h] (the Physics3D note's rule sx = sy = r, sz = h).
 
 Closed forms of the canonical cylinder (r = 1, z ∈ [-1, 1]): V = π·1²·2 = 2π, centre 0,
 ``∫x² dV = 2 ∫₀^{2π}∫₀¹ ρ² cos²φ ρ dρ dφ = 2·π/4 = π/2`` (likewise y),
 ``∫z² dV = π ∫₋₁¹ z² dz = 2π/3``, products zero by symmetry.
 
-Bounds (FACTS.md, "Rotated bounds"): the cylinder is the Minkowski sum of its axis segment
+Bounds (docs/method.md, "Rotated bounds"): the cylinder is the Minkowski sum of its axis segment
 ``±h a`` and its central disc, so along world axis i the half-extent is
 ``|a_i| h + r sqrt(1 - a_i²)`` with ``a = R e_z`` the world axis direction (evaluated as
 ``r sqrt(R_i0² + R_i1²)`` for the second term, which is the same for a rotation and does not
@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from fractions import Fraction as F
 
 import numpy as np
 

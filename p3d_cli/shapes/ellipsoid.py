@@ -1,7 +1,7 @@
 """Ellipsoid: the unit ball under any diagonal scale (spec ``ellipsoid:A,B,C``).
 
 The exact generalisation of the sphere when sx = sy = sz does not hold: eq. 9 is exact for
-any diagonal scale (FACTS.md), so its moments are the unit ball's constants scaled. Its
+any diagonal scale (docs/method.md, "Scaling"), so its moments are the unit ball's constants scaled. Its
 bounds have a closed form too: the support function of ``{M u : |u| ≤ 1}`` in direction e
 is ``|Mᵀ e|``, so with ``M = R S`` the half-extent along world axis i is the length of row
 i of ``R S``: ``sqrt(Σⱼ (R_ij sⱼ)²)``.

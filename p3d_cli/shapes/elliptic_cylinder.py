@@ -1,7 +1,7 @@
 """Elliptic cylinder: the canonical cylinder under any diagonal scale (spec ``ecylinder:A,B,H``).
 
 The exact generalisation of the cylinder when sx = sy does not hold: moments are the
-cylinder's constants through eq. 9 (exact for any diagonal scale, FACTS.md). Bounds: the
+cylinder's constants through eq. 9 (exact for any diagonal scale, docs/method.md, "Scaling"). Bounds: the
 solid is the Minkowski sum of its axis segment ``±h a`` (``a = R e_z``) and the elliptic disc
 ``{R S (u, v, 0) : u² + v² ≤ 1}``, whose support along world axis i is
 ``sqrt((R_i0 a)² + (R_i1 b)²)``; the half-extent is ``|a_i| h`` plus that. With a = b = r it

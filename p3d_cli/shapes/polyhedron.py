@@ -2,7 +2,7 @@
 
 A polyhedral class is a list of canonical vertices in [-1, 1]³ and faces wound
 counter-clockwise seen from outside. Its placed bounds are exact by vertex projection
-(the design note's eq. 10, generalised from the box's 8 corners to any vertex list): a
+(the Physics3D note's eq. 10, generalised from the box's 8 corners to any vertex list): a
 linear map sends the convex hull of the vertices to the convex hull of their images, and
 a box around a convex hull is attained at vertices.
 """
@@ -10,6 +10,8 @@ a box around a convex hull is attained at vertices.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
+from typing import ClassVar
 
 import numpy as np
 
@@ -88,6 +90,13 @@ class ScaledPolyhedron:
     sz: float = 1.0
 
     polyhedral = True
+    # Each subclass states its canonical solid (class constants, not dataclass fields).
+    name: ClassVar[str]
+    VOLUME: ClassVar[Fraction]
+    CENTER: ClassVar[tuple]
+    CENTRAL: ClassVar[tuple]
+    VERTICES: ClassVar[tuple]
+    FACES: ClassVar[tuple]
 
     @property
     def scale(self) -> np.ndarray:

@@ -1,15 +1,14 @@
-"""Sphere: the unit ball scaled by r in every direction (the note's rule sx = sy = sz).
+"""Sphere: the unit ball scaled by r in every direction (the Physics3D note's rule sx = sy = sz).
 
 Closed forms of the unit ball: V = 4π/3, centre 0, and by symmetry
 ``∫x² dV = (1/3) ∫|r|² dV = (1/3) ∫₀¹ 4π r⁴ dr = 4π/15`` (likewise y, z), ``∫xy dV = 0``.
-Bounds under any rotation are ``t ± r`` (the note's section 1.2.2).
+Bounds under any rotation are ``t ± r`` (the Physics3D note's section 1.2.2).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from fractions import Fraction as F
 
 import numpy as np
 

@@ -1,6 +1,7 @@
-"""Wedge: the half-cube x + y ≤ 0 of [-1, 1]³, scaled (FACTS.md, "Shape classes").
+"""Wedge: the half-cube x + y ≤ 0 of [-1, 1]³, scaled (docs/method.md, "Wedge and corner vertices").
 
-Physics3D's built-in wedge constants are wrong (FACTS.md); these are derived from the
+Physics3D's built-in wedge constants are wrong (docs/method.md, "Physics3D's wedge and corner
+constants"); these are derived from the
 geometry below and checked in exact rational arithmetic by ``tests/shapes/test_wedge.py``.
 
 Derivation. Every cross-section z = const is the triangle T with corners (-1,-1), (1,-1),
@@ -23,7 +24,7 @@ import numpy as np
 
 from p3d_cli.shapes import polyhedron
 
-#: The six corners as FACTS.md lists them.
+#: The six corners (docs/method.md, "Wedge and corner vertices").
 VERTICES = ((-1, -1, -1), (-1, -1, 1), (1, -1, 1), (1, -1, -1), (-1, 1, -1), (-1, 1, 1))
 #: Faces counter-clockwise seen from outside: y = -1, x = -1, the slope x + y = 0, z = -1, z = +1.
 FACES = ((0, 3, 2, 1), (0, 1, 5, 4), (3, 4, 5, 2), (0, 4, 3), (1, 2, 5))

@@ -44,7 +44,7 @@ def test_spec_in_the_same_output_as_a_mesh(block):
     ("box:1,2,3", 48, [48 * (16 + 36) / 12, 48 * (4 + 36) / 12, 48 * (4 + 16) / 12]),
     ("sphere:2", 32 * math.pi / 3, [0.4 * 32 * math.pi / 3 * 4] * 3),
     ("cylinder:1,1,2", 4 * math.pi, [4 * math.pi * (3 + 16) / 12] * 2 + [2 * math.pi]),
-    # Corner: C_ii = 1/5, so I_ii = tr(C) - C_ii = 2/5 (FACTS.md tetrahedron, derived by hand).
+    # Corner: C_ii = 1/5, so I_ii = tr(C) - C_ii = 2/5 (docs/method.md, "Wedge and corner vertices"; derived by hand).
     ("corner", 4 / 3, [0.4] * 3),
 ])
 def test_closed_forms(spec, volume, inertia_diag):

@@ -3,7 +3,7 @@
 Independent of p3d's float code: each triangle (a, b, c) of a closed outward-wound surface
 spans the signed tetrahedron (0, a, b, c), and with D = det[a b c] and s = a + b + c the
 textbook simplex integrals are ∫dV = D/6, ∫x dV = D s/24, ∫x xᵀ dV = D (aaᵀ + bbᵀ + ccᵀ + ssᵀ)/120
-(the design note's section 1.3 in closed form). Coordinates are Fractions, so nothing rounds.
+(the Physics3D note's section 1.3 in closed form; docs/method.md, "Divergence theorem"). Coordinates are Fractions, so nothing rounds.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Corner (FACTS.md tetrahedron): constants derived from the geometry, checked exactly."""
+"""Corner (docs/method.md, "Wedge and corner vertices"): constants derived from the geometry, checked exactly."""
 
 from fractions import Fraction as F
 

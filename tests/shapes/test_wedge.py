@@ -1,4 +1,4 @@
-"""Wedge (FACTS.md: half-cube x + y ≤ 0): constants derived from the geometry, exactly."""
+"""Wedge (the half-cube x + y ≤ 0, docs/method.md): constants derived from the geometry, exactly."""
 
 from fractions import Fraction as F
 
