@@ -41,3 +41,13 @@ def test_readme_python_example_runs():
         done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=False)
         assert done.returncode == 0, f"{code}\n{done.stderr}"
         assert "both given; they are exclusive" in done.stdout and "--" not in done.stdout
+
+
+def test_api_doc_examples_run():
+    text = (REPO / "docs" / "api.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)\n```", text, re.S)
+    assert len(blocks) >= 4
+    code = "\n".join(blocks)  # later examples use names the first ones define, as a reader would
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "sample_meshes/bracket.stl" in done.stdout
