@@ -67,7 +67,7 @@ FLAGS = {
     "samples": "--samples", "seed": "--seed", "tolerance": "--tolerance", "tessellate": "--tessellate",
     "format": "--format", "scale": "--scale", "rotate": "--rotate", "quat": "--quat",
     "translate": "--translate", "require": "--require", "files_from": "--files-from",
-    "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt",
+    "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt", "trajectory": "--trajectory",
 }
 
 

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import csv
-
 import click
 
 from p3d_cli.cli import output
 from p3d_cli.cli.options import FiniteFloat, json_option
-from p3d_cli.constraints import TRAJECTORY_HEADER, SolveResult, load_scene, solve_scene, trajectory_row
+from p3d_cli.constraints import SolveResult, load_scene, solve_scene
+from p3d_cli.constraints.trajectory import trajectory_writer
 from p3d_cli.errors import UsageError
 
 
@@ -47,28 +46,12 @@ def solve(scene, steps, dt, trajectory, as_json):
     if trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)
     else:
-        try:
-            handle = open(trajectory, "w", newline="", encoding="utf-8")
-        except OSError as exc:
-            raise UsageError("--trajectory", f"cannot write {trajectory!r} ({exc.strerror or exc})",
-                             "choose a writable path") from None
-        with handle:
-            writer = csv.writer(handle)
-            writer.writerow(TRAJECTORY_HEADER)
-
-            def record(t, bodies):
-                for body in bodies:
-                    writer.writerow([_csv_value(v) for v in trajectory_row(t, body)])
-
+        with trajectory_writer(trajectory) as record:
             result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
     if as_json:
         click.echo(output.dumps(solve_record(result)))
     else:
         click.echo(solve_table(scene, result))
-
-
-def _csv_value(value):
-    return repr(value) if isinstance(value, float) else value
 
 
 def solve_record(result: SolveResult) -> dict:

@@ -116,3 +116,11 @@ def test_help_shows_an_example():
     done = run("solve", "--help")
     assert done.exit_code == 0
     assert "p3d solve examples/pendulum.yaml" in done.output
+
+
+def test_unwritable_trajectory_is_a_usage_error(tmp_path):
+    scene = str(REPO / "examples" / "pendulum.yaml")
+    target = str(tmp_path / "no-such-dir" / "swing.csv")
+    result = CliRunner().invoke(cli, ["solve", scene, "--steps", "2", "--dt", "0.01", "--trajectory", target])
+    assert result.exit_code == 2
+    assert result.stderr.startswith(f"p3d: error: --trajectory: cannot write {target!r}")
