@@ -29,8 +29,11 @@ def cos_sin_degrees(degrees: float) -> tuple[float, float]:
 
     ``math.cos(math.radians(90))`` is 6e-17, not 0; reducing the angle to [-45°, 45°] about
     the nearest quarter turn first makes quarter turns exact (so a box turned by 90° keeps
-    exact bounds) and keeps the rest accurate for large angles.
+    exact bounds) and keeps the rest accurate. The angle is first reduced modulo 360° with
+    ``math.fmod``, which is exact for every float: 1e20° is 280°, not a rounding of 1e20/90
+    quarter turns (which would be the identity).
     """
+    degrees = math.fmod(degrees, 360.0)
     quarter = round(degrees / 90.0)
     rest = math.radians(degrees - 90.0 * quarter)
     c, s = math.cos(rest), math.sin(rest)

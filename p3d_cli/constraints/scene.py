@@ -265,8 +265,9 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
         raise SceneError(place, f"expected a mapping, got {values.describe(spec)}",
                          "write {type: ball, a: base, b: arm, attach_a: [..], attach_b: [..]}")
     kind = spec.get("type")
-    if kind not in CONSTRAINT_KEYS:
-        what = "has no type" if kind is None else f"unknown constraint type {kind!r}"
+    if not isinstance(kind, str) or kind not in CONSTRAINT_KEYS:
+        what = ("has no type" if kind is None else f"unknown constraint type {kind!r}" if isinstance(kind, str)
+                else f"expected a type name, got {values.describe(kind)}")
         raise SceneError(f"{place}.type", what, "use one of: " + ", ".join(CONSTRAINT_KEYS))
     allowed = ("type", "a", "b") + CONSTRAINT_KEYS[kind]
     _known_keys(spec, allowed, where, f"constraints[{index}].")

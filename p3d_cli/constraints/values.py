@@ -38,8 +38,11 @@ def describe(value) -> str:
 def number(value, where: str, *, positive: bool = False) -> float:
     """A finite float (``positive``: also > 0)."""
     if not is_number(value):
-        raise SceneError(where, f"expected a number, got {describe(value)}", "write a plain number such as 2.5")
-    x = float(value)
+        raise SceneError(where, f"expected a number, got {describe(value)}", _number_hint(value))
+    try:
+        x = float(value)
+    except OverflowError:  # an integer written out with hundreds of digits
+        raise SceneError(where, f"{describe(value)[:40]}... is too large for a float64", "write a finite number") from None
     if not math.isfinite(x):
         raise SceneError(where, f"{value!r} is not finite", "write a finite number")
     if positive and x <= 0:
@@ -47,12 +50,27 @@ def number(value, where: str, *, positive: bool = False) -> float:
     return x
 
 
+def _number_hint(value) -> str:
+    """YAML 1.1 (PyYAML) reads ``1e300`` as text: a float needs a dot, ``1.0e+300``."""
+    if isinstance(value, str):
+        try:
+            float(value)
+        except ValueError:
+            pass
+        else:
+            return f"YAML reads {value!r} as text; write it with a dot and a signed exponent, e.g. 1.0e+300"
+    return "write a plain number such as 2.5"
+
+
 def vector(value, where: str, *, nonzero: bool = False) -> np.ndarray:
     """A (3,) float64 from a list of three finite numbers (``nonzero``: not the zero vector)."""
     if not isinstance(value, list) or len(value) != 3 or not all(is_number(v) for v in value):
         raise SceneError(where, f"expected three numbers [x, y, z], got {describe(value)}",
                          "write a list like [0, 0, 1]")
-    out = np.array(value, dtype=np.float64)
+    try:
+        out = np.array([float(v) for v in value], dtype=np.float64)
+    except OverflowError:
+        raise SceneError(where, "a component is too large for a float64", "write finite numbers") from None
     if not np.isfinite(out).all():
         raise SceneError(where, "a component is not finite", "write finite numbers")
     if nonzero and not np.any(out):

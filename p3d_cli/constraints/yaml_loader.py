@@ -7,6 +7,8 @@ loader below is a ``SafeLoader`` subclass whose mapping constructor refuses that
 
 from __future__ import annotations
 
+import os
+
 import yaml
 
 from p3d_cli.errors import SceneError
@@ -26,10 +28,20 @@ class UniqueKeySafeLoader(yaml.SafeLoader):
     """A ``SafeLoader`` that refuses a mapping holding the same key twice."""
 
 
+#: Largest scene file read (a scene of thousands of bodies is well under 1 MB): a device such as
+#: /dev/zero, or a huge file given by mistake, is refused instead of filling memory.
+MAX_SCENE_BYTES = 16 << 20
+
+_MERGE = "tag:yaml.org,2002:merge"
+
+
 def _construct_unique_mapping(loader: UniqueKeySafeLoader, node: yaml.MappingNode, deep: bool = False):
-    loader.flatten_mapping(node)
+    # Keys written in this mapping must be unique; keys brought in by a merge (``<<: *defaults``)
+    # may be overridden by a written key, as YAML's merge type says. So check before merging.
     seen: dict = {}
     for key_node, _ in node.value:
+        if key_node.tag == _MERGE:
+            continue
         key = loader.construct_object(key_node, deep=True)
         try:
             hash(key)
@@ -39,11 +51,22 @@ def _construct_unique_mapping(loader: UniqueKeySafeLoader, node: yaml.MappingNod
         if key in seen:
             raise DuplicateKeyError("", key, key_node.start_mark.line + 1)
         seen[key] = key_node
+    loader.flatten_mapping(node)  # merged keys first, so that written ones win
     return loader.construct_mapping(node, deep=deep)
 
 
 UniqueKeySafeLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
                                     _construct_unique_mapping)
+
+
+def _read_bounded(path: str) -> bytes:
+    """At most ``MAX_SCENE_BYTES + 1`` bytes of ``path``. A FIFO is opened without blocking (no
+    writer yet means nothing to read, not a wait forever)."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as f:
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)  # a writer that is there is read to its end
+        return f.read(MAX_SCENE_BYTES + 1)
 
 
 def read_yaml(path: str, where: str):
@@ -62,13 +85,18 @@ def read_yaml(path: str, where: str):
         The file cannot be read, is not valid YAML, or repeats a key in one mapping.
     """
     try:
-        with open(path, "rb") as f:
-            text = f.read()
+        text = _read_bounded(path)
     except OSError as exc:
         raise SceneError(where, f"cannot read the scene file ({exc.strerror or exc})",
                          "check the path and its permissions") from None
+    if len(text) > MAX_SCENE_BYTES:
+        raise SceneError(where, f"is larger than {MAX_SCENE_BYTES >> 20} MB, far more than any scene",
+                         "give the scene's YAML file")
     try:
         return yaml.load(text, Loader=UniqueKeySafeLoader)  # noqa: S506 - a SafeLoader subclass
+    except RecursionError:
+        raise SceneError(where, "nests lists or mappings too deeply to read",
+                         "a scene needs a few levels of nesting; check the brackets") from None
     except DuplicateKeyError as exc:
         raise SceneError(f"{where}:{exc.line}", f"key {exc.key!r} appears twice in one mapping",
                          "YAML would silently keep only the last one; rename or remove one") from None

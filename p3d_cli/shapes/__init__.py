@@ -122,6 +122,9 @@ def _numbers(text: str, name: str, body: str) -> list[float]:
             raise SpecError(text, f"{part.strip()!r} is not a number", hint) from None
         if not math.isfinite(value):
             raise SpecError(text, f"scale factor {part.strip()!r} is not finite", hint)
+        if value == 0 and any(c in "123456789" for c in part.split("e")[0].split("E")[0]):
+            raise SpecError(text, f"scale factor {part.strip()} underflows to 0 in float64",
+                            "give the size in a smaller unit, above 1e-300")
         if value <= 0:
             raise SpecError(text, f"scale factor {part.strip()} is not positive",
                             "scale factors are half-extents and must be > 0 (p3d does not mirror)")

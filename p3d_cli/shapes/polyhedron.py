@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import ClassVar
+from typing import Callable, ClassVar
 
 import numpy as np
 
@@ -129,11 +129,27 @@ class ScaledPolyhedron:
 
 #: Fewest segments a tessellation accepts (a triangle's worth around the axis).
 MIN_SEGMENTS = 3
+#: Most triangles a tessellation may have: 2M triangles are 144 MB of float64 corners, and the
+#: integrals need a few times that; the error at this size (below 1e-11 for the sphere) is far
+#: under anything a tessellation is used to show.
+MAX_TRIANGLES = 2_000_000
 
 
-def check_segments(n) -> int:
-    """``n`` as a tessellation's segment count, or ``UsageError``."""
+def check_segments(n, triangles: Callable[[int], int] = lambda n: n) -> int:
+    """``n`` as a tessellation's segment count, or ``UsageError``.
+
+    Parameters
+    ----------
+    n : int
+    triangles : callable
+        The triangle count ``n`` segments give: refused above ``MAX_TRIANGLES`` before any
+        memory is asked for.
+    """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < MIN_SEGMENTS:
         raise UsageError("tessellate", f"{n!r} is not a segment count",
                          f"give a whole number of at least {MIN_SEGMENTS}")
+    count = triangles(int(n))
+    if count > MAX_TRIANGLES:
+        raise UsageError("tessellate", f"{n} segments would make {count:,} triangles, over the limit of "
+                         f"{MAX_TRIANGLES:,}", "give fewer segments (the error falls as 1/N²)")
     return int(n)

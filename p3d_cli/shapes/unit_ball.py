@@ -31,7 +31,7 @@ def unit_sphere_triangles(n: int) -> np.ndarray:
     (2 n (stacks - 1), 3, 3) float64
         Counter-clockwise seen from outside.
     """
-    n = check_segments(n)
+    n = check_segments(n, lambda k: 2 * k * (max(2, k // 2) - 1))
     stacks = max(2, n // 2)
     theta = np.pi * np.arange(stacks + 1) / stacks
     phi = 2 * np.pi * np.arange(n) / n

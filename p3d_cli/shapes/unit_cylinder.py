@@ -27,7 +27,7 @@ def unit_cylinder_triangles(n: int) -> np.ndarray:
         Sides as two triangles per segment, caps fanned from their centres; counter-clockwise
         seen from outside.
     """
-    n = check_segments(n)
+    n = check_segments(n, lambda k: 4 * k)
     phi = 2 * np.pi * np.arange(n) / n
     ring = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     bottom = np.hstack([ring, np.full((n, 1), -1.0)])
