@@ -42,7 +42,8 @@ def number(value, where: str, *, positive: bool = False) -> float:
     try:
         x = float(value)
     except OverflowError:  # an integer written out with hundreds of digits
-        raise SceneError(where, f"{describe(value)[:40]}... is too large for a float64", "write a finite number") from None
+        raise SceneError(where, f"{describe(value)[:40]}... is too large for a float64",
+                         "write a finite number") from None
     if not math.isfinite(x):
         raise SceneError(where, f"{value!r} is not finite", "write a finite number")
     if positive and x <= 0:
