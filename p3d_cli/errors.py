@@ -66,6 +66,11 @@ class FormatError(InputError):
     """A file's bytes do not follow its format (truncated, corrupt, lying header)."""
 
 
+class RangeError(InputError):
+    """A number the input leads to is outside float64's range: it would overflow to infinity or
+    underflow to zero (a part of size 1e200 has a volume of 1e600)."""
+
+
 class UnknownFormatError(InputError):
     """p3d cannot tell, or does not read, the file's format."""
 

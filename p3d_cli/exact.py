@@ -11,7 +11,7 @@ import dataclasses
 
 import numpy as np
 
-from p3d_cli.errors import UsageError
+from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import MeshAnalysis, analyze
 from p3d_cli.mesh.integrals import triangle_moments
@@ -47,7 +47,13 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
     Raises
     ------
     UsageError, InputError
+        ``RangeError`` (an ``InputError``) when a result would overflow or underflow float64.
     """
+    with np.errstate(all="ignore"):  # out-of-range results are caught by check_range instead
+        return _exact_props(solid, placement, tessellate, density, mass, about)
+
+
+def _exact_props(solid: Solid, placement: Placement, tessellate, density, mass, about) -> PropsResult:
     details: dict = {} if placement.is_identity else {"placement": placement.describe()}
     if solid.shape is None:
         refuse_tessellate(solid, tessellate)
@@ -55,13 +61,18 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
     elif tessellate is not None:
         details["tessellate"] = tessellate
         triangles = shape_triangles(solid.shape, tessellate)
-        moments = placement.moments(triangle_moments(triangles))
-        props = mass_properties(moments, density=density, mass=mass, about=about)
+        unplaced = triangle_moments(triangles)
+        moments = placement.moments(unplaced)
+        check_range(solid.source, unplaced, moments)
+        props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
         facts = MeshFacts(solid.source, "tessellated", len(triangles), True, placement.triangles_bounds(triangles))
         result = PropsResult(facts, props, "exact", solid.warnings, exact_uncertainty(moments, props))
     else:
-        moments = placement.moments(solid.shape.moments())
-        props = mass_properties(moments, density=density, mass=mass, about=about)
+        unplaced = solid.shape.moments()
+        check_range(solid.source, None, unplaced)
+        moments = placement.moments(unplaced)
+        check_range(solid.source, unplaced, moments)
+        props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
         facts = MeshFacts(solid.source, "primitive", 0, None, placement.shape_bounds(solid.shape))
         result = PropsResult(facts, props, "exact", solid.warnings, None)
     return dataclasses.replace(result, details={**result.details, **details})
@@ -73,6 +84,7 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     if not placement.is_identity:
         mesh, placed_bounds = watch_bounds(mesh, placement)
     found = analyze(mesh, mesh.where)
+    check_range(solid.source, found.moments, found.moments)
     facts = mesh_facts(solid, found)
     warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
     if found.inverted_tetrahedra:
@@ -81,16 +93,46 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     moments = found.moments
     if placed_bounds is not None:
         moments = placement.moments(moments)
+        check_range(solid.source, found.moments, moments)
         facts = dataclasses.replace(facts, bounds=placed_bounds())
-    props = mass_properties(moments, density=density, mass=mass, about=about)
+    props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
 
 
 def solid_moments(solid: Solid) -> Moments:
     """The unplaced volume moments of a shape (closed forms) or a mesh (one analysis pass)."""
     if solid.shape is not None:
-        return solid.shape.moments()
+        moments = solid.shape.moments()
+        check_range(solid.source, None, moments)
+        return moments
     return analyze(solid.mesh, solid.mesh.where).moments
+
+
+def check_range(where: str, before: Moments | None, after: Moments) -> None:
+    """Refuse moments that a shape's size or a placement pushed out of float64's range.
+
+    A volume or second moment that was non-zero ``before`` (``before=None`` for a shape, whose
+    are never zero) and is zero ``after`` underflowed; an infinite or NaN one overflowed. Either
+    would print a silently wrong number.
+
+    Raises
+    ------
+    RangeError
+    """
+    with np.errstate(all="ignore"):
+        values = [after.volume] + ([] if after.is_empty else [after.center, after.central])
+        if not all(np.isfinite(v).all() for v in values):
+            raise RangeError(where, "the volume or its moments overflow float64",
+                             "measure in a larger unit (e.g. km instead of mm)")
+        if before is None:  # a shape
+            lost = after.volume == 0 or after.is_empty or bool(np.any(np.diag(after.central) == 0))
+        else:
+            lost = before.volume != 0 and after.volume == 0
+            if not before.is_empty and not after.is_empty:
+                lost = lost or bool(np.any((np.diag(before.central) != 0) & (np.diag(after.central) == 0)))
+    if lost:
+        raise RangeError(where, "the volume or its second moments underflow float64 (the part is too small)",
+                         "measure in a smaller unit (e.g. mm instead of m)")
 
 
 def mesh_facts(solid: Solid, found: MeshAnalysis) -> MeshFacts:

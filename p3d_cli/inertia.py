@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.errors import UsageError
+from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.results import MassProperties, Moments
 
 
@@ -104,6 +104,10 @@ def density_for(volume: float, density: float | None = None, mass: float | None 
     if density is not None and mass is not None:
         raise UsageError("mass, density", "both given; they are exclusive",
                          "give one: the other follows from the volume")
+    for name, value in (("mass", mass), ("density", density)):
+        if value is not None and 0 < abs(value) < np.finfo(np.float64).tiny:
+            raise UsageError(name, f"{value!r} is below float64's normal range (about 2.2e-308), "
+                             "where it keeps only a few digits", "give it in a larger unit")
     if mass is not None:
         if volume == 0.0:
             raise UsageError("mass", "the input encloses no volume, so no density follows from a mass",
@@ -128,7 +132,7 @@ def breaks_triangle_inequality(principal, rtol: float = 1e-9) -> bool:
 
 
 def mass_properties(moments: Moments, *, density: float | None = None, mass: float | None = None,
-                    about=None) -> MassProperties:
+                    about=None, where: str = "") -> MassProperties:
     """Mass properties of a uniform solid from its volume moments.
 
     Parameters
@@ -141,24 +145,39 @@ def mass_properties(moments: Moments, *, density: float | None = None, mass: flo
         negative sign in ``mass``, ``inertia`` and everything derived from them).
     about : (3,) array_like, optional
         A point for ``inertia_about``.
+    where : str, optional
+        The input's name, for the error when a result overflows.
 
     Raises
     ------
     UsageError
         Both ``density`` and ``mass`` given, or ``mass`` given for a solid with no volume.
+    RangeError
+        A result overflows float64 (a huge part, density, or distance from the origin).
     """
     density = density_for(moments.volume, density, mass)
-    total = density * moments.volume
     about_point = None if about is None else np.asarray(about, dtype=np.float64).reshape(3)
-    if moments.is_empty:
-        return MassProperties(moments.volume, density, total, None, None, None, None, None, None,
-                              about_point, None)
-    second = density * moments.central
-    inertia = inertia_from_second_moments(second)
-    inertia_origin = shifted_inertia(inertia, total, moments.center, np.zeros(3))
+    with np.errstate(all="ignore"):  # overflow is detected below and reported as one error
+        total = density * moments.volume
+        _check_finite(where, "the mass", total)
+        if moments.is_empty:
+            return MassProperties(moments.volume, density, total, None, None, None, None, None, None,
+                                  about_point, None)
+        second = density * moments.central
+        inertia = inertia_from_second_moments(second)
+        _check_finite(where, "the inertia", moments.center, second, inertia)
+        inertia_origin = shifted_inertia(inertia, total, moments.center, np.zeros(3))
+        _check_finite(where, "the inertia about the origin", inertia_origin)
+        inertia_about = None
+        if about_point is not None:
+            inertia_about = shifted_inertia(inertia, total, moments.center, about_point)
+            _check_finite(where, "the inertia about the point given", inertia_about)
     principal, axes = principal_frame(inertia)
-    inertia_about = None
-    if about_point is not None:
-        inertia_about = shifted_inertia(inertia, total, moments.center, about_point)
     return MassProperties(moments.volume, density, total, moments.center.copy(), inertia,
                           inertia_origin, principal, axes, second, about_point, inertia_about)
+
+
+def _check_finite(where: str, what: str, *values) -> None:
+    if not all(np.isfinite(v).all() for v in values):
+        raise RangeError(where or "result", f"{what} overflows float64",
+                         "measure in a larger unit, or nearer the origin, or with a smaller density")

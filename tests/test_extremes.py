@@ -299,3 +299,21 @@ def test_montecarlo_far_away_and_at_extreme_scales(tmp_path, scale, offset):
     assert (np.abs(result.properties.center_of_mass - ref.center_of_mass)
             <= 5 * u["center_of_mass"] + 4 * np.spacing(np.abs(ref.center_of_mass))).all()
     assert (np.abs(result.properties.inertia - ref.inertia) <= 5 * u["inertia"]).all()
+
+
+# --- sizes where the products of the bound leave float64's range ---------------------------------
+
+@pytest.mark.parametrize("scale", [2.0 ** -200, 1e-45, 1e-39, 1e30, 1e40, 1e45])
+def test_bound_and_accuracy_at_extreme_sizes(scale):
+    # size⁸ (the product under the centre's bound) overflows at 1e40 and underflows below 1e-39;
+    # the results themselves (size³ to size⁵) are in range at all of these.
+    v, f = hull(3)
+    check(place(v, f, scale=scale, rot=rotation(3), offset=np.array([3.0, -1.0, 2.0]) * scale))
+
+
+def test_a_tetrahedron_of_size_1e40_prints_json():
+    tet = np.array([[[0, 0, 0], [0, 1, 0], [1, 0, 0]], [[0, 0, 0], [1, 0, 0], [0, 0, 1]],
+                    [[0, 0, 0], [0, 0, 1], [0, 1, 0]], [[1, 0, 0], [0, 1, 0], [0, 0, 1]]], dtype=float) * 1e40
+    result = p3d.props(tet)
+    assert result.properties.volume == pytest.approx(1e120 / 6, rel=1e-15)
+    assert all(np.isfinite(np.ravel(x)).all() for x in result.uncertainty.values())

@@ -94,3 +94,27 @@ def test_tessellation_is_capped_before_memory_is_asked_for():
     one_error_line(run("props", "sphere", "--tessellate", "20000"), "--tessellate", "over the limit")
     one_error_line(run("bounds", "cylinder", "--tessellate", "100000000"), "--tessellate", "over the limit")
     assert run("props", "cylinder", "--tessellate", "100000", "--field", "faces").stdout.strip() == "400000"
+
+
+@pytest.mark.parametrize("args, what", [
+    (["box:1e200,1,1", "--json"], "overflow"),
+    (["sphere:1e150"], "overflow"),
+    (["box", "--scale", "1e308,1,1"], "overflow"),
+    (["box", "--density", "1e308", "--json"], "the mass overflows"),
+    (["box", "--translate", "1e308,0,0", "--json"], "the inertia about the origin overflows"),
+    (["box", "--about", "1e308,0,0"], "the inertia about the point given overflows"),
+    (["box", "--mass", "1e-320"], "below float64's normal range"),
+    (["sphere:1e-110"], "underflow"),
+    (["box:1e-200,1,1"], "underflow"),
+    (["box", "--scale", "1e-200,1,1"], "underflow"),
+])
+def test_out_of_range_results_are_one_error_not_a_bug(args, what):
+    with np.errstate(all="warn"):
+        result = run("props", *args)
+    one_error_line(result, what)
+    assert "RuntimeWarning" not in result.stderr and "internal error" not in result.output
+
+
+def test_large_but_representable_parts_still_measure():
+    assert float(run("props", "box:1e100,1,1", "--field", "volume").stdout) == 8e100
+    assert float(run("props", "box:1e-100,1,1", "--field", "volume").stdout) == 8e-100
