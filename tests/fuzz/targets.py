@@ -1,0 +1,106 @@
+"""Fuzz targets: one per reader and one for the scene loader.
+
+Each target takes arbitrary bytes and must end in a result or a ``P3DError``: any other
+exception (``IndexError``, ``OverflowError``, ``RecursionError``, ...) is a bug, and so is a
+crash or a hang, which the harness that drives the target sees. The same targets serve the
+short hypothesis runs of the test suite (``tests/fuzz/test_fuzz.py``) and long coverage-guided
+runs with atheris (``tests/fuzz/run_atheris.py``; see docs/fuzzing.md).
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from p3d_cli.errors import P3DError
+from p3d_cli.io import formats
+from p3d_cli.io.raw import RawInput
+
+REPO = Path(__file__).resolve().parents[2]
+
+#: Bytes of the largest fuzz input: enough for every header and a few faces.
+MAX_INPUT = 1 << 14
+
+
+def measure_bytes(data: bytes, fmt: str):
+    """Read ``data`` as format ``fmt`` and integrate it, as ``p3d props`` would: the
+    ``PropsResult``, or None when p3d refused the input with a ``P3DError``."""
+    from p3d_cli.exact import exact_props
+    from p3d_cli.solid import Solid
+
+    raw = RawInput("<fuzz>", None, data, len(data))
+    try:
+        mesh = formats.read(raw, fmt)
+        result = exact_props(Solid("<fuzz>", mesh=mesh))
+    except P3DError:
+        return None
+    volume = result.properties.volume
+    assert isinstance(volume, float) and np.isfinite(volume), volume
+    return result
+
+
+def load_scene_bytes(data: bytes):
+    """Parse and solve ``data`` as a scene file (one velocity solve), as ``p3d solve`` would:
+    the ``SolveResult``, or None when p3d refused the scene with a ``P3DError``."""
+    from p3d_cli.constraints import load_scene, solve_scene
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "scene.yaml")
+        with open(path, "wb") as f:
+            f.write(data)
+        try:
+            return solve_scene(load_scene(path))
+        except P3DError:
+            return None
+
+
+def seeds(name: str) -> list[bytes]:
+    """Valid inputs of each target to mutate from: the bundled samples and examples."""
+    samples = REPO / "sample_meshes"
+    if name == "scene":
+        return [p.read_bytes() for p in sorted((REPO / "examples").glob("*.yaml"))]
+    if name == "stl":
+        return [(samples / "bracket.stl").read_bytes()[:MAX_INPUT], (samples / "tetrahedron.stl").read_bytes(),
+                _binary_stl()]
+    if name == "obj":
+        return [(samples / "bracket.obj").read_bytes()]
+    if name == "off":
+        return [(samples / "cube.off").read_bytes()]
+    if name == "ply":
+        return [_ply("ascii"), _ply("binary_little_endian"), _ply("binary_big_endian")]
+    raise KeyError(name)
+
+
+_TET_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+_TET_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+def _binary_stl() -> bytes:
+    records = np.zeros(4, dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    records["v"] = _TET_V[_TET_F]
+    return b"fuzz".ljust(80, b" ") + struct.pack("<I", 4) + records.tobytes()
+
+
+def _ply(fmt: str) -> bytes:
+    head = (f"ply\nformat {fmt} 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    if fmt == "ascii":
+        body = "".join(f"{x} {y} {z}\n" for x, y, z in _TET_V) + "".join(f"3 {a} {b} {c}\n" for a, b, c in _TET_F)
+        return head + body.encode()
+    order = "<" if fmt.endswith("little_endian") else ">"
+    body = b"".join(struct.pack(order + "3f", *v) for v in _TET_V)
+    body += b"".join(struct.pack(order + "B3i", 3, *f) for f in _TET_F)
+    return head + body
+
+
+TARGETS = {
+    "stl": lambda data: measure_bytes(data, "stl"),
+    "obj": lambda data: measure_bytes(data, "obj"),
+    "ply": lambda data: measure_bytes(data, "ply"),
+    "off": lambda data: measure_bytes(data, "off"),
+    "scene": load_scene_bytes,
+}
