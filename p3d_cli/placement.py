@@ -395,7 +395,7 @@ def placement_from_mapping(entry: dict, where: str) -> Placement:
     except InputError:
         raise
     except P3DError as exc:
-        named = exc.where if exc.where in PLACEMENT_KEYS else key
+        named = exc.where if all(n in PLACEMENT_KEYS for n in exc.where.split("/")) else key
         raise InputError(f"{where}.{named}", exc.what, exc.hint) from None
     return IDENTITY if placement is None else placement
 
