@@ -181,3 +181,73 @@ def _check_finite(where: str, what: str, *values) -> None:
     if not all(np.isfinite(v).all() for v in values):
         raise RangeError(where or "result", f"{what} overflows float64",
                          "measure in a larger unit, or nearer the origin, or with a smaller density")
+
+
+def implausibilities(props: MassProperties, bounds=None, method: str = "exact") -> list[str]:
+    """Plain-words warnings for a result no solid can have: only a bad mesh gives one.
+
+    A solid has positive volume and mass, principal moments that are positive and satisfy the
+    triangle inequality (``I1 + I2 >= I3``: ``I3 = ∫(x² + y²) dm <= I1 + I2 = ∫(x² + y² + 2z²) dm``
+    in the principal frame), and its centre of mass inside its bounding box (the box is convex
+    and holds every point). The triangle check is skipped for Monte Carlo estimates, whose
+    noise can break the equality of a flat part.
+
+    Parameters
+    ----------
+    props : MassProperties
+    bounds : Bounds, optional
+    method : str
+    """
+    out = []
+    if props.volume <= 0 or props.mass <= 0:
+        out.append(f"volume {props.volume:.6g} and mass {props.mass:.6g} are not both positive, as a "
+                   "solid's are: the mesh is inside out or not a solid")
+    if (props.principal_moments is not None and method == "exact" and props.mass > 0
+            and breaks_triangle_inequality(props.principal_moments)):
+        out.append("principal moments break the triangle inequality (or one is negative), which no "
+                   "solid's do: the mesh probably intersects itself")
+    if props.center_of_mass is not None and bounds is not None:
+        slack = 1e-9 * max(bounds.diagonal, float(np.abs(bounds.max).max()), float(np.abs(bounds.min).max()))
+        c = props.center_of_mass
+        if np.any(c < bounds.min - slack) or np.any(c > bounds.max + slack):
+            out.append("the centre of mass lies outside the bounds, which no solid's does: the mesh is "
+                       "not a solid (inside-out or overlapping parts)")
+    return out
+
+
+def combine_mass_properties(parts, about=None) -> MassProperties:
+    """The mass properties of several solids taken together (an assembly).
+
+    Masses and volumes add; the centre is ``c = Σ mᵢ cᵢ / M``; second moments about it add with
+    the parallel-axis terms, ``S = Σ (Sᵢ + mᵢ dᵢ dᵢᵀ)`` with ``dᵢ = cᵢ - c`` (Steiner's theorem
+    on ``S = ∫ (x - c)(x - c)ᵀ dm``), and ``I = tr(S) E - S``. The density reported is the mean,
+    ``M / V``.
+
+    Parameters
+    ----------
+    parts : iterable of MassProperties
+        Each in the same frame and units; parts without volume add nothing.
+    about : (3,) array_like, optional
+
+    Raises
+    ------
+    UsageError
+        No part has mass.
+    """
+    parts = [p for p in parts if p.center_of_mass is not None]
+    volume = float(sum(p.volume for p in parts))
+    total = float(sum(p.mass for p in parts))
+    if not parts or total == 0.0:
+        raise UsageError("parts", "no part has mass", "give parts with a volume")
+    center = sum(p.mass * p.center_of_mass for p in parts) / total
+    second = np.zeros((3, 3))
+    for p in parts:
+        d = p.center_of_mass - center
+        second = second + p.second_moments + p.mass * np.outer(d, d)
+    inertia = inertia_from_second_moments(second)
+    principal, axes = principal_frame(inertia)
+    about_point = None if about is None else np.asarray(about, dtype=np.float64).reshape(3)
+    inertia_about = None if about_point is None else shifted_inertia(inertia, total, center, about_point)
+    return MassProperties(volume, total / volume if volume else 0.0, total, center, inertia,
+                          shifted_inertia(inertia, total, center, np.zeros(3)), principal, axes, second,
+                          about_point, inertia_about)

@@ -10,10 +10,13 @@ from __future__ import annotations
 
 from typing import Any, BinaryIO, Iterable
 
-from p3d_cli.errors import InputError, UsageError
-from p3d_cli.placement import IDENTITY, Placement
+import numpy as np
+
+from p3d_cli.errors import UsageError
+from p3d_cli.placement import IDENTITY, Placement, then
 from p3d_cli.results import BoundsResult, PropsResult
-from p3d_cli.solid import Solid, as_solid
+from p3d_cli.single import finish, measure_solid, solid_bounds
+from p3d_cli.solid import as_solid
 
 #: The values of ``props(method=...)``.
 METHODS = ("exact", "montecarlo")
@@ -23,7 +26,8 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
           density: float | None = None, mass: float | None = None, about=None,
           tessellate: int | None = None, samples: int | None = None, seed: int | None = None,
           tolerance: float | None = None, format: str | None = None,
-          stdin: BinaryIO | None = None) -> PropsResult:
+          stdin: BinaryIO | None = None, units: str | None = None,
+          output_units: str | None = None) -> PropsResult:
     """Volume, mass, centre of mass, inertia and principal frame of a mesh or shape.
 
     Parameters
@@ -36,10 +40,11 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         ``exact``: divergence theorem or closed forms, with rounding-error bounds in
         ``uncertainty``. ``montecarlo``: sample the bounding box with an inside test, with
         standard errors (an independent check of a mesh you distrust).
-    density, mass : float, optional
-        Exclusive: mass per unit volume (default 1), or the total mass.
+    density, mass : float or str, optional
+        Exclusive: mass per unit volume (default 1), or the total mass; bare numbers, or text
+        with a unit (``"7.85 g/cm^3"``, ``"2.5 lb"``) when ``units`` is given.
     about : (3,) array_like, optional
-        Also give the inertia about this point.
+        Also give the inertia about this point (in ``units``).
     tessellate : int, optional
         Exact method only: measure a round shape's inscribed polyhedron of this many segments.
     samples, seed, tolerance : optional
@@ -49,6 +54,14 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         Format name for a path, instead of guessing from content and extension.
     stdin : binary stream, optional
         What ``-`` reads.
+    units : {"mm", "cm", "m", "in", "ft"}, optional
+        The length unit of the mesh and of ``about`` and the placement's translation. With
+        units, results are in SI (or ``output_units``) and ``result.units`` says which.
+    output_units : str, optional
+        ``"LENGTH,MASS"`` of the results, e.g. ``"mm,g"`` (default ``"m,kg"``).
+
+    A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.assembly``) or an
+    ``Assembly`` gives the whole, with each part's result in ``result.parts``.
 
     Returns
     -------
@@ -68,15 +81,28 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     """
     placement = IDENTITY if placement is None else placement
     check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
-    solid = as_solid(thing, format=format, stdin=stdin)
-    if method == "montecarlo":
-        from p3d_cli.montecarlo import montecarlo_props
+    from p3d_cli import units as unit_rules
+    from p3d_cli.assembly import find_assembly
 
-        return montecarlo_props(solid, placement, samples=samples, seed=seed, tolerance=tolerance,
-                                density=density, mass=mass, about=about)
-    from p3d_cli.exact import exact_props
+    found = find_assembly(thing)
+    if found is not None:
+        from p3d_cli.assemble import assembly_props
 
-    return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about)
+        return assembly_props(found, placement, units=units, output_units=output_units,
+                                       density=density, mass=mass, about=about, method=method,
+                                       tessellate=tessellate, samples=samples, seed=seed,
+                                       tolerance=tolerance)
+    density_given = density is not None
+    system, density, mass = unit_rules.resolve(units, output_units, density, mass)
+    user_placement = placement
+    if system is not None:
+        placement = then(placement, Placement(scale=np.full(3, system.factor)))
+        if about is not None:
+            about = np.asarray(about, dtype=np.float64) * system.factor
+    result = measure_solid(as_solid(thing, format=format, stdin=stdin), placement, method=method, density=density,
+                           mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
+                           tolerance=tolerance)
+    return finish(result, system, user_placement, density_given)
 
 
 def check_props_options(method, density, mass, tessellate, samples, seed, tolerance) -> None:
@@ -95,15 +121,16 @@ def check_props_options(method, density, mass, tessellate, samples, seed, tolera
 
 
 def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | None = None,
-           format: str | None = None, stdin: BinaryIO | None = None) -> BoundsResult:
+           format: str | None = None, stdin: BinaryIO | None = None, units: str | None = None,
+           output_units: str | None = None) -> BoundsResult:
     """Exact axis-aligned bounds of a mesh or shape after placement.
 
     Meshes and polyhedral shapes by projecting every vertex; round shapes by closed forms.
 
     Parameters
     ----------
-    thing, placement, tessellate, format, stdin
-        As for ``props``.
+    thing, placement, tessellate, format, stdin, units, output_units
+        As for ``props`` (bounds are in the output length unit when units are given).
 
     Returns
     -------
@@ -120,36 +147,20 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
     [1.0, 2.0, 3.0]
     """
     placement = IDENTITY if placement is None else placement
-    solid = as_solid(thing, format=format, stdin=stdin)
-    if solid.shape is not None:
-        if tessellate is not None:
-            from p3d_cli.exact import shape_triangles
+    from p3d_cli.assembly import find_assembly
 
-            triangles = shape_triangles(solid.shape, tessellate)
-            return BoundsResult(solid.source, "tessellated", "vertices", placement.triangles_bounds(triangles),
-                                len(triangles), solid.warnings)
-        method = "vertices" if solid.shape.polyhedral else "closed form"
-        return BoundsResult(solid.source, "primitive", method, placement.shape_bounds(solid.shape), 0,
-                            solid.warnings)
-    from p3d_cli.exact import refuse_tessellate
+    found = find_assembly(thing)
+    if found is not None:
+        from p3d_cli.assemble import assembly_bounds
 
-    refuse_tessellate(solid, tessellate)
-    return _mesh_bounds(solid, placement)
+        return assembly_bounds(found, placement, units=units, output_units=output_units, tessellate=tessellate)
+    if units is not None or output_units is not None:
+        from p3d_cli.units import resolve
 
-
-def _mesh_bounds(solid: Solid, placement: Placement) -> BoundsResult:
-    import numpy as np
-
-    mesh = solid.mesh
-    if mesh.tetrahedra is not None:
-        blocks: Iterable = (np.asarray(mesh.tetrahedra),)
-    else:
-        blocks = mesh.finite_blocks()
-    try:
-        box = placement.triangles_bounds(blocks)
-    except ValueError:
-        raise InputError(mesh.where, "the mesh has no faces", "export it again with its faces") from None
-    return BoundsResult(solid.source, mesh.format, "vertices", box, mesh.face_count, tuple(mesh.warnings))
+        system, _, _ = resolve(units, output_units)
+        if system is not None:
+            placement = then(placement, Placement(scale=np.full(3, system.factor)))
+    return solid_bounds(as_solid(thing, format=format, stdin=stdin), placement, tessellate)
 
 
 def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,

@@ -4,13 +4,21 @@ Mass properties are placed from the unplaced solid's moments: eq. 9 of the Physi
 (``p3d_cli.moments.scale_moments``) for the scale, ``C' = R C Rᵀ`` for the rotation (so
 ``I' = R I Rᵀ``), and the centre moved by the translation (docs/method.md, "Placement").
 Bounds are placed exactly: shapes by their closed forms, triangles by projecting every corner.
+
+Mirrors: a negative scale factor reflects the solid. A reflection reverses the orientation of
+every face, so a mesh that was wound outward would come out wound inward and its signed
+volume negative (eq. 4 gives ``V' = sx sy sz V``). p3d treats a mirrored part as the mirror
+image of the solid, wound outward again: the winding is flipped back, which multiplies the
+volume and the central second moments by ``sign(sx sy sz)``, so ``V' = |sx sy sz| V`` and
+``C' = |det S| S C S`` (so ``I' = S I S`` for a pure reflection ``S = diag(±1)``). An
+inward-wound input stays inward-wound (its volume stays negative), as it should.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -21,13 +29,97 @@ from p3d_cli.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
 
 
+#: Shapes symmetric under each coordinate-plane reflection: mirroring them changes nothing.
+MIRROR_SYMMETRIC = frozenset({"box", "sphere", "cylinder", "ellipsoid", "ecylinder", "capsule"})
+
+
 def check_scale(scale) -> np.ndarray:
-    """``scale`` as ``(3,) float64``, or ``UsageError`` unless all three are finite and > 0."""
+    """``scale`` as ``(3,) float64`` (one number: uniform), or ``UsageError`` unless all three
+    are finite and non-zero (negative factors mirror)."""
     s = np.ones(3) if scale is None else np.asarray(scale, dtype=np.float64).reshape(-1)
-    if s.shape != (3,) or not np.all(np.isfinite(s)) or not np.all(s > 0):
-        raise UsageError("scale", f"{tuple(s.tolist())} is not three positive factors",
-                         "give SX,SY,SZ > 0 (half-extent multipliers; p3d does not mirror)")
+    if s.shape == (1,):
+        s = np.repeat(s, 3)
+    if s.shape != (3,) or not np.all(np.isfinite(s)) or not np.all(s != 0):
+        raise UsageError("scale", f"{tuple(s.tolist())} is not one or three finite non-zero factors",
+                         "give S or SX,SY,SZ, each positive, or negative to mirror the solid")
     return s
+
+
+def mirror_signs(scale) -> np.ndarray | None:
+    """The reflection ``diag(sign(s))`` of a scale as ``(3,)`` signs, or None when it mirrors nothing."""
+    if scale is None or np.all(scale > 0):
+        return None
+    return np.sign(scale)
+
+
+def flip_winding(moments: Moments) -> Moments:
+    """The moments of the same solid with its winding reversed: signed ``V`` and ``C`` negated."""
+    if moments.is_empty:
+        return Moments(-moments.volume, None, None, moments.errors)
+    return Moments(-moments.volume, moments.center, -moments.central, moments.errors)
+
+
+@dataclass(frozen=True)
+class Mirrored:
+    """A shape reflected by ``diag(signs)`` (for shapes that are not mirror-symmetric: wedge,
+    corner). It answers the shape protocol, so every road (closed forms, bounds, Monte Carlo's
+    inside test and sampling box) sees the mirrored solid.
+
+    Attributes
+    ----------
+    shape : Shape
+        The shape before the reflection (positive scale factors).
+    signs : (3,) float64
+        ``±1`` per axis.
+    """
+
+    shape: Any
+    signs: np.ndarray
+
+    @property
+    def name(self) -> str:
+        return self.shape.name
+
+    @property
+    def polyhedral(self) -> bool:
+        return self.shape.polyhedral
+
+    @property
+    def scale(self) -> np.ndarray:
+        return self.shape.scale
+
+    def spec(self) -> str:
+        return f"{self.shape.spec()} mirrored {','.join(f'{s:g}' for s in self.signs)}"
+
+    def scaled(self, scale) -> "Mirrored":
+        s = np.asarray(scale, dtype=np.float64)
+        return Mirrored(self.shape.scaled(np.abs(s)), self.signs * np.sign(s))
+
+    def moments(self) -> Moments:
+        return place_moments(self.shape.moments(), self.signs)
+
+    def bounds(self, rotation=None, translation=None) -> Bounds:
+        r = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
+        # R M is orthogonal: every shape's bounds formula holds for it (they use the
+        # matrix as a linear map, never its determinant).
+        return self.shape.bounds(r * self.signs, translation)
+
+    def inside(self, points) -> np.ndarray:
+        return self.shape.inside(np.asarray(points, dtype=np.float64).reshape(-1, 3) * self.signs)
+
+    def vertices(self) -> np.ndarray:
+        return self.shape.vertices() * self.signs
+
+    def triangles(self) -> np.ndarray:
+        return self._outward(self.shape.triangles() * self.signs)
+
+    def tessellate(self, n: int) -> np.ndarray:
+        return self._outward(self.shape.tessellate(n) * self.signs)
+
+    def _outward(self, triangles: np.ndarray) -> np.ndarray:
+        # A reflection (odd number of -1) turns every face inward: swap two corners back.
+        # Two -1 are a half turn, which keeps the winding.
+        return triangles[:, [0, 2, 1]] if np.prod(self.signs) < 0 else triangles
 
 
 @dataclass(frozen=True)
@@ -37,7 +129,8 @@ class Placement:
     Attributes
     ----------
     scale : (3,) float64 or None
-        Positive diagonal scale factors.
+        Non-zero diagonal scale factors (one number is a uniform scale); a negative factor
+        mirrors the solid (see the module's note on winding).
     rotation : (3, 3) float64 or None
         A proper rotation matrix (``p3d_cli.rotation``).
     translation : (3,) float64 or None
@@ -69,8 +162,15 @@ class Placement:
         return place_moments(moments, self.scale, self.rotation, self.translation)
 
     def shape(self, shape):
-        """The shape after the scale (a sphere or cylinder becomes its exact generalisation)."""
-        return shape if self.scale is None else shape.scaled(self.scale)
+        """The shape after the scale (a sphere or cylinder becomes its exact generalisation; a
+        mirrored wedge or corner a ``Mirrored`` shape)."""
+        if self.scale is None:
+            return shape
+        signs = mirror_signs(self.scale)
+        scaled = shape.scaled(np.abs(self.scale))
+        if signs is None or scaled.name in MIRROR_SYMMETRIC:
+            return scaled
+        return Mirrored(scaled, signs)
 
     def shape_bounds(self, shape) -> Bounds:
         """Exact bounds of the placed shape (closed forms or vertex projection)."""
@@ -112,12 +212,17 @@ def place_moments(moments: Moments, scale=None, rotation=None, translation=None)
     ----------
     moments : Moments
     scale : (3,) array_like, optional
-        Eq. 9: exact for any diagonal scale (docs/method.md, "Scaling").
+        Eq. 9: exact for any diagonal scale (docs/method.md, "Scaling"). A mirroring scale
+        (``sx sy sz < 0``) also flips the winding back (the module's note), so an outward solid
+        keeps a positive volume.
     rotation : (3, 3) array_like, optional
     translation : (3,) array_like, optional
     """
     if scale is not None:
-        moments = scale_moments(moments, check_scale(scale))
+        s = check_scale(scale)
+        moments = scale_moments(moments, s)
+        if s[0] * s[1] * s[2] < 0:
+            moments = flip_winding(moments)
     if rotation is not None:
         moments = rotate_moments(moments, rotation)
     if translation is not None:
@@ -172,3 +277,150 @@ def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Ca
         return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
 
     return dataclasses.replace(mesh, read_blocks=blocks), bounds
+
+
+def make_placement(*, scale=None, turns=None, quat=None, rpy=None, translate=None,
+                   names: tuple[str, str, str] = ("rotate", "quat", "rpy")) -> Placement | None:
+    """The one parser of placement text: the ``Placement`` of these values, or None for none.
+
+    Parameters
+    ----------
+    scale : float or (3,) array_like, optional
+        One factor (uniform) or three; negative factors mirror.
+    turns : iterable of str, optional
+        ``AXIS:DEGREES`` turns, each after the previous about the world axes.
+    quat : str, optional
+        ``W,X,Y,Z``.
+    rpy : str, optional
+        ``R,P,Y`` radians (URDF: fixed axes x, then y, then z).
+    translate : (3,) array_like, optional
+    names : three str
+        How the caller names ``turns``, ``quat`` and ``rpy`` in the error when several are given.
+
+    Raises
+    ------
+    UsageError
+        A malformed turn, quaternion or rpy, a zero scale, or the rotation given two ways.
+    """
+    from p3d_cli.rotation import compose_rotations, parse_quaternion, parse_rpy, parse_turn
+
+    given = [n for n, v in zip(names, (turns, quat, rpy)) if v]
+    if len(given) > 1:
+        raise UsageError("/".join(given), "both given" if len(given) == 2 else "all given",
+                         f"give the rotation one way: {' or '.join(given)}")
+    rotation = None
+    if turns:
+        rotation = compose_rotations(parse_turn(t) for t in turns)
+    elif quat:
+        rotation = parse_quaternion(quat)
+    elif rpy:
+        rotation = parse_rpy(rpy)
+    if scale is None and rotation is None and translate is None:
+        return None
+    return Placement(None if scale is None else check_scale(scale), rotation, translate)
+
+
+def then(first: Placement, second: Placement) -> Placement:
+    """The placement ``second ∘ first`` (``first`` applied, then ``second``), which must again be
+    scale-rotate-translate: so ``second``'s scale must be uniform up to mirrors (``|sx| = |sy| =
+    |sz|``; a non-uniform scale after a rotation is a shear, which no diagonal scale gives).
+
+    ``R2 S2 (R1 S1 p + t1) + t2``, with ``S2 = s M`` (``M`` a reflection): ``M R1 = (M R1 M) M``
+    and ``M R1 M`` is a rotation, so this is ``R S p + t`` with ``R = R2 M R1 M``,
+    ``S = s M S1`` and ``t = R2 S2 t1 + t2``.
+
+    Raises
+    ------
+    UsageError
+        ``second``'s scale is not uniform.
+    """
+    s2 = np.ones(3) if second.scale is None else second.scale
+    if not np.all(np.abs(s2) == abs(s2[0])):
+        raise UsageError("scale", f"{tuple(s2.tolist())} is not uniform, and it would apply after "
+                         "a rotation inside (a shear)", "give one factor (a negative one mirrors)")
+    signs = np.sign(s2)
+    r1 = np.eye(3) if first.rotation is None else first.rotation
+    r2 = np.eye(3) if second.rotation is None else second.rotation
+    s1 = np.ones(3) if first.scale is None else first.scale
+    t1 = np.zeros(3) if first.translation is None else first.translation
+    t2 = np.zeros(3) if second.translation is None else second.translation
+    rotation = r2 @ (signs[:, None] * r1 * signs)
+    scale = s2 * s1
+    translation = r2 @ (s2 * t1) + t2
+    return Placement(None if np.all(scale == 1) else scale,
+                     None if np.array_equal(rotation, np.eye(3)) else rotation,
+                     None if not np.any(translation) else translation)
+
+
+#: The placement keys of a part or a body in a YAML file.
+PLACEMENT_KEYS = ("translate", "rotate", "quat", "rpy", "scale")
+
+
+def placement_from_mapping(entry: dict, where: str) -> Placement:
+    """The placement of a YAML mapping's ``translate``, ``rotate``, ``quat``, ``rpy``, ``scale``.
+
+    ``rotate`` is ``{axis: z, degrees: 30}`` (axis a name or ``[x, y, z]``), the text ``z:30``,
+    or a list of those turns (each after the previous, about the world axes); ``quat`` is
+    ``[w, x, y, z]``; ``rpy`` is ``[roll, pitch, yaw]`` in radians (URDF); ``scale`` one number
+    or three (negative mirrors); ``translate`` three numbers. The values become the text the
+    command line takes and go through ``make_placement``: one parser for every road.
+
+    Raises
+    ------
+    InputError
+        A bad value, named ``where.key``.
+    """
+    from p3d_cli.errors import InputError, P3DError
+
+    def numbers(key: str, counts: tuple[int, ...]) -> list[float] | None:
+        value = entry.get(key)
+        if value is None:
+            return None
+        items = value if isinstance(value, list) else [value]
+        if len(items) not in counts or not all(_is_number(v) and np.isfinite(v) for v in items):
+            raise InputError(f"{where}.{key}", f"expected {' or '.join(map(str, counts))} finite numbers, "
+                             f"got {value!r}", "write a list of numbers, e.g. [0, 0, 1]")
+        return [float(v) for v in items]
+
+    def text(values: list[float] | None) -> str | None:
+        return None if values is None else ",".join(repr(v) for v in values)
+
+    key = "rotate"
+    try:
+        turns = _turns(entry.get("rotate"))
+        translate, scale = numbers("translate", (3,)), numbers("scale", (1, 3))
+        quat, rpy = text(numbers("quat", (4,))), text(numbers("rpy", (3,)))
+        key = "placement"
+        placement = make_placement(scale=scale, turns=turns, quat=quat, rpy=rpy, translate=translate)
+    except InputError:
+        raise
+    except P3DError as exc:
+        named = exc.where if all(n in PLACEMENT_KEYS for n in exc.where.split("/")) else key
+        raise InputError(f"{where}.{named}", exc.what, exc.hint) from None
+    return IDENTITY if placement is None else placement
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _turns(value) -> list[str] | None:
+    """``rotate:`` values as ``AXIS:DEGREES`` text."""
+    if value is None:
+        return None
+    items = value if isinstance(value, list) and not all(_is_number(v) for v in value) else [value]
+    out = []
+    for item in items:
+        if isinstance(item, str):
+            out.append(item)
+        elif isinstance(item, dict) and set(item) == {"axis", "degrees"} and _is_number(item["degrees"]):
+            axis = item["axis"]
+            if isinstance(axis, list) and len(axis) == 3 and all(_is_number(a) for a in axis):
+                axis = ",".join(repr(float(a)) for a in axis)
+            if not isinstance(axis, str):
+                raise UsageError("rotate", f"axis {axis!r} is neither x, y, z nor three numbers",
+                                 "write {axis: z, degrees: 30}")
+            out.append(f"{axis}:{float(item['degrees'])!r}")
+        else:
+            raise UsageError("rotate", f"{item!r} is not a turn", "write {axis: z, degrees: 30} or z:30")
+    return out

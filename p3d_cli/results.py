@@ -128,6 +128,26 @@ class MassProperties:
     about: np.ndarray | None = None
     inertia_about: np.ndarray | None = None
 
+    @property
+    def principal_quaternion(self) -> np.ndarray | None:
+        """The principal frame as a unit quaternion ``[w, x, y, z]`` (``w >= 0``): the rotation
+        taking the world axes to the principal axes (its matrix has the axes as columns, so it
+        is MJCF's ``<inertial quat=...>``, and ``I = R diag(principal_moments) Rᵀ``)."""
+        if self.principal_axes is None:
+            return None
+        from p3d_cli.rotation import matrix_quaternion
+
+        return matrix_quaternion(self.principal_axes.T)
+
+    @property
+    def principal_rpy(self) -> np.ndarray | None:
+        """The same rotation as ``principal_quaternion`` as URDF roll, pitch, yaw (radians)."""
+        if self.principal_axes is None:
+            return None
+        from p3d_cli.rotation import matrix_rpy
+
+        return matrix_rpy(self.principal_axes.T)
+
 
 @dataclass(frozen=True)
 class MeshFacts:
@@ -173,7 +193,13 @@ class PropsResult:
         errors for Monte Carlo, rounding-error bounds for the exact method.
     details : dict
         How the result was made, for the record: ``samples`` and ``seed`` (Monte Carlo),
-        ``placement`` (the scale, rotation and translation applied), ``tessellate``.
+        ``placement`` (the scale, rotation and translation applied), ``tessellate``; for a part
+        of an assembly, its ``name``.
+    units : dict or None
+        The unit of every quantity (``length``, ``volume``, ``density``, ``mass``, ``inertia``):
+        SI or the output units asked for, or the mesh's own (``system: mesh``) without units.
+    parts : tuple of PropsResult
+        For an assembly, each part's result, placed in the assembly's frame (in the same units).
     """
 
     facts: MeshFacts
@@ -182,6 +208,8 @@ class PropsResult:
     warnings: tuple[str, ...] = field(default_factory=tuple)
     uncertainty: dict | None = None
     details: dict = field(default_factory=dict)
+    units: dict | None = None
+    parts: tuple["PropsResult", ...] = field(default_factory=tuple)
 
 
 @dataclass(frozen=True)

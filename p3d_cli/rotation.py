@@ -166,3 +166,93 @@ def parse_quaternion(text: str) -> np.ndarray:
     if len(values) != 4:
         raise UsageError("quat", f"{text!r} has {len(values)} numbers, not 4", hint)
     return rotation_from_quaternion(*values)
+
+
+def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """The rotation of URDF roll-pitch-yaw angles (radians), ``(3, 3) float64``.
+
+    URDF's convention (``<origin rpy="r p y"/>``): turns about the fixed world axes, first
+    ``roll`` about x, then ``pitch`` about y, then ``yaw`` about z, so ``R = Rz(y) Ry(p) Rx(r)``
+    (ROS REP 103; the same matrix as intrinsic z-y'-x'' turns by yaw, pitch, roll).
+
+    Raises
+    ------
+    UsageError
+        An angle is not finite.
+    """
+    angles = (roll, pitch, yaw)
+    if not all(math.isfinite(a) for a in angles):
+        raise UsageError("rpy", f"{angles} is not three finite angles", "give roll, pitch, yaw in radians")
+    (cr, sr), (cp, sp), (cy, sy) = ((math.cos(a), math.sin(a)) for a in angles)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    return compose_rotations((rx, ry, rz))
+
+
+def parse_rpy(text: str) -> np.ndarray:
+    """The rotation of ``R,P,Y`` text (radians, URDF convention); ``UsageError`` when malformed."""
+    hint = "write R,P,Y in radians (roll about x, then pitch about y, then yaw about z, fixed axes)"
+    try:
+        values = [float(p) for p in str(text).split(",")]
+    except ValueError:
+        raise UsageError("rpy", f"{text!r} is not three numbers", hint) from None
+    if len(values) != 3:
+        raise UsageError("rpy", f"{text!r} has {len(values)} numbers, not 3", hint)
+    return rotation_from_rpy(*values)
+
+
+def matrix_quaternion(rotation) -> np.ndarray:
+    """The unit quaternion ``[w, x, y, z]`` of a proper rotation matrix, with ``w >= 0``.
+
+    Shepperd's method (J. Guidance and Control 1(3), 1978): of ``4w², 4x², 4y², 4z²`` (each a
+    sum of diagonal entries) take the largest, whose square root is far from zero, and get
+    the other three from the off-diagonal sums and differences divided by it. This avoids
+    the cancellation of ``w = sqrt(1 + tr R) / 2`` near half turns. The inverse of
+    ``quaternion_matrix``: ``quaternion_matrix(matrix_quaternion(R)) == R`` to rounding.
+    MJCF's ``quat`` attribute takes this order (scalar first).
+
+    Parameters
+    ----------
+    rotation : (3, 3) array_like
+        A rotation (orthonormal, determinant +1).
+    """
+    r = np.asarray(rotation, dtype=np.float64).reshape(3, 3)
+    squares = np.array([1 + r[0, 0] + r[1, 1] + r[2, 2], 1 + r[0, 0] - r[1, 1] - r[2, 2],
+                        1 - r[0, 0] + r[1, 1] - r[2, 2], 1 - r[0, 0] - r[1, 1] + r[2, 2]])
+    k = int(np.argmax(squares))
+    big = 0.5 * math.sqrt(max(float(squares[k]), 0.0))
+    f = 0.25 / big
+    if k == 0:
+        q = [big, (r[2, 1] - r[1, 2]) * f, (r[0, 2] - r[2, 0]) * f, (r[1, 0] - r[0, 1]) * f]
+    elif k == 1:
+        q = [(r[2, 1] - r[1, 2]) * f, big, (r[0, 1] + r[1, 0]) * f, (r[0, 2] + r[2, 0]) * f]
+    elif k == 2:
+        q = [(r[0, 2] - r[2, 0]) * f, (r[0, 1] + r[1, 0]) * f, big, (r[1, 2] + r[2, 1]) * f]
+    else:
+        q = [(r[1, 0] - r[0, 1]) * f, (r[0, 2] + r[2, 0]) * f, (r[1, 2] + r[2, 1]) * f, big]
+    out = np.array(q)
+    out /= np.linalg.norm(out)
+    return (-out if out[0] < 0 else out) + 0.0
+
+
+def matrix_rpy(rotation) -> np.ndarray:
+    """URDF roll, pitch, yaw (radians) of a proper rotation: ``rotation_from_rpy(*rpy) == R``.
+
+    ``R = Rz(y) Ry(p) Rx(r)`` has ``R[2, 0] = -sin p``, ``R[2, 1] = cos p sin r``,
+    ``R[2, 2] = cos p cos r``, ``R[1, 0] = sin y cos p``, ``R[0, 0] = cos y cos p``; pitch is
+    taken in [-π/2, π/2]. At gimbal lock (``cos p = 0``) only ``y - r`` (or ``y + r``) is
+    determined: roll is set to 0 and yaw takes the whole turn.
+    """
+    r = np.asarray(rotation, dtype=np.float64).reshape(3, 3)
+    cos_pitch = math.hypot(r[0, 0], r[1, 0])
+    pitch = math.atan2(-r[2, 0], cos_pitch)
+    if cos_pitch > 1e-12:
+        roll = math.atan2(r[2, 1], r[2, 2])
+        yaw = math.atan2(r[1, 0], r[0, 0])
+    else:
+        # Gimbal lock: R = Rz(y) Ry(±π/2) Rx(r) depends on y ∓ r alone; with r = 0,
+        # R[0, 1] = -sin y and R[1, 1] = cos y.
+        roll = 0.0
+        yaw = math.atan2(-r[0, 1], r[1, 1])
+    return np.array([roll, pitch, yaw]) + 0.0

@@ -16,6 +16,7 @@ from p3d_cli.cli.options import (
     inputs_argument,
     json_option,
     placement_options,
+    units_options,
 )
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import UsageError
@@ -35,6 +36,7 @@ Inputs: mesh files, - for standard input, or shape specs:
   box:SX,SY,SZ                             half-extents: box:1,2,3 measures 2 x 4 x 6
   sphere:R   cylinder:R,R,H                a sphere keeps sx=sy=sz, a cylinder sx=sy
   ellipsoid:A,B,C   ecylinder:A,B,H        their exact generalisations
+  capsule:R,H                              radius R about z, H the cylinder's half-length
 A file named like a spec is reached as ./box. Directories are searched for mesh files, and
 --files-from, --jobs, --dask and --csv work as for p3d props (see docs/batch.md).
 
@@ -44,13 +46,16 @@ Examples:
   p3d bounds cylinder:1,1,2 --rotate 1,1,0:45 --translate 0,0,5 --json
   p3d bounds box:1,2,3 --quat 0.9239,0,0,0.3827
   p3d bounds exports/ --csv --jobs 4 > boxes.csv
+  p3d bounds part.stl --units mm --output-units m
+  p3d bounds assembly.yaml --json
 """)
 @inputs_argument
 @format_option
 @placement_options
+@units_options
 @json_option
 @batch_options
-def bounds(inputs, fmt, placement, tessellate, as_json, batch):
+def bounds(inputs, fmt, placement, tessellate, units, output_units, as_json, batch):
     if as_json and batch.csv:
         raise UsageError("--json/--csv", "both given", "choose one output format")
     style = "csv" if batch.csv else "json" if as_json else "table"
@@ -58,7 +63,7 @@ def bounds(inputs, fmt, placement, tessellate, as_json, batch):
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate,
-                                 format=fmt),
+                                 format=fmt, units=units, output_units=output_units),
                functools.partial(error_line, style=style))
     return run.finish()
 

@@ -68,6 +68,7 @@ FLAGS = {
     "format": "--format", "scale": "--scale", "rotate": "--rotate", "quat": "--quat",
     "translate": "--translate", "require": "--require", "files_from": "--files-from",
     "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt", "trajectory": "--trajectory",
+    "rpy": "--rpy", "units": "--units", "output_units": "--output-units",
 }
 
 

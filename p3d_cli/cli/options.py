@@ -45,6 +45,45 @@ class FiniteFloat(click.ParamType):
         return x
 
 
+class Scale(click.ParamType):
+    """``S`` (uniform) or ``SX,SY,SZ``: finite non-zero numbers (negative ones mirror)."""
+
+    name = "S|SX,SY,SZ"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        try:
+            numbers = tuple(float(p) for p in str(value).split(","))
+        except ValueError:
+            numbers = ()
+        if len(numbers) not in (1, 3) or not all(math.isfinite(x) and x != 0 for x in numbers):
+            self.fail(f"expected S or SX,SY,SZ, each finite and positive (or negative to mirror), "
+                      f"got {value!r}", param, ctx)
+        return numbers * 3 if len(numbers) == 1 else numbers
+
+
+class Quantity(click.ParamType):
+    """A positive number, bare or with a unit (``7850``, ``7.85g/cm^3``, ``2.5lb``).
+
+    A bare number becomes a float; text with a unit is handed to the library as it is, which
+    parses it (``p3d_cli.units``) only then, so the unit library is loaded only when used.
+    """
+
+    name = "NUMBER[UNIT]"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float):
+            return value
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            return str(value)
+        if not math.isfinite(x) or x <= 0:
+            self.fail(f"must be a positive finite number, got {value!r}", param, ctx)
+        return x
+
+
 VECTOR3 = Vector3()
 
 
@@ -64,10 +103,29 @@ def json_option(f):
 
 
 def density_options(f):
-    f = click.option("--mass", type=FiniteFloat(positive=True), default=None,
-                     help="Total mass; the density is derived from the volume.")(f)
-    f = click.option("--density", type=FiniteFloat(positive=True), default=None,
-                     help="Mass per unit volume (default 1, in the mesh's units).")(f)
+    f = click.option("--mass", type=Quantity(), default=None,
+                     help="Total mass, bare or with a unit (2.5kg, 2.5lb, 500g); the density is "
+                          "derived from the volume.")(f)
+    f = click.option("--density", type=Quantity(), default=None,
+                     help="Mass per unit volume (default 1), bare (in the mesh's units) or with a "
+                          "unit: 7.85g/cm^3, 7850kg/m^3, 0.284lb/in^3.")(f)
+    return f
+
+
+def units_options(f):
+    """``--units`` (the mesh's length unit) and ``--output-units``, handed on as ``units`` and
+    ``output_units``."""
+    from p3d_cli.units import LENGTHS
+
+    names = "|".join(LENGTHS)
+    f = click.option("--output-units", "output_units", default=None, metavar="LENGTH,MASS",
+                     help="Units of the results when units are given (default m,kg: SI), e.g. "
+                          "mm,g or in,lb.")(f)
+    f = click.option("--units", type=click.Choice(list(LENGTHS)), default=None, metavar=names,
+                     help=f"Length unit of the mesh and of the numbers given with it (--about, "
+                          f"--translate): {', '.join(LENGTHS)}. With units, results are in SI "
+                          f"(kg, m, kg·m²) unless --output-units says otherwise; without, in "
+                          f"the mesh's own units.")(f)
     return f
 
 
@@ -106,7 +164,7 @@ def batch_options(f):
 
 #: How --scale, --rotate/--quat and --translate combine; quoted in the commands' help.
 PLACEMENT_HELP = ("Placement order: --scale (in the solid's own frame), then the rotation "
-                  "about the world origin, then --translate.")
+                  "(--rotate, --quat or --rpy) about the world origin, then --translate.")
 
 
 def placement_options(f):
@@ -115,12 +173,12 @@ def placement_options(f):
     import functools
 
     @functools.wraps(f)
-    def command(*args, scale, turns, quat, translate, tessellate, **kwargs):
-        return f(*args, placement=make_placement(scale, turns, quat, translate),
+    def command(*args, scale, turns, quat, rpy, translate, tessellate, **kwargs):
+        return f(*args, placement=make_placement(scale, turns, quat, translate, rpy),
                  tessellate=tessellate, **kwargs)
 
     command = click.option("--tessellate", type=click.IntRange(min=3), default=None, metavar="N",
-                           help="Replace a round shape spec (sphere, cylinder, ellipsoid, ecylinder) "
+                           help="Replace a round shape spec (sphere, cylinder, ellipsoid, ecylinder, capsule) "
                                 "by an inscribed polyhedron of N segments, to see how far the "
                                 "polyhedral approximation is from the exact shape.")(command)
     command = click.option("--translate", type=VECTOR3, default=None, metavar="X,Y,Z",
@@ -128,41 +186,36 @@ def placement_options(f):
     command = click.option("--quat", default=None, metavar="W,X,Y,Z",
                            help="Rotate by the quaternion W + Xi + Yj + Zk (scalar first), "
                                 "normalised for you; q and -q give the same rotation; a leading "
-                                "minus is fine (--quat -0.7,0.1,0.7,0). Not with --rotate.")(command)
+                                "minus is fine (--quat -0.7,0.1,0.7,0). Not with --rotate or --rpy.")(command)
+    command = click.option("--rpy", default=None, metavar="R,P,Y",
+                           help="Rotate by roll-pitch-yaw angles in radians, URDF's convention: "
+                                "about the fixed axes, first R about x, then P about y, then Y "
+                                "about z (R = Rz Ry Rx). Not with --rotate or --quat.")(command)
     command = click.option("--rotate", "turns", multiple=True, metavar="AXIS:DEGREES",
                            help="Turn by DEGREES about AXIS (x, y, z or a vector such as 1,1,0) "
                                 "through the world origin, right-hand rule. Repeatable: each turn "
                                 "is applied after the previous one about the fixed world axes "
                                 "(R = Rn...R2 R1).")(command)
-    command = click.option("--scale", type=VECTOR3, default=None, metavar="SX,SY,SZ",
-                           help="Scale the solid by SX,SY,SZ > 0 along its own axes, about the "
-                                "origin (applied first; mass properties by eq. 9 of the "
-                                "Physics3D note, exact for any diagonal scale). A sphere or "
-                                "cylinder scaled unevenly becomes the ellipsoid or elliptic "
-                                "cylinder.")(command)
+    command = click.option("--scale", type=Scale(), default=None, metavar="S|SX,SY,SZ",
+                           help="Scale the solid by S (uniform) or SX,SY,SZ along its own axes, "
+                                "about the origin (applied first; mass properties by eq. 9 of the "
+                                "Physics3D note, exact for any diagonal scale). A negative factor "
+                                "mirrors the solid (its winding is flipped so the mirror has a "
+                                "positive volume). A sphere or cylinder scaled unevenly becomes "
+                                "the ellipsoid or elliptic cylinder. For unit conversion use "
+                                "--units.")(command)
     return command
 
 
-def make_placement(scale, turns, quat, translate):
+def make_placement(scale, turns, quat, translate, rpy=None):
     """The ``Placement`` of the placement options, or None when none was given.
 
     Raises
     ------
     UsageError
-        A malformed turn or quaternion, a non-positive scale, or --rotate with --quat.
+        A malformed turn, quaternion or rpy, a zero scale, or two ways of giving the rotation.
     """
-    from p3d_cli.errors import UsageError
-    from p3d_cli.placement import Placement
-    from p3d_cli.rotation import compose_rotations, parse_quaternion, parse_turn
+    from p3d_cli.placement import make_placement as placement
 
-    if turns and quat is not None:
-        raise UsageError("--rotate/--quat", "both given",
-                         "give the rotation one way: --rotate turns, or one --quat")
-    rotation = None
-    if turns:
-        rotation = compose_rotations(parse_turn(t) for t in turns)
-    elif quat is not None:
-        rotation = parse_quaternion(quat)
-    if scale is None and rotation is None and translate is None:
-        return None
-    return Placement(scale, rotation, translate)
+    return placement(scale=scale, turns=turns or None, quat=quat, rpy=rpy, translate=translate,
+                     names=("--rotate", "--quat", "--rpy"))

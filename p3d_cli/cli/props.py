@@ -19,6 +19,7 @@ from p3d_cli.cli.options import (
     json_option,
     placement_options,
     strict_option,
+    units_options,
 )
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
@@ -47,9 +48,13 @@ from p3d_cli.results import PropsResult
 @click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
               help="Monte Carlo: pick the sample count for this relative standard error of the volume.")
 @placement_options
+@units_options
+@click.option("--combine", is_flag=True,
+              help="Measure the inputs as one assembly (one placement and density for all; "
+                   "--mass is the whole's): each part and the whole, as for an assembly file.")
 @batch_options
 def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch,
-          placement, tessellate):
+          placement, tessellate, units, output_units, combine):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -68,28 +73,56 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
       p3d props part.stl --method montecarlo --samples 1000000 --seed 7 --json
       p3d props box:1,2,3 --rotate z:30 --translate 0,0,5 --density 7850
       p3d props sphere:2 --tessellate 64
+      p3d props part.stl --units mm --density 7.85g/cm^3
+      p3d props assembly.yaml --json
+      p3d props a.stl b.stl --combine --units mm --density 2.7g/cm^3
 
     Shape specs (box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder; see p3d bounds
     --help) give exact closed forms. --scale, --rotate/--quat and --translate place the solid
     (scale first, then rotation about the world origin, then translation); the centre of mass
     and inertia reported are the placed solid's (I' = R I Rᵀ).
+
+    Units (docs/units.md): --units names the mesh's length unit; densities and masses may
+    carry units (7.85g/cm^3, 7850kg/m^3, 0.284lb/in^3, 2.5kg, 2.5lb, 500g); results are then
+    in SI (or --output-units) and every output says its units. An assembly file (YAML with
+    parts:, docs/assemblies.md) is measured part by part and as a whole.
     """
     if batch.csv and (as_json or fields):
         raise UsageError("--csv", "given with --json or --field", "choose one output format")
     style = "csv" if batch.csv else "fields" if fields else "json" if as_json else "table"
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
-                   tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt)
+                   tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
+                   units=units, output_units=output_units)
     measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
     work = functools.partial(props_report, style=style, fields=fields, strict=strict, **options)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
+    if combine:
+        return combined(run, work)
     run.report(work, functools.partial(error_line, style=style))
     status = run.finish("with warnings (--strict)")
     if run.failed and not run.errors:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
     return status
+
+
+def combined(run: Batch, work) -> int:
+    """``--combine``: the inputs as one assembly, one report (an unreadable input ends it)."""
+    from p3d_cli.assembly import combine
+
+    bad = [item for item in run.items if not isinstance(item, str)]
+    if bad:
+        raise bad[0]
+    report = work(combine(run.items, "combined"))
+    for line in report.notes:
+        click.echo(line, err=True)
+    click.echo(report.text)
+    if not report.passed:
+        raise CheckFailedError("--strict", "some result carries a warning (see above)",
+                               "fix the mesh, or drop --strict to accept it")
+    return 0
 
 
 def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **options) -> Report:
@@ -108,7 +141,8 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **op
     else:
         record = props_record(result)
         if style == "csv":
-            text = output.csv_line(props_row(record))
+            rows = [{**part, "source": f"{record['source']}#{part['name']}"} for part in record.get("parts", ())]
+            text = "\n".join(output.csv_line(props_row(row)) for row in rows + [record])
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
@@ -152,6 +186,8 @@ def props_record(result: PropsResult) -> dict:
         "inertia_origin": p.inertia_origin,
         "principal_moments": p.principal_moments,
         "principal_axes": p.principal_axes,
+        "principal_quaternion": p.principal_quaternion,
+        "principal_rpy": p.principal_rpy,
         "second_moments": p.second_moments,
         "bounds": None if f.bounds is None else {"min": f.bounds.min, "max": f.bounds.max},
         "coordinate_dtype": f.coordinate_dtype,
@@ -163,15 +199,30 @@ def props_record(result: PropsResult) -> dict:
         record["about"] = p.about
         record["inertia_about"] = p.inertia_about
     record.update(result.details)
+    record["units"] = result.units
+    if result.parts:
+        record["parts"] = [props_record(part) for part in result.parts]
     return record
 
 
+def units_line(units: dict | None) -> str:
+    """The table's statement of units."""
+    if not units or units.get("system") == "mesh":
+        return "  units             the mesh's own (no units given)"
+    return (f"  units             length {units['length']}, mass {units['mass']}, inertia {units['inertia']} "
+            f"(mesh in {units['mesh_length']})")
+
+
 def props_table(result: PropsResult) -> str:
-    """A readable block for one input."""
+    """A readable block for one input (for an assembly: each part's block, then the whole)."""
+    blocks = [props_table(part) for part in result.parts]
     p, f = result.properties, result.facts
     closed = {True: "yes", False: "NO", None: "n/a"}[f.closed]
+    name = f"part {result.details['name']}: " if "name" in result.details else ""
+    whole = "whole " if result.parts else ""
     lines = [
-        f"{f.source}  ({f.format}, {f.faces} faces, closed: {closed}, method: {result.method})",
+        f"{whole}{name}{f.source}  ({f.format}, {f.faces} faces, closed: {closed}, method: {result.method})",
+        units_line(result.units),
         f"  volume            {output.number(p.volume)}",
         f"  density           {output.number(p.density)}",
         f"  mass              {output.number(p.mass)}",
@@ -193,7 +244,7 @@ def props_table(result: PropsResult) -> str:
     if f.bounds is not None:
         lines.append(f"  bounds min        {output.vector(f.bounds.min)}")
         lines.append(f"  bounds max        {output.vector(f.bounds.max)}")
-    return "\n".join(lines)
+    return "\n".join(blocks + lines)
 
 
 #: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention.

@@ -3,6 +3,7 @@
 A spec names a shape where a mesh path would go: ``NAME`` (unit scale) or
 ``NAME:SX,SY,SZ`` with the Physics3D note's scale factors, the half-extents of the canonical
 solid in [-1, 1]³ (docs/method.md, "Scale factors"): ``box:1,2,3`` measures 2 × 4 × 6. ``sphere:R`` gives a radius.
+``capsule:R,H`` is the exception: a radius and the half-length of its cylindrical part.
 
 The note's scale rules keep circles circular: a sphere needs sx = sy = sz and a cylinder
 (axis z) sx = sy. Breaking them is refused, naming the rule and the exact generalisation p3d
@@ -22,6 +23,7 @@ from typing import Union
 
 from p3d_cli.errors import SpecError
 from p3d_cli.shapes.box import Box
+from p3d_cli.shapes.capsule import Capsule
 from p3d_cli.shapes.corner import Corner
 from p3d_cli.shapes.cylinder import Cylinder
 from p3d_cli.shapes.ellipsoid import Ellipsoid
@@ -29,7 +31,7 @@ from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
 from p3d_cli.shapes.sphere import Sphere
 from p3d_cli.shapes.wedge import Wedge
 
-Shape = Union[Box, Wedge, Corner, Cylinder, Sphere, Ellipsoid, EllipticCylinder]
+Shape = Union[Box, Wedge, Corner, Cylinder, Sphere, Ellipsoid, EllipticCylinder, Capsule]
 
 #: Spec name -> shape class.
 SHAPES: dict[str, type[Shape]] = {
@@ -40,6 +42,7 @@ SHAPES: dict[str, type[Shape]] = {
     "sphere": Sphere,
     "ellipsoid": Ellipsoid,
     "ecylinder": EllipticCylinder,
+    "capsule": Capsule,
 }
 
 #: The written form of each spec, for messages and help.
@@ -51,6 +54,7 @@ FORMS = {
     "sphere": "sphere, sphere:R or sphere:R,R,R",
     "ellipsoid": "ellipsoid or ellipsoid:A,B,C (semi-axes)",
     "ecylinder": "ecylinder or ecylinder:A,B,H (semi-axes A, B about z, half-height H)",
+    "capsule": "capsule or capsule:R,H (radius R about z, H the half-length of the cylindrical part)",
 }
 
 _SPEC = re.compile(r"^([A-Za-z]+)(?::(.*))?$")
@@ -113,7 +117,8 @@ def parse_shape(text: str) -> Shape:
 
 
 def _numbers(text: str, name: str, body: str) -> list[float]:
-    hint = f"write {FORMS[name]}; factors are half-extents of the canonical [-1, 1]³ shape"
+    hint = f"write {FORMS[name]}" + ("" if name == "capsule" else
+                                      "; factors are half-extents of the canonical [-1, 1]³ shape")
     values = []
     for part in body.split(","):
         try:
@@ -127,9 +132,10 @@ def _numbers(text: str, name: str, body: str) -> list[float]:
                             "give the size in a smaller unit, above 1e-300")
         if value <= 0:
             raise SpecError(text, f"scale factor {part.strip()} is not positive",
-                            "scale factors are half-extents and must be > 0 (p3d does not mirror)")
+                            "scale factors are half-extents and must be > 0 "
+                            "(to mirror, place the shape with a negative scale)")
         values.append(value)
-    counts = (1, 3) if name == "sphere" else (3,)
+    counts = {"sphere": (1, 3), "capsule": (2,)}.get(name, (3,))
     if len(values) not in counts:
         got = f"{len(values)} number{'s' if len(values) != 1 else ''}"
         raise SpecError(text, f"{name} takes {' or '.join(map(str, counts))} numbers, got {got}", hint)
@@ -149,7 +155,9 @@ def _build(text: str, name: str, f: list[float]) -> Shape:
             raise SpecError(text, "a cylinder (axis z) keeps sx = sy (circles stay circles)",
                             f"write cylinder:R,R,H, or ecylinder:{_join(f)} for the elliptic cylinder")
         return Cylinder(f[0], f[2])
-    return SHAPES[name](*f)
+    if name == "capsule":
+        return Capsule(f[0], f[1])
+    return SHAPES[name](*f)  # type: ignore[arg-type]  # the three-factor classes
 
 
 def _join(values) -> str:
@@ -157,4 +165,4 @@ def _join(values) -> str:
 
 
 __all__ = ["SHAPES", "FORMS", "Shape", "parse_shape", "parse_spec", "looks_like_spec", "Box", "Wedge", "Corner",
-           "Cylinder", "Sphere", "Ellipsoid", "EllipticCylinder"]
+           "Cylinder", "Sphere", "Ellipsoid", "EllipticCylinder", "Capsule"]

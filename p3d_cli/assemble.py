@@ -1,0 +1,175 @@
+"""Measuring an assembly (``p3d_cli.assembly``): every part placed in one frame, then the whole.
+
+Units: an assembly's ``units`` (or the caller's, for a file that names none) is the length
+unit of its meshes and translations; a nested file without ``units`` inherits its parent's.
+Every placement is carried into the output units by conjugating with the length factor ``f``
+of the file it is written in (a uniform scale commutes with rotations and scales, so only the
+translation changes: ``t -> f t``), and each leaf's mesh coordinates are scaled by ``f`` first.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Iterator
+
+import numpy as np
+
+from p3d_cli.assembly import Assembly, Part
+from p3d_cli.errors import InputError, P3DError, UsageError
+from p3d_cli.placement import Placement, then
+from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
+from p3d_cli.units import LENGTHS, UnitSystem, parse_output_units
+
+
+def _system(assembly: Assembly, units: str | None, output_units: str | None) -> UnitSystem | None:
+    if assembly.units is not None and units is not None and units != assembly.units:
+        raise UsageError("units", f"{units} given, but {assembly.source} says units: {assembly.units}",
+                         "drop units=, or make them agree")
+    top = assembly.units or units
+    if top is None:
+        if output_units is not None:
+            raise UsageError("output_units", "given without units=", "say the assembly's length unit first")
+        return None
+    length, mass = parse_output_units(output_units)
+    return UnitSystem(top, length, mass)
+
+
+def _in_output(placement: Placement, factor: float) -> Placement:
+    """A placement written in a file's unit, carried into the output unit (``t -> f t``)."""
+    if placement.translation is None or factor == 1.0:
+        return placement
+    return Placement(placement.scale, placement.rotation, placement.translation * factor)
+
+
+def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
+           units: str | None = None, path: str = "") -> Iterator[tuple[Part, Placement, str | None, str]]:
+    """Every mesh or shape part, with its whole placement in the output frame, its file's unit
+    and its name path (``bracket/clip`` for a part of a nested assembly)."""
+    units = assembly.units or units
+    factor = 1.0 if system is None or units is None else LENGTHS[units] / LENGTHS[system.length]
+    if system is None and assembly.units is not None:
+        raise InputError(f"{assembly.source}: units", "a nested assembly has units, its parent none",
+                         "give the top assembly its units: too")
+    for part in assembly.parts:
+        name = f"{path}{part.name}"
+        own = _in_output(part.placement, factor)
+        try:
+            if isinstance(part.thing, Assembly):
+                yield from leaves(part.thing, then(own, outer), system, units, name + "/")
+                continue
+            scale = np.full(3, factor) if own.scale is None else own.scale * factor
+            total = then(Placement(None if np.all(scale == 1) else scale, own.rotation, own.translation), outer)
+        except InputError:
+            raise
+        except P3DError as exc:
+            raise InputError(f"{part.where}.{exc.where}", exc.what, exc.hint) from None
+        yield part, total, units, name
+
+
+def _amounts(part: Part, units, system: UnitSystem | None, density, mass):
+    from p3d_cli.units import resolve
+
+    if part.density is not None or part.mass is not None:
+        density, mass = part.density, part.mass
+    output = None if system is None else f"{system.length},{system.mass}"
+    try:
+        _, density, mass = resolve(units, output, density, mass)
+    except P3DError as exc:
+        raise InputError(f"{part.where}.{exc.where}", exc.what, exc.hint) from None
+    return density, mass
+
+
+def assembly_props(assembly: Assembly, placement: Placement, *, units=None, output_units=None, density=None,
+                   mass=None, about=None, method="exact", tessellate=None, samples=None, seed=None,
+                   tolerance=None) -> PropsResult:
+    """The whole assembly's ``PropsResult``, with each part's in ``parts``.
+
+    ``density`` is the default of parts that give neither density nor mass; ``mass`` the
+    whole's (for parts that give neither: the density follows from their total volume).
+
+    Raises
+    ------
+    InputError, UsageError
+    """
+    from p3d_cli.inertia import combine_mass_properties, implausibilities
+    from p3d_cli.single import finish, measure_solid
+    from p3d_cli.solid import as_solid
+
+    system = _system(assembly, units, output_units)
+    factor = 1.0 if system is None else system.factor
+    outer = _in_output(placement, factor)
+    about_out = None if about is None else np.asarray(about, dtype=np.float64) * factor
+    whole_mass = mass
+    if whole_mass is not None and density is not None:
+        raise UsageError("mass, density", "both given; they are exclusive", "give one")
+    results = []
+    top = None if system is None else system.mesh_length
+    for part, total, part_units, name in leaves(assembly, outer, system, top):
+        if whole_mass is not None and (part.density is not None or part.mass is not None):
+            raise InputError(f"{part.where}", "gives its own density or mass, and the whole's mass is given",
+                             "drop mass=, or the parts' own")
+        d, m = _amounts(part, part_units, system, density, None)
+        solid = as_solid(part.thing)
+        shape_only = tessellate if solid.shape is not None else None
+        result = measure_solid(solid, total, method=method, density=d, mass=m, about=about_out,
+                               tessellate=shape_only, samples=samples, seed=seed, tolerance=tolerance)
+        result = finish(result, system, total, density_given=d is not None)
+        results.append(replace(result, details={"name": name, **result.details}))
+    if whole_mass is not None:
+        _, target = _amounts(Part("", "", where=assembly.source), assembly.units or units, system, None,
+                                whole_mass)
+        k = target / sum(r.properties.mass for r in results)
+        results = [replace(r, properties=_rescaled(r.properties, k), uncertainty=None) for r in results]
+    props = combine_mass_properties([r.properties for r in results], about_out)
+    facts = MeshFacts(assembly.source, "assembly", sum(r.facts.faces for r in results), _closed(results),
+                      _union([r.facts.bounds for r in results]))
+    warnings = [f"{r.details['name']}: {w}" for r in results for w in r.warnings]
+    if not warnings:
+        warnings += implausibilities(props, facts.bounds, method)
+    units_record = results[0].units
+    details = {} if placement.is_identity else {"placement": placement.describe()}
+    return PropsResult(facts, props, method, tuple(warnings), None, details, units_record, tuple(results))
+
+
+def _rescaled(p: MassProperties, k: float) -> MassProperties:
+    """``p`` with its density (so mass and every moment of mass) multiplied by ``k``."""
+    times = lambda a: None if a is None else a * k
+    return replace(p, density=p.density * k, mass=p.mass * k, inertia=times(p.inertia),
+                   inertia_origin=times(p.inertia_origin), principal_moments=times(p.principal_moments),
+                   second_moments=times(p.second_moments), inertia_about=times(p.inertia_about))
+
+
+def _closed(results) -> bool | None:
+    flags = [r.facts.closed for r in results]
+    if any(f is False for f in flags):
+        return False
+    return True if all(f is True for f in flags) else None
+
+
+def _union(boxes):
+    boxes = [b for b in boxes if b is not None]
+    if not boxes:
+        return None
+    out = boxes[0]
+    for b in boxes[1:]:
+        out = out.union(b)
+    return out
+
+
+def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, output_units=None,
+                    tessellate=None) -> BoundsResult:
+    """The exact bounds of every placed part, and their union."""
+    from p3d_cli.single import solid_bounds
+    from p3d_cli.solid import as_solid
+
+    system = _system(assembly, units, output_units)
+    outer = _in_output(placement, 1.0 if system is None else system.factor)
+    found = []
+    for part, total, _, name in leaves(assembly, outer, system, None if system is None else system.mesh_length):
+        solid = as_solid(part.thing)
+        result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
+        found.append(replace(result, warnings=tuple(f"{name}: {w}" for w in result.warnings)))
+    methods = {r.method for r in found}
+    return BoundsResult(assembly.source, "assembly", methods.pop() if len(methods) == 1 else "mixed",
+                        _union([r.bounds for r in found]), sum(r.faces for r in found),
+                        tuple(w for r in found for w in r.warnings))

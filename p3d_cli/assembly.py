@@ -1,0 +1,181 @@
+"""Assemblies: several parts, each placed and of its own material, measured as one whole.
+
+An assembly file is YAML recognised by its content (a top-level ``parts:`` list)::
+
+    units: mm                       # optional: the length unit of meshes and translations
+    parts:
+      - name: base
+        mesh: base.stl              # relative to this file
+        density: 7.85 g/cm^3
+      - name: arm
+        shape: box:10,20,30
+        mass: 0.5 kg
+        translate: [0, 0, 100]
+        rotate: {axis: z, degrees: 30}   # or quat: [w, x, y, z], or rpy: [r, p, y] (radians)
+        scale: [1, -1, 1]                # negative: mirrored
+      - name: bracket
+        assembly: bracket.yaml           # nested
+
+Each part is measured exactly as a single input is (``p3d_cli.measure``), placed in the
+assembly's frame, and the parts are summed: masses and volumes add, the centre of mass is
+the mass-weighted mean, and second moments about it add with the parallel-axis terms
+(``p3d_cli.inertia.combine_mass_properties``). Placement keys are read by the one placement
+parser (``p3d_cli.placement.placement_from_mapping``), as for scenes and the command line.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from p3d_cli.errors import InputError, P3DError, UsageError
+from p3d_cli.placement import IDENTITY, Placement, placement_from_mapping
+
+#: Keys of one part.
+PART_KEYS = ("name", "mesh", "shape", "assembly", "density", "mass", "translate", "rotate", "quat", "rpy",
+             "scale")
+#: What a part is made of: exactly one of these.
+KINDS = ("mesh", "shape", "assembly")
+_PARTS_LINE = re.compile(rb"^parts\s*:", re.MULTILINE)
+
+
+@dataclass(frozen=True)
+class Part:
+    """One part: what it is, where it goes, what it is made of.
+
+    Attributes
+    ----------
+    name : str
+    thing : str or Assembly
+        A mesh path (already joined to the assembly file's folder), a shape spec, an ``Assembly``.
+    placement : Placement
+        In the assembly's length unit.
+    density, mass : float or str or None
+        Bare numbers or text with a unit; at most one.
+    where : str
+        ``assembly.yaml: parts[1]``, for messages.
+    """
+
+    name: str
+    thing: Any
+    placement: Placement = IDENTITY
+    density: float | str | None = None
+    mass: float | str | None = None
+    where: str = ""
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Parts in one frame. ``units``: the length unit of its meshes and translations."""
+
+    source: str
+    parts: tuple[Part, ...] = field(default_factory=tuple)
+    units: str | None = None
+
+
+def combine(inputs, source: str = "<combined>") -> Assembly:
+    """An assembly of the inputs as they are (``p3d props a.stl b.stl --combine``)."""
+    return Assembly(source, tuple(Part(str(x), x, where=f"{source}: {x}") for x in inputs))
+
+
+def find_assembly(thing) -> Assembly | None:
+    """``thing`` as an assembly: an ``Assembly``, or a path to a file that is one; else None."""
+    if isinstance(thing, Assembly):
+        return thing
+    if isinstance(thing, os.PathLike):
+        thing = os.fspath(thing)
+    if not isinstance(thing, str) or thing == "-" or not os.path.isfile(thing):
+        return None
+    try:
+        with open(thing, "rb") as f:
+            head = f.read(1 << 14)
+    except OSError:
+        return None
+    if b"\0" in head or not _PARTS_LINE.search(head):
+        return None
+    return load_assembly(thing)
+
+
+def load_assembly(path: str, _seen: tuple[str, ...] = ()) -> Assembly:
+    """Read and check an assembly file (nested files too).
+
+    Raises
+    ------
+    InputError
+        Not valid YAML, not an assembly, a bad part (``path: parts[i].key: ...``), a cycle.
+    """
+    import yaml
+
+    real = os.path.realpath(path)
+    if real in _seen:
+        raise InputError(path, "includes itself (through nested assemblies)", "remove the cycle")
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = yaml.safe_load(f)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path, f"cannot be read ({exc})", "check the path") from None
+    except yaml.YAMLError as exc:
+        raise InputError(path, f"is not valid YAML ({str(exc).splitlines()[0]})", "fix the file") from None
+    if not isinstance(data, dict) or not isinstance(data.get("parts"), list) or not data["parts"]:
+        raise InputError(path, "is not an assembly (no list of parts)", "write parts: with one entry per part")
+    unknown = [k for k in data if k not in ("units", "parts", "name")]
+    if unknown:
+        raise InputError(f"{path}: {unknown[0]}", "unknown key", "an assembly has units: and parts:")
+    units = data.get("units")
+    if units is not None:
+        from p3d_cli.units import check_length
+
+        try:
+            check_length(str(units))
+        except UsageError as exc:
+            raise InputError(f"{path}: units", exc.what, exc.hint) from None
+        units = str(units)
+    folder = os.path.dirname(path)
+    parts = tuple(_part(entry, f"{path}: parts[{i}]", folder, _seen + (real,)) for i, entry in enumerate(data["parts"]))
+    return Assembly(path, parts, units)
+
+
+def _part(entry, where: str, folder: str, seen: tuple[str, ...]) -> Part:
+    if not isinstance(entry, dict):
+        raise InputError(where, "is not a mapping", "write each part as keys: name, mesh or shape, placement")
+    for key in entry:
+        if key not in PART_KEYS:
+            raise InputError(f"{where}.{key}", "unknown key", "part keys are: " + ", ".join(PART_KEYS))
+    kinds = [k for k in KINDS if k in entry]
+    if len(kinds) != 1:
+        raise InputError(where, "needs exactly one of mesh:, shape:, assembly:" + (f" (has {', '.join(kinds)})"
+                                                                                  if kinds else ""),
+                         "say what the part is")
+    kind = kinds[0]
+    value = entry[kind]
+    if not isinstance(value, str) or not value.strip():
+        raise InputError(f"{where}.{kind}", "is not text", "write a path (relative to this file) or a spec")
+    thing: Any = value
+    if kind == "shape":
+        from p3d_cli.shapes import parse_shape
+
+        try:
+            parse_shape(value)
+        except P3DError as exc:
+            raise InputError(f"{where}.shape", exc.what, exc.hint) from None
+    else:
+        path = value if os.path.isabs(value) else os.path.join(folder, value)
+        if not os.path.isfile(path):
+            raise InputError(f"{where}.{kind}", f"no such file {path}", "paths are relative to the assembly file")
+        thing = load_assembly(path, seen) if kind == "assembly" else path
+    name = entry.get("name", os.path.basename(value) if kind != "shape" else value)
+    if not isinstance(name, (str, int)) or isinstance(name, bool):
+        raise InputError(f"{where}.name", "is not text", "write a name such as base")
+    amounts = {}
+    for key in ("density", "mass"):
+        if key in entry:
+            v = entry[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+                raise InputError(f"{where}.{key}", "is not a number or a quantity", "write e.g. 7850 kg/m^3")
+            amounts[key] = v if isinstance(v, str) else float(v)
+    if len(amounts) == 2:
+        raise InputError(f"{where}.mass", "given with density:", "give one: the other follows from the volume")
+    placement = placement_from_mapping(entry, where)
+    return Part(str(name), thing, placement, amounts.get("density"), amounts.get("mass"), where)

@@ -1,0 +1,84 @@
+"""One resolved solid measured: the step that single inputs and every part of an assembly share.
+
+``p3d_cli.measure`` resolves what the user gave (units, assemblies) and calls these;
+``p3d_cli.assemble`` calls them once per part.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Iterable
+
+import numpy as np
+
+from p3d_cli.errors import InputError
+from p3d_cli.placement import Placement
+from p3d_cli.results import BoundsResult, PropsResult
+from p3d_cli.solid import Solid
+
+
+def measure_solid(solid: Solid, placement: Placement, *, method: str, density, mass, about, tessellate,
+                  samples, seed, tolerance) -> PropsResult:
+    """``solid``'s result by ``method``, everything already in the units of the result."""
+    if method == "montecarlo":
+        from p3d_cli.montecarlo import montecarlo_props
+
+        return montecarlo_props(solid, placement, samples=samples, seed=seed, tolerance=tolerance,
+                                density=density, mass=mass, about=about)
+    from p3d_cli.exact import exact_props
+
+    return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about)
+
+
+def finish(result: PropsResult, system, user_placement: Placement, density_given: bool = False) -> PropsResult:
+    """Say the units, keep the user's placement in the record, add the plausibility warnings
+    (``density_given``: the density was the user's, so the unit-slip warning applies)."""
+    from p3d_cli.inertia import implausibilities
+    from p3d_cli.units import MESH_UNITS, slip_warning
+
+    details = dict(result.details)
+    details.pop("placement", None)
+    if not user_placement.is_identity:
+        details["placement"] = user_placement.describe()
+    warnings = list(result.warnings)
+    if not warnings:
+        warnings += implausibilities(result.properties, result.facts.bounds, result.method)
+    if system is None and density_given and result.facts.bounds is not None:
+        slip = slip_warning(float(result.facts.bounds.size.max()), result.properties.density)
+        if slip is not None:
+            warnings.append(slip)
+    return dataclasses.replace(result, details=details, warnings=tuple(warnings),
+                               units=MESH_UNITS if system is None else system.describe())
+
+
+def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = None) -> BoundsResult:
+    """Exact bounds of ``solid`` after ``placement`` (closed forms or vertex projection)."""
+    if solid.shape is not None:
+        if tessellate is not None:
+            from p3d_cli.exact import shape_triangles
+
+            triangles = shape_triangles(solid.shape, tessellate)
+            return BoundsResult(solid.source, "tessellated", "vertices", placement.triangles_bounds(triangles),
+                                len(triangles), solid.warnings)
+        method = "vertices" if solid.shape.polyhedral else "closed form"
+        return BoundsResult(solid.source, "primitive", method, placement.shape_bounds(solid.shape), 0,
+                            solid.warnings)
+    from p3d_cli.exact import refuse_tessellate
+
+    refuse_tessellate(solid, tessellate)
+    return _mesh_bounds(solid, placement)
+
+
+def _mesh_bounds(solid: Solid, placement: Placement) -> BoundsResult:
+    mesh = solid.mesh
+    if mesh.tetrahedra is not None:
+        blocks: Iterable = (np.asarray(mesh.tetrahedra),)
+    else:
+        blocks = mesh.finite_blocks()
+    try:
+        box = placement.triangles_bounds(blocks)
+    except ValueError:
+        raise InputError(mesh.where, "the mesh has no faces", "export it again with its faces") from None
+    return BoundsResult(solid.source, mesh.format, "vertices", box, mesh.face_count, tuple(mesh.warnings))
+
+

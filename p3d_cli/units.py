@@ -1,0 +1,234 @@
+"""Units: the mesh's length unit, densities and masses with units, and the units of results.
+
+A mesh file carries no unit. ``units="mm"`` says what its numbers (and the numbers given with
+it: ``about``, ``translate``) are; a density or mass may carry its own unit (``"7.85 g/cm^3"``,
+``"7850 kg/m^3"``, ``"2.5 lb"``). Given units, results are in SI (m, kg, kg·m²) unless
+``output_units`` asks for others (``"mm,g"``). Without units nothing is converted: the numbers
+are in the mesh's own units, and the density's (as before units existed).
+
+Conversion is exact in the maths: a length factor ``f`` from the mesh unit to the output unit is
+a uniform scale applied after the user's placement (eq. 9: ``V' = f³ V``, ``C' = f⁵ C``), and
+the density is converted to output mass per output length cubed, so no result is converted
+after the fact. Density and mass text is parsed by pint (https://pint.readthedocs.io: the
+maintained reference units library, with the inch, pound and their kin defined exactly), which
+is imported only when a unit is written: a bare number costs nothing.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import Any
+
+from p3d_cli.errors import UsageError
+
+#: Length units of ``units`` and ``output_units``, in metres (the inch and foot are exact by
+#: the 1959 international yard and pound agreement).
+LENGTHS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
+
+#: Mass units of ``output_units``, in kilograms (the pound exactly 0.45359237 kg).
+MASSES = {"g": 1e-3, "kg": 1.0, "lb": 0.45359237}
+
+#: Unit strings the command-line help shows; every one is checked to parse (tests/test_units.py).
+EXAMPLES = ("7.85g/cm^3", "7850kg/m^3", "0.284lb/in^3", "2.5kg", "2.5lb", "500g")
+
+#: The ``units`` record of a result measured without units.
+MESH_UNITS = {"system": "mesh", "length": "mesh unit", "volume": "mesh unit^3",
+              "density": "as given (default 1)", "mass": "density * volume",
+              "inertia": "mass * mesh unit^2"}
+
+
+@dataclass(frozen=True)
+class UnitSystem:
+    """How one measurement converts: the mesh's length unit and the output units.
+
+    Attributes
+    ----------
+    mesh_length : str
+        The unit of the mesh's coordinates (a key of ``LENGTHS``).
+    length, mass : str
+        Units of the results (keys of ``LENGTHS`` and ``MASSES``).
+    density, mass_value : float or None
+        The density (output mass per output length cubed) or the total mass (output mass unit),
+        whichever was given.
+    """
+
+    mesh_length: str
+    length: str
+    mass: str
+    density: float | None = None
+    mass_value: float | None = None
+
+    @property
+    def factor(self) -> float:
+        """Mesh length unit -> output length unit."""
+        return LENGTHS[self.mesh_length] / LENGTHS[self.length]
+
+    def describe(self) -> dict:
+        """The ``units`` record of a result: the unit of every quantity."""
+        L, M = self.length, self.mass
+        return {"system": "SI" if (L, M) == ("m", "kg") else "converted", "length": L,
+                "volume": f"{L}^3", "density": f"{M}/{L}^3", "mass": M, "inertia": f"{M}*{L}^2",
+                "mesh_length": self.mesh_length}
+
+
+def parse_output_units(text: str | None) -> tuple[str, str]:
+    """``"mm,g"`` -> ``("mm", "g")``; ``"mm"`` -> ``("mm", "kg")``; None -> SI ``("m", "kg")``.
+
+    Raises
+    ------
+    UsageError
+        Not a length and a mass unit of the tables.
+    """
+    if text is None:
+        return "m", "kg"
+    hint = f"write LENGTH,MASS with LENGTH one of {', '.join(LENGTHS)} and MASS one of {', '.join(MASSES)}"
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) == 1:
+        parts.append("kg")
+    if len(parts) != 2 or parts[0] not in LENGTHS or parts[1] not in MASSES:
+        raise UsageError("output_units", f"{text!r} is not a length and a mass unit", hint)
+    return parts[0], parts[1]
+
+
+def check_length(unit: str, name: str = "units") -> str:
+    """``unit`` if it is a length unit of ``LENGTHS``, else ``UsageError`` naming ``name``."""
+    if unit not in LENGTHS:
+        raise UsageError(name, f"unknown length unit {unit!r}", "use one of " + ", ".join(LENGTHS))
+    return unit
+
+
+@functools.lru_cache(maxsize=1)
+def _registry():
+    import pint
+
+    try:
+        # Pint's own cache of its parsed definition files (in the user's cache directory)
+        # makes the registry three times quicker to build; without it pint still works.
+        return pint.UnitRegistry(cache_folder=":auto:")
+    except Exception:  # noqa: BLE001 - an unwritable cache must not stop a measurement
+        return pint.UnitRegistry()
+
+
+def has_unit(value: Any) -> bool:
+    """True for text that is not a bare number (so carries a unit)."""
+    if not isinstance(value, str):
+        return False
+    try:
+        float(value)
+    except ValueError:
+        return True
+    return False
+
+
+def quantity_si(text: str, kind: str, name: str) -> float:
+    """The SI value of a density (kg/m³) or mass (kg) written with a unit.
+
+    Parameters
+    ----------
+    text : str
+        ``"7.85 g/cm^3"``, ``"2.5lb"``: a number and a unit, as pint reads them (``^`` or
+        ``**`` for powers; ``g/cc`` too).
+    kind : {"density", "mass"}
+    name : str
+        The parameter's name, for errors.
+
+    Raises
+    ------
+    UsageError
+        Not a quantity, the wrong dimension, or not positive and finite.
+    """
+    import math
+
+    ureg = _registry()
+    target = {"density": "kg/m^3", "mass": "kg"}[kind]
+    hint = ("write a number and a unit, e.g. " + ("7.85g/cm^3 or 7850kg/m^3" if kind == "density"
+                                                    else "2.5kg or 5.5lb"))
+    try:
+        q = ureg.Quantity(str(text).replace("³", "^3"))
+        value = float(q.to(target).magnitude)
+    except Exception as exc:  # noqa: BLE001 - pint raises many kinds for bad text
+        what = "is not a " + kind if "ensionality" in type(exc).__name__ else "is not a quantity"
+        raise UsageError(name, f"{text!r} {what} ({type(exc).__name__})", hint) from None
+    if not math.isfinite(value) or value <= 0:
+        raise UsageError(name, f"{text!r} is not positive and finite", hint)
+    return value
+
+
+def _positive(value, name: str) -> float:
+    import math
+
+    x = float(value)
+    if not math.isfinite(x) or x <= 0:
+        raise UsageError(name, f"{value!r} is not positive and finite", "give a number greater than 0")
+    return x
+
+
+def resolve(units: str | None, output_units: str | None, density=None, mass=None,
+            names: tuple[str, str] = ("density", "mass")) -> tuple[UnitSystem | None, float | None, float | None]:
+    """The unit system of one measurement, and the density and mass to use with it.
+
+    Parameters
+    ----------
+    units : str or None
+        The mesh's length unit.
+    output_units : str or None
+        ``LENGTH,MASS`` of the results (default SI when units are given).
+    density, mass : float or str, optional
+        Bare numbers, or text with a unit.
+    names : two str
+        How the caller names density and mass in errors.
+
+    Returns
+    -------
+    system : UnitSystem or None
+        None when no unit was given anywhere: nothing is converted.
+    density, mass : float or None
+        In the output units (or as given, without units).
+
+    Raises
+    ------
+    UsageError
+        A unit written for the density or mass without the mesh's length unit, a bare number
+        with units (which unit would it be in?), output units without units, bad text.
+    """
+    given = {names[0]: density, names[1]: mass}
+    if units is None:
+        for name, value in given.items():
+            if has_unit(value):
+                raise UsageError("units", f"{name}={value} has a unit, but the mesh's length unit is not given",
+                                 "add units= with the unit of the mesh's coordinates (mm, cm, m, in, ft)")
+        if output_units is not None:
+            raise UsageError("output_units", "given without units=",
+                             "say the mesh's length unit with units= first")
+        return (None, None if density is None else _positive(density, names[0]),
+                None if mass is None else _positive(mass, names[1]))
+    length, mass_unit = parse_output_units(output_units)
+    system = UnitSystem(check_length(units), length, mass_unit)
+    for name, value in given.items():
+        if value is not None and not has_unit(value):
+            example = "7850kg/m^3 or 7.85g/cm^3" if name == names[0] else "2.5kg"
+            raise UsageError(name, f"{value} has no unit, and units={units} is given",
+                             f"write the unit, e.g. {example} (a bare number would be ambiguous)")
+    out_density = out_mass = None
+    if density is not None:
+        out_density = quantity_si(density, "density", names[0]) * LENGTHS[length] ** 3 / MASSES[mass_unit]
+    if mass is not None:
+        out_mass = quantity_si(mass, "mass", names[1]) / MASSES[mass_unit]
+    return (UnitSystem(system.mesh_length, length, mass_unit, out_density, out_mass), out_density, out_mass)
+
+
+#: Densities and sizes of the classic slip: a mesh in millimetres with a density in kg/m³.
+SLIP_SIZE = (10.0, 1000.0)
+SLIP_DENSITY = (500.0, 25_000.0)
+
+
+def slip_warning(size: float, density: float | None) -> str | None:
+    """The plausibility warning for a part of largest extent ``size`` (mesh units) measured with
+    ``density`` and no units: in millimetres, a density in kg/m³ makes the mass 1e9 too large."""
+    if density is None or not (SLIP_SIZE[0] <= size <= SLIP_SIZE[1]) or not (SLIP_DENSITY[0] <= density
+                                                                             <= SLIP_DENSITY[1]):
+        return None
+    return (f"the part is {size:.3g} across and the density {density:.6g}, with no units given: if the "
+            "mesh is in millimetres and the density in kg/m³, the mass is 1e9 times too large; state "
+            f"both units (the mesh's as mm, the density as {density:g}kg/m^3) for SI results")
