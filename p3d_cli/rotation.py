@@ -35,8 +35,13 @@ def cos_sin_degrees(degrees: float) -> tuple[float, float]:
     """
     degrees = math.fmod(degrees, 360.0)
     quarter = round(degrees / 90.0)
-    rest = math.radians(degrees - 90.0 * quarter)
+    rest_degrees = degrees - 90.0 * quarter
+    rest = math.radians(rest_degrees)
     c, s = math.cos(rest), math.sin(rest)
+    if abs(rest_degrees) == 45.0:
+        # cos(π/4) and sin(π/4) round to neighbouring floats; equal components make the
+        # half-angle quaternion of a quarter turn give an exact matrix (quaternion_matrix).
+        c, s = math.sqrt(0.5), math.copysign(math.sqrt(0.5), rest_degrees)
     for _ in range(quarter % 4):
         c, s = -s, c          # add 90°: cos(a+90) = -sin a, sin(a+90) = cos a
     return c, s
@@ -56,6 +61,15 @@ def rotation_from_axis_degrees(axis, degrees: float) -> np.ndarray:
     UsageError
         Unknown axis name, zero or non-finite axis vector, non-finite angle.
     """
+    u = _unit_axis(axis, degrees)
+    c, s = cos_sin_degrees(degrees)
+    # Rodrigues: R = c E + s [u]x + (1 - c) u uᵀ.
+    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+    return c * np.eye(3) + s * ux + (1.0 - c) * np.outer(u, u)
+
+
+def _unit_axis(axis, degrees: float) -> np.ndarray:
+    """The unit vector of a named axis or a direction, checking the angle is finite too."""
     if isinstance(axis, str):
         if axis.lower() not in AXES:
             raise UsageError("rotate", f"unknown axis {axis!r}", "use x, y, z or a vector such as 1,1,0")
@@ -68,20 +82,21 @@ def rotation_from_axis_degrees(axis, degrees: float) -> np.ndarray:
                          "give a non-zero axis vector such as 1,1,0")
     if not math.isfinite(degrees):
         raise UsageError("rotate", f"angle {degrees!r} is not finite", "give the angle in degrees")
-    u = u / norm
-    c, s = cos_sin_degrees(degrees)
-    # Rodrigues: R = c E + s [u]x + (1 - c) u uᵀ.
-    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
-    return c * np.eye(3) + s * ux + (1.0 - c) * np.outer(u, u)
+    return u / norm
 
 
 def quaternion_matrix(q) -> np.ndarray:
-    """Rotation matrix of unit quaternions ``[w, x, y, z]``: the one copy of this formula.
+    """Rotation matrix of quaternions ``[w, x, y, z]``: the one copy of this formula.
+
+    The homogeneous form ``R = (1/|q|²) [[w²+x²-y²-z², 2(xy-wz), ...], ...]`` is used rather
+    than ``1 - 2(y² + z²)``: it is exact at quarter turns whose quaternion has equal components
+    (90° about z is ``(√½, 0, 0, √½)``: ``w² - z²`` is exactly 0 and ``2wz / |q|²`` exactly 1,
+    where ``1 - 2z²`` gives 2e-16), and it needs no unit length.
 
     Parameters
     ----------
     q : (4,) or (n, 4) array_like of float
-        Unit length (not normalised here: callers that take user input normalise first).
+        Not zero (callers that take user input refuse the zero quaternion first).
 
     Returns
     -------
@@ -89,17 +104,36 @@ def quaternion_matrix(q) -> np.ndarray:
     """
     q = np.asarray(q, dtype=np.float64)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    n = ww + xx + yy + zz
     out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    out[..., 0, 1] = 2 * (x * y - w * z)
-    out[..., 0, 2] = 2 * (x * z + w * y)
-    out[..., 1, 0] = 2 * (x * y + w * z)
-    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    out[..., 1, 2] = 2 * (y * z - w * x)
-    out[..., 2, 0] = 2 * (x * z - w * y)
-    out[..., 2, 1] = 2 * (y * z + w * x)
-    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    out[..., 0, 0] = (ww + xx - yy - zz) / n
+    out[..., 0, 1] = 2 * (x * y - w * z) / n
+    out[..., 0, 2] = 2 * (x * z + w * y) / n
+    out[..., 1, 0] = 2 * (x * y + w * z) / n
+    out[..., 1, 1] = (ww - xx + yy - zz) / n
+    out[..., 1, 2] = 2 * (y * z - w * x) / n
+    out[..., 2, 0] = 2 * (x * z - w * y) / n
+    out[..., 2, 1] = 2 * (y * z + w * x) / n
+    out[..., 2, 2] = (ww - xx - yy + zz) / n
     return out
+
+
+def quaternion_from_axis_degrees(axis, degrees: float) -> np.ndarray:
+    """The unit quaternion ``[w, x, y, z]`` of a turn by ``degrees`` about ``axis``.
+
+    Built from ``cos_sin_degrees(degrees / 2)``, so a quarter turn's quaternion has exactly equal
+    components and ``quaternion_matrix`` gives the same exact matrix as
+    ``rotation_from_axis_degrees``.
+
+    Raises
+    ------
+    UsageError
+        As ``rotation_from_axis_degrees``.
+    """
+    u = _unit_axis(axis, degrees)
+    c, s = cos_sin_degrees(degrees / 2.0)
+    return np.concatenate([[c], s * u])
 
 
 def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:

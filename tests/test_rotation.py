@@ -96,3 +96,23 @@ def test_axis_angle_fixes_its_axis(axis, deg):
     u = np.array(axis) / np.linalg.norm(axis)
     np.testing.assert_allclose(r @ u, u, atol=1e-14)
     np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-14)
+
+
+@pytest.mark.parametrize("axis", ["x", "y", "z", [1.0, 1.0, 0.0]])
+@pytest.mark.parametrize("degrees", [90, 180, 270, -90, 450, 30, 45])
+def test_a_scene_turn_and_a_rotate_turn_are_one_rotation(axis, degrees):
+    # One formula: a scene's {axis, degrees} goes through its quaternion, --rotate through
+    # Rodrigues; quarter turns about the named axes are exact both ways (the scene used to be
+    # off by 2e-16).
+    from p3d_cli.constraints.values import rotation as scene_rotation
+    from p3d_cli.rotation import quaternion_matrix
+
+    q = scene_rotation({"axis": list(np.eye(3)["xyz".index(axis)]) if isinstance(axis, str) else axis,
+                        "degrees": degrees}, "scene.yaml: bodies.a.rotation")
+    from_scene = quaternion_matrix(q)
+    from_cli = rotation_from_axis_degrees(axis, degrees)
+    if isinstance(axis, str) and degrees % 90 == 0:
+        assert np.array_equal(from_scene, from_cli)
+        assert set(np.abs(from_cli).ravel().tolist()) <= {0.0, 1.0}
+    else:
+        assert np.abs(from_scene - from_cli).max() <= 4e-16

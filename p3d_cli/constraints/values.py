@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from p3d_cli.constraints.rotation import quat_from_axis_angle
+from p3d_cli.rotation import quaternion_from_axis_degrees
 from p3d_cli.errors import SceneError
 from p3d_cli.inertia import breaks_triangle_inequality
 
@@ -135,7 +136,9 @@ def rotation(value, where: str) -> np.ndarray:
         axis = vector(value["axis"], f"{where}.axis", nonzero=True)
         key = angle_keys.pop()
         angle = number(value[key], f"{where}.{key}")
-        return quat_from_axis_angle(axis, math.radians(angle) if key == "degrees" else angle)
+        if key == "degrees":
+            return quaternion_from_axis_degrees(axis, angle)  # exact at quarter turns
+        return quat_from_axis_angle(axis, angle)
     unknown = sorted(str(k) for k in keys - {"quat", "axis", "degrees", "radians"})
     what = f"unknown key {unknown[0]!r}" if unknown else f"has keys {sorted(map(str, keys))}, which name no rotation"
     raise SceneError(where, what, hint)
