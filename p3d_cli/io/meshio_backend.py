@@ -23,7 +23,7 @@ from xml.etree.ElementTree import ParseError
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError, MissingExtraError, UsageError
-from p3d_cli.io.obj import fan_triangles
+from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
 
