@@ -7,6 +7,7 @@ import io
 import os
 import stat
 import sys
+import time
 from dataclasses import dataclass
 
 from p3d_cli.errors import InputError
@@ -57,6 +58,8 @@ class RawInput:
 #: Most bytes read from a pipe or FIFO (and standard input): a stream has no size to check
 #: before reading, so this bounds the memory an endless writer can take.
 STREAM_LIMIT = 1 << 32
+#: Seconds a FIFO is waited for a writer before it counts as empty.
+FIFO_WAIT = 10.0
 
 
 def open_input(source: str, stdin=None) -> RawInput:
@@ -116,22 +119,42 @@ def _mode(source: str) -> int:
 
 
 def _open_pipe(source: str) -> RawInput:
-    """Read a FIFO or socket whole. Opened non-blocking (a FIFO with no writer would otherwise
-    block ``open`` forever), then switched to blocking reads so that a live writer is waited for."""
+    """Read a FIFO or socket whole, waiting up to ``FIFO_WAIT`` seconds for a writer.
+
+    A blocking ``open`` of a FIFO waits for a writer forever; so it is opened non-blocking, and
+    until a writer shows up (a read then gives data or "would block" instead of end-of-file),
+    polled. Then reads block as usual, and the writer's end-of-file ends the input.
+    """
     try:
         fd = os.open(source, os.O_RDONLY | os.O_NONBLOCK)
     except PermissionError:
         raise InputError(source, "permission denied", "check the file's permissions") from None
     except OSError as exc:
         raise InputError(source, f"cannot be read ({exc.strerror or exc})", "check the file") from None
-    os.set_blocking(fd, True)
-    with os.fdopen(fd, "rb") as stream:
-        data = _read_stream(stream, source)
+    with os.fdopen(fd, "rb", buffering=0) as stream:
+        first = _first_bytes(stream, time.monotonic() + FIFO_WAIT)
+        os.set_blocking(fd, True)
+        data = first + _read_stream(stream, source) if first is not None else b""
     if not data:
-        raise InputError(source, "the pipe delivered no data (nothing is writing to it)",
+        raise InputError(source, f"the pipe delivered no data (nothing wrote to it within {FIFO_WAIT:g} s)",
                          "start the program that writes the mesh first, or pipe it into p3d with -")
-    # The path is kept for its extension; the bytes are read from ``data`` (RawInput prefers it).
     return RawInput(source, source, data, len(data))
+
+
+def _first_bytes(stream, deadline: float) -> bytes | None:
+    """The first bytes a writer sends (b"" once a writer is there), or None if none came."""
+    while True:
+        try:
+            piece = stream.read(1 << 20)
+        except BlockingIOError:
+            return b""          # a writer holds the other end: wait for it with blocking reads
+        if piece is None:
+            return b""
+        if piece:
+            return piece
+        if time.monotonic() >= deadline:
+            return None
+        time.sleep(0.02)
 
 
 def _read_stream(stream, where: str) -> bytes:
