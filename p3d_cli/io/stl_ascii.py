@@ -237,7 +237,7 @@ def _strip_solid_lines(data: bytes) -> bytes | None:
         line_end = len(data) if line_end == -1 else line_end
         first = data[line_start:line_end].split(None, 1)[0].lower()
         before = data[pos:line_start].rstrip()
-        if first not in (b"solid", b"endsolid") or (before and not before.endswith(b"endfacet")):
+        if first not in (b"solid", b"endsolid") or (before and before[-8:].lower() != b"endfacet"):
             return None
         pieces.append(data[pos:line_start])
         pos = line_end
