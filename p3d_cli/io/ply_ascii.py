@@ -10,6 +10,8 @@ element by element; a word that is not a number is reported with its line.
 
 from __future__ import annotations
 
+from array import array
+
 import numpy as np
 
 from p3d_cli.errors import FormatError
@@ -157,34 +159,52 @@ def _columns(where, element, table, starts, keep):
     return [table[:, starts[i]] if p.count is None else None for i, p in enumerate(element.properties)]
 
 
+class _Window:
+    """``numbers[i]`` as Python floats, converted a window at a time: item access on a list is
+    several times faster than on an array, and a window bounds the memory the list takes."""
+
+    SIZE = 1 << 16
+
+    def __init__(self, numbers: np.ndarray) -> None:
+        self.numbers, self.start, self.values = numbers, 0, []
+
+    def __getitem__(self, i: int) -> float:
+        if not self.start <= i < self.start + len(self.values):
+            self.start, self.values = i, self.numbers[i:i + self.SIZE].tolist()
+        return self.values[i - self.start]
+
+
 def _walk(where, element, numbers, pos, keep):
-    """Record by record, for lists of varying length."""
+    """Record by record, for lists of varying length. Kept lists are recorded as (start, size)
+    in compact arrays and gathered in one pass at the end."""
     total = numbers.size
-    polygons = element.name in ("face", "tristrips")
-    values = numbers.tolist() if polygons else None
-    scalars = {i: [] for i, p in enumerate(element.properties) if p.count is None}
-    pieces, sizes = [], []
+    values = _Window(numbers)
+    scalars = {i: array("d") for i, p in enumerate(element.properties) if p.count is None}
+    starts, sizes = array("q"), array("q")
     for _ in range(element.size):
         for i, p in enumerate(element.properties):
             if pos >= total:
                 raise FormatError(where, f"the data ends inside the {element.name} records "
                                   f"(the header declares {element.size})", HINT)
             if p.count is None:
-                scalars[i].append(numbers[pos])
+                scalars[i].append(values[pos])
                 pos += 1
                 continue
-            n = _length(where, element, values[pos] if values is not None else numbers[pos], "a")
+            n = _length(where, element, values[pos], "a")
             if pos + 1 + n > total:
                 raise FormatError(where, f"the data ends inside the {element.name} records "
                                   f"(the header declares {element.size})", HINT)
             if p.name in keep:
-                pieces.append((pos + 1, n))
+                starts.append(pos + 1)
                 sizes.append(n)
             pos += 1 + n
-    if polygons:
-        index = np.concatenate([np.arange(a, a + n) for a, n in pieces]) if pieces else np.zeros(0, dtype=np.int64)
-        return (integral(where, numbers[index]), np.array(sizes, dtype=np.int64)), pos
-    return [np.array(scalars[i]) if i in scalars else None for i in range(len(element.properties))], pos
+    if element.name in ("face", "tristrips"):
+        first = np.frombuffer(starts, dtype=np.int64)
+        counts = np.frombuffer(sizes, dtype=np.int64)
+        index = np.repeat(first - (np.cumsum(counts) - counts), counts) + np.arange(int(counts.sum()))
+        return (integral(where, numbers[index]), counts.copy()), pos
+    return [np.frombuffer(scalars[i], dtype=np.float64).copy() if i in scalars else None
+            for i in range(len(element.properties))], pos
 
 
 def integral(where: str, values: np.ndarray) -> np.ndarray:

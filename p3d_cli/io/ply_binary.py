@@ -12,6 +12,7 @@ or read past the buffer.
 from __future__ import annotations
 
 import struct
+from array import array
 
 import numpy as np
 
@@ -112,8 +113,9 @@ def _walk(where: str, element: Element, data: bytes, offset: int, order: str, ke
             steps.append((None, struct.Struct(order + np.dtype(p.dtype).char), p.name in keep))
         else:
             steps.append((struct.Struct(order + np.dtype(p.count).char), ITEMSIZE[p.dtype], p.name in keep))
-    scalars = {p.name: [] for p in element.properties if p.count is None and p.name in keep}
-    starts, sizes = [], []
+    # Compact arrays, not lists: 8 bytes per value, a small multiple of the file at most.
+    scalars = {p.name: array("d") for p in element.properties if p.count is None and p.name in keep}
+    starts, sizes = array("q"), array("q")
     end = len(data)
     view = memoryview(data)
     try:
@@ -139,9 +141,10 @@ def _walk(where: str, element: Element, data: bytes, offset: int, order: str, ke
                           f"(the header declares {element.size})", HINT) from None
     if element.name in ("face", "tristrips"):
         item = next(np.dtype(order + p.dtype) for p in element.properties if p.count is not None and p.name in keep)
-        sizes_array = np.array(sizes, dtype=np.int64)
-        return (_gather(data, np.array(starts, dtype=np.int64), sizes_array, item), sizes_array), offset
-    return [np.array(scalars[p.name]) if p.name in scalars else None for p in element.properties], offset
+        sizes_array = np.frombuffer(sizes, dtype=np.int64).copy()
+        return (_gather(data, np.frombuffer(starts, dtype=np.int64), sizes_array, item), sizes_array), offset
+    return [np.frombuffer(scalars[p.name], dtype=np.float64).copy() if p.name in scalars else None
+            for p in element.properties], offset
 
 
 def _gather(data: bytes, starts: np.ndarray, sizes: np.ndarray, item: np.dtype) -> np.ndarray:
