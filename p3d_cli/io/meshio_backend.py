@@ -15,15 +15,13 @@ from __future__ import annotations
 import contextlib
 import io
 import os
-import struct
+import re
 import tempfile
-import zlib
-from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError, MissingExtraError, UsageError
-from p3d_cli.io.obj import fan_triangles
+from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
 
@@ -95,13 +93,33 @@ def _extension_for(helpers, name: str) -> str:
     return ""
 
 
-def _read_errors():
-    """What meshio's readers raise on corrupt input (besides its own ReadError): numpy
-    parsing (ValueError), missing sections (KeyError, IndexError), short binary data
-    (struct.error, EOFError), XML formats (ParseError), compressed VTU (zlib.error),
-    bad text encodings (UnicodeError is a ValueError)."""
-    from meshio import ReadError
-    return (ReadError, ValueError, KeyError, IndexError, struct.error, EOFError, ParseError, zlib.error)
+#: Declared counts in the formats whose readers allocate by them before reading: the regular
+#: expression finding each count and the fewest bytes one item takes in the file (a point is at
+#: least ``0 0 0`` and a newline in text, 12 bytes in binary; a Gmsh node adds its tag).
+_COUNTS = {
+    "vtk": [(re.compile(rb"^[ \t]*POINTS[ \t]+([0-9]+)", re.M), 6, "points"),
+            (re.compile(rb"^[ \t]*CELLS[ \t]+[0-9]+[ \t]+([0-9]+)", re.M), 2, "cell index values")],
+    "gmsh": [(re.compile(rb"^\$Nodes[ \t]*\r?\n[ \t]*([0-9]+)[ \t]*\r?$", re.M), 8, "nodes"),
+             (re.compile(rb"^\$Nodes[ \t]*\r?\n[ \t]*[0-9]+[ \t]+([0-9]+)", re.M), 8, "nodes"),
+             (re.compile(rb"^\$Elements[ \t]*\r?\n[ \t]*([0-9]+)[ \t]*\r?$", re.M), 4, "elements"),
+             (re.compile(rb"^\$Elements[ \t]*\r?\n[ \t]*[0-9]+[ \t]+([0-9]+)", re.M), 4, "elements")],
+}
+
+
+def _check_declared_counts(raw: RawInput, name: str) -> None:
+    """Refuse a file whose declared counts need more bytes than it has, before meshio allocates
+    arrays of that size (a VTK file declaring 1e11 points asked numpy for 2 TiB)."""
+    patterns = _COUNTS.get(name)
+    if not patterns:
+        return
+    data = raw.read_all()
+    for pattern, least, what in patterns:
+        for found in pattern.finditer(data):
+            count = int(found.group(1))
+            if count * least > raw.size:
+                raise FormatError(raw.where, f"meshio could not read it as {name}: the file declares {count} {what} "
+                                  f"(at least {count * least} bytes) but has {raw.size} bytes",
+                                  "the file is truncated or corrupt; export it again")
 
 
 def load(raw: RawInput, name: str | None = None) -> MeshSource:
@@ -135,14 +153,25 @@ def load(raw: RawInput, name: str | None = None) -> MeshSource:
                          "give --format with a meshio format name such as vtu or gmsh")
     # meshio's readers print warnings to stderr themselves (through rich); a library must not
     # print, so they are captured and handed back as the source's warnings.
+    _check_declared_counts(raw, name)
     captured = io.StringIO()
     try:
         with contextlib.redirect_stderr(captured):
-            if raw.path is not None:
+            if raw.data is None:
                 mesh = reader(raw.path)
             else:
                 mesh = _read_stdin(raw, helpers, reader, name)
-    except _read_errors() as exc:
+    except UsageError:
+        raise
+    except MemoryError:
+        raise FormatError(raw.where, f"meshio ran out of memory reading it as {name} (the file declares more "
+                          "points or cells than it holds, or is too large)",
+                          "the file is corrupt or not in this format; check --format or export it again") from None
+    except Exception as exc:  # noqa: BLE001 - any failure of meshio's reader on these bytes
+        # Besides its own ReadError, meshio's readers raise whatever their parsing meets on
+        # input that is not what they expect: ValueError, KeyError, IndexError, struct.error,
+        # EOFError, XML ParseError, zlib.error, and TypeError/AssertionError/AttributeError on
+        # files that are XML or text of another kind (a non-mesh .xml or .dat).
         detail = str(exc).strip().splitlines()[0][:120] if str(exc).strip() else type(exc).__name__
         raise FormatError(raw.where, f"meshio could not read it as {name} ({detail})",
                           "the file is corrupt or not in this format; check --format or export it again") from None
@@ -183,6 +212,13 @@ def _source(where: str, name: str, mesh, notes=()) -> MeshSource:
         cells = np.concatenate(tetra).astype(np.int64)
         _check_indices(where, cells, len(points), "tetra")
         tets = points[cells].astype(np.float64)
+        surface = {t: len(d) for t, d in blocks if t in _SURFACE and len(d)}
+        if surface:
+            # Volume meshes often carry their boundary (or named patches) as surface cells too:
+            # adding them would count nothing (they hold no volume) but say which was measured.
+            held = ", ".join(f"{n} {t}" for t, n in sorted(surface.items()))
+            notes = notes + (f"the mesh holds {len(tets)} tetrahedra and surface cells ({held}): the "
+                             "tetrahedra were measured, the surface cells were not",)
         return MeshSource(fmt, len(tets), dtype, lambda: iter(()), tets, notes)
     triangles = []
     for kind, data in blocks:

@@ -18,7 +18,8 @@ import re
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.obj import fan_triangles
+from p3d_cli.io.numbers import lone_sign, saturated, to_float, to_int
+from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
 
@@ -82,7 +83,7 @@ def _header(where: str, numbered: list[tuple[int, bytes]]):
     try:
         if len(counts) not in (2, 3):
             raise ValueError
-        values = [int(c) for c in counts]
+        values = [to_int(c) for c in counts]
         if min(values) < 0:
             raise ValueError
     except ValueError:
@@ -92,36 +93,47 @@ def _header(where: str, numbered: list[tuple[int, bytes]]):
     return values[0], values[1], rest
 
 
-def _per_line(lines: list[bytes], dtype, sentinel):
-    """All numbers of ``lines`` and each line's count, or None if a word is not a number."""
-    marker = b" nan " if dtype is np.float64 else b" -1 "
+def _per_line(lines: list[bytes], integers: bool):
+    """All numbers of ``lines`` and each line's count and start, or None if numpy's reading
+    could differ from the grammar's (a word that is no number, ``nan``, a lone sign, ...)."""
+    marker = b" -1 " if integers else b" nan "
     text = (marker + b"\n").join(lines) + marker
     try:
-        numbers = np.fromstring(text, dtype=dtype, sep=" ")
+        numbers = np.fromstring(text, dtype=np.int64 if integers else np.float64, sep=" ")
     except ValueError:
         return None
-    ends = np.flatnonzero(np.isnan(numbers) if dtype is np.float64 else numbers == sentinel)
+    if integers:
+        if saturated(numbers) or lone_sign(text):
+            return None
+        ends = np.flatnonzero(numbers == -1)
+    else:
+        ends = np.flatnonzero(np.isnan(numbers))
+        if np.isinf(numbers).any():
+            return None
     if ends.size != len(lines):
-        return None
-    return numbers, np.diff(ends, prepend=-1) - 1, ends - (np.diff(ends, prepend=-1) - 1)
+        return None  # a -1 (or a NaN) among the numbers: the caller reads them another way
+    counts = np.diff(ends, prepend=-1) - 1
+    return numbers, counts, ends - counts
 
 
 def _bad_line(where: str, numbered, what: str):
-    """The first of ``numbered`` lines that fails ``what``'s shape, as a FormatError."""
+    """The first of ``numbered`` lines holding a word that is no number, as a FormatError."""
     for number, line in numbered:
-        words = line.split()
-        try:
-            [float(w) for w in words]
-        except ValueError:
-            text = line.decode("utf-8", "replace").strip()[:60]
-            return FormatError(f"{where}: line {number}", f"expected {what}, found {text!r}", _HINT)
+        for word in line.split():
+            try:
+                to_float(word)
+            except ValueError:
+                text = line.decode("utf-8", "replace").strip()[:60]
+                return FormatError(f"{where}: line {number}", f"expected {what}, found {text!r} "
+                                   f"({word.decode('utf-8', 'replace')[:20]!r} is not a finite decimal number)",
+                                   _HINT)
     return FormatError(where, f"malformed {what} lines", _HINT)
 
 
 def _vertices(where: str, numbered) -> np.ndarray:
     if not numbered:
         return np.zeros((0, 3))
-    parsed = _per_line([line for _, line in numbered], np.float64, None)
+    parsed = _per_line([line for _, line in numbered], False)
     if parsed is None:
         raise _bad_line(where, numbered, "a vertex 'x y z'")
     numbers, counts, starts = parsed
@@ -130,19 +142,15 @@ def _vertices(where: str, numbered) -> np.ndarray:
         number, line = numbered[int(short[0])]
         raise FormatError(f"{where}: line {number}", f"expected a vertex 'x y z', found "
                           f"{line.decode('utf-8', 'replace').strip()[:60]!r}", _HINT)
-    if np.isnan(numbers).sum() != len(numbered):
-        bad = int(np.searchsorted(starts + counts, np.flatnonzero(np.isnan(numbers))[0]))
-        raise FormatError(f"{where}: line {numbered[min(bad, len(numbered) - 1)][0]}", "a NaN vertex coordinate",
-                          _HINT)
     return numbers[starts[:, None] + np.arange(3)]
 
 
 def _faces(where: str, numbered, vertex_count: int) -> np.ndarray:
     lines = [line for _, line in numbered]
-    parsed = _per_line(lines, np.int64, -1)
+    parsed = _per_line(lines, True)
     if parsed is None:
         # Colours after the indices may be floats (or a -1 is among the numbers): parse as float.
-        parsed = _per_line(lines, np.float64, None)
+        parsed = _per_line(lines, False)
         if parsed is None:
             raise _bad_line(where, numbered, "a face 'k i1 .. ik'")
     numbers, counts, starts = parsed
@@ -159,9 +167,9 @@ def _faces(where: str, numbered, vertex_count: int) -> np.ndarray:
     wrong = (corners < 0) | (corners >= vertex_count) | (corners != np.floor(corners))
     if wrong.any():
         first = int(np.flatnonzero(wrong)[0])
-        number = numbered[int(owner[first])][0]
-        value = corners[first]
-        shown = int(value) if value == np.floor(value) else float(value)
+        number, line = numbered[int(owner[first])]
+        # The index as written (numbers may have been rounded to float64 on the way).
+        shown = line.split()[1 + int(offset[first])].decode("ascii", "replace")
         raise FormatError(f"{where}: line {number}", f"face index {shown} is out of range: the file has "
                           f"{vertex_count} vertices (indices 0 to {vertex_count - 1})",
                           "fix the face or export the mesh again")

@@ -172,3 +172,51 @@ def test_meshio_is_imported_lazily():
     code = "import sys, p3d_cli.io; print('meshio' in sys.modules, 'trimesh' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
+
+
+# --- issue 12 and 17: mixed cells, files that are no mesh, lying counts ----------------
+
+def test_tetrahedra_and_triangles_say_which_was_measured(tmp_path):
+    path = str(tmp_path / "mixed.vtu")
+    boundary = CUBE_QUADS[:, [0, 1, 2]]   # one triangle per side: surface cells beside the volume
+    meshio.write(path, meshio.Mesh(CUBE_V, [("tetra", CUBE_TETS), ("triangle", boundary)]))
+    mesh = load_mesh(path)
+    assert mesh.tetrahedra.shape == (6, 4, 3)
+    assert len(mesh.warnings) == 1
+    assert "6 tetrahedra" in mesh.warnings[0] and "6 triangle" in mesh.warnings[0]
+    assert "tetrahedra were measured" in mesh.warnings[0]
+    assert mesh_props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
+
+
+@pytest.mark.parametrize("name, data", [
+    ("config.xml", b'<?xml version="1.0"?>\n<config><a>1</a></config>\n'),
+    ("notes.dat", b"hello world\n1 2 3\n"),
+])
+def test_files_that_are_no_mesh_are_format_errors(tmp_path, name, data):
+    path = tmp_path / name
+    path.write_bytes(data)
+    with pytest.raises(FormatError) as info:
+        load_mesh(str(path))
+    assert "meshio could not read it" in info.value.what and info.value.hint
+
+
+@pytest.mark.parametrize("name, data, claim", [
+    ("lie.vtk", b"# vtk DataFile Version 4.2\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 100000000000 double\n"
+     b"0 0 0\n", "100000000000 points"),
+    ("lie.msh", b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1000000000000\n1 0 0 0\n$EndNodes\n",
+     "1000000000000 nodes"),
+    ("lie4.msh", b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1000000000000 1 1000000000000\n2 1 0 1\n1\n"
+     b"0 0 0\n$EndNodes\n", "1000000000000 nodes"),
+])
+def test_lying_counts_are_refused_before_meshio_allocates(tmp_path, name, data, claim):
+    import tracemalloc
+    path = tmp_path / name
+    path.write_bytes(data)
+    tracemalloc.start()
+    try:
+        with pytest.raises(FormatError) as info:
+            load_mesh(str(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert claim in info.value.what and peak < 50_000_000
