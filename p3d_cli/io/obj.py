@@ -235,7 +235,8 @@ def _face(where: str, number: int, words: list[bytes], mesh: _Mesh) -> None:
 
 def _corner(where: str, number: int, word: bytes) -> int:
     """The vertex index of one corner ``a``, ``a/b``, ``a//c``, ``a/b/c`` (the last two fields of
-    the three-field form may be empty: ``a/b/``, ``a//``; ``a/`` is not a corner), checked to be a non-zero integer that can address a vertex."""
+    the three-field form may be empty: ``a/b/``, ``a//``; ``a/`` is not a corner), checked to be a
+    non-zero integer that can address a vertex."""
     parts = word.split(b"/")
     try:
         if len(parts) > 3 or (len(parts) == 2 and not parts[1]) or any(p and to_int(p) == 0 for p in parts[1:]):

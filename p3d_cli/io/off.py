@@ -56,7 +56,7 @@ def load(raw: RawInput) -> MeshSource:
                           f"only {len(body)} lines follow", "the file is truncated; export it again")
     vertices = _vertices(raw.where, body[:nv])
     faces = _faces(raw.where, body[nv:nv + nf], nv)
-    warnings = ()
+    warnings: tuple[str, ...] = ()
     if len(body) > nv + nf:
         warnings = (f"{len(body) - nv - nf} lines after the last face were ignored",)
     return indexed_source("off", vertices, faces, "float64", warnings)

@@ -76,7 +76,7 @@ def _read_lines(where: str, header: Header, data: bytes):
             tables[element.name] = columns
         line += element.size
     rest = body[int(starts[line]):] if line < len(starts) else b""
-    warnings = ()
+    warnings: tuple[str, ...] = ()
     if rest.strip():
         warnings = (f"{len(rest.split())} values after the last PLY element were ignored",)
     return tables, warnings
@@ -94,13 +94,13 @@ def _read_stream(where: str, header: Header, data: bytes):
         columns, pos = ascii_element(where, element, numbers, pos)
         if is_kept(element):
             tables[element.name] = columns
-    warnings = ()
+    warnings: tuple[str, ...] = ()
     if pos < numbers.size:
         warnings = (f"{numbers.size - pos} numbers after the last PLY element were ignored",)
     return tables, warnings
 
 
-def _bad_text(where: str, header: Header, data: bytes):
+def _bad_text(where: str, header: Header, data: bytes) -> tuple[str, str]:
     """Where the first word that is not a number is (only called on the error path)."""
     first_line = data[:header.length].count(b"\n") + 1
     for number, line in enumerate(data[header.length:].split(b"\n"), start=first_line):
@@ -126,7 +126,7 @@ def ascii_element(where: str, element: Element, numbers: np.ndarray, pos: int):
             return (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), pos
         return [table[:, i] for i in range(width)], pos + element.size * width
     # Fast path: every record has the first record's list lengths (verified below).
-    widths = []
+    widths: list = []
     for p in element.properties:
         at = pos + sum(widths)
         if at >= total:
@@ -166,7 +166,8 @@ class _Window:
     SIZE = 1 << 16
 
     def __init__(self, numbers: np.ndarray) -> None:
-        self.numbers, self.start, self.values = numbers, 0, []
+        self.numbers, self.start = numbers, 0
+        self.values: list = []
 
     def __getitem__(self, i: int) -> float:
         if not self.start <= i < self.start + len(self.values):

@@ -36,7 +36,7 @@ def read_binary(where: str, header: Header, data: bytes):
         columns, offset = _element(where, element, data, offset, order)
         if is_kept(element):
             tables[element.name] = columns
-    warnings = ()
+    warnings: tuple[str, ...] = ()
     if offset < len(data):
         warnings = (f"{len(data) - offset} trailing bytes after the PLY data were ignored",)
     return tables, warnings
@@ -52,7 +52,8 @@ def _element(where: str, element: Element, data: bytes, offset: int, order: str)
                        for p, n in zip([p for p in element.properties if p.count is not None], lengths))
     need = element.size * record_size
     if need <= len(data) - offset:
-        fields, it = [], iter(lengths)
+        fields: list[tuple] = []
+        it = iter(lengths)
         for i, p in enumerate(element.properties):
             if p.count is None:
                 fields.append((f"p{i}", order + p.dtype))
@@ -107,7 +108,7 @@ def _columns(element: Element, table: np.ndarray, keep: set):
 
 def _walk(where: str, element: Element, data: bytes, offset: int, order: str, keep: set):
     """Record by record, for lists of varying length (mixed triangles and quads, ...)."""
-    steps = []
+    steps: list[tuple] = []
     for p in element.properties:
         if p.count is None:
             steps.append((None, struct.Struct(order + np.dtype(p.dtype).char), p.name in keep))

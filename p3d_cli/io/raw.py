@@ -158,7 +158,8 @@ def _first_bytes(stream, deadline: float) -> bytes | None:
 
 
 def _read_stream(stream, where: str) -> bytes:
-    pieces, total = [], 0
+    pieces: list[bytes] = []
+    total = 0
     while True:
         piece = stream.read(1 << 20)
         if not piece:

@@ -259,7 +259,8 @@ def parse_lines(where: str, stream) -> np.ndarray:
     """A careful line-by-line parse of the grammar: polygons with more than three vertices
     become fans, and anything malformed gets its line number."""
     corners = array("d")
-    state, loop = "outside", []
+    state = "outside"
+    loop: list = []
     for number, line in _lines(stream):
         words = line.split()
         if not words:

@@ -185,7 +185,7 @@ def test_tetrahedra_and_triangles_say_which_was_measured(tmp_path):
     assert len(mesh.warnings) == 1
     assert "6 tetrahedra" in mesh.warnings[0] and "6 triangle" in mesh.warnings[0]
     assert "tetrahedra were measured" in mesh.warnings[0]
-    assert mesh_props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
+    assert p3d.props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
 @pytest.mark.parametrize("name, data", [
