@@ -98,7 +98,6 @@ def csv_row(record: dict, precision: int | None = None) -> str:
     for end in ("min", "max"):
         if record.get(end) is not None:
             row.update(zip((f"{end}_x", f"{end}_y", f"{end}_z"), (float(x) for x in record[end])))
-    row["source"] = output.shown_name(record["source"])
     row["warnings"] = " ".join(record.get("warning_codes") or []) or None
     return output.csv_line((row[k] for k in CSV_COLUMNS), precision)
 

@@ -150,7 +150,6 @@ def check_csv_line(record: dict) -> str:
     row = {key: record.get(key, "") for key in CSV_COLUMNS}
     if isinstance(row["failed"], list):
         row["failed"] = " ".join(row["failed"])
-    row["source"] = output.shown_name(row["source"])
     return output.csv_line(row[key] for key in CSV_COLUMNS)
 
 

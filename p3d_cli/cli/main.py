@@ -68,6 +68,8 @@ FLAGS = {
     "format": "--format", "scale": "--scale", "rotate": "--rotate", "quat": "--quat",
     "translate": "--translate", "require": "--require", "files_from": "--files-from",
     "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt", "trajectory": "--trajectory",
+    "null": "-0/--null", "ignore_warning": "--ignore-warning", "rtol": "--rtol", "atol": "--atol",
+    "root": "--root",
 }
 
 

@@ -94,7 +94,7 @@ def bare(value) -> str:
         return " ".join(bare(v) for v in value)
     if isinstance(value, (list, dict)):
         return dumps(value)
-    return str(value)
+    return shown_name(str(value))   # one line, and encodable: a name's newline becomes \x0a
 
 
 #: Significant digits of ``--csv`` numbers by default: what a spreadsheet keeps (IEEE doubles
@@ -110,6 +110,10 @@ def csv_cell(value, precision: int | None = CSV_PRECISION) -> str:
         return ""
     if isinstance(value, bool):
         return "true" if value else "false"
+    if isinstance(value, str):
+        # Names that are not UTF-8 become ls -b escapes (stdout could not encode them);
+        # newlines, tabs and carriage returns stay, inside the cell's quotes.
+        return shown_name(value, keep="\n\r\t")
     if isinstance(value, float):
         if precision is None or not math.isfinite(value):
             return repr(value)
@@ -134,16 +138,19 @@ def _quoted(cell: str) -> str:
     return cell
 
 
-def shown_name(name: str) -> str:
+def shown_name(name: str, keep: str = "") -> str:
     """A path as text that stays one line and stays distinguishable: bytes that are not UTF-8
     (held by Python as surrogate escapes) and control characters become ``\\xNN`` escapes, and
-    a backslash becomes ``\\\\`` (as ``ls -b`` does)."""
+    a backslash becomes ``\\\\``, as ``ls -b`` writes names. Characters in ``keep`` (CSV keeps
+    newlines: its quoting holds them) are left as they are."""
     if name.isprintable() and "\\" not in name:
         return name
     out = []
     for ch in name:
         code = ord(ch)
-        if 0xDC80 <= code <= 0xDCFF:          # surrogateescape: the undecodable byte code - 0xDC00
+        if ch in keep:
+            out.append(ch)
+        elif 0xDC80 <= code <= 0xDCFF:          # surrogateescape: the undecodable byte + 0xDC00
             out.append(f"\\x{code - 0xDC00:02x}")
         elif ch == "\\":
             out.append("\\\\")

@@ -276,7 +276,5 @@ def props_row(record: dict, about: bool = False) -> list:
         row.update(_xyz("about_", record["about"]))
         if record.get("inertia_about") is not None:
             row.update(_tensor("about_", record["inertia_about"]))
-    if "source" in record:
-        row["source"] = output.shown_name(record["source"])
     row["warnings"] = " ".join(record.get("warning_codes") or []) or None
     return [row[k] for k in columns]
