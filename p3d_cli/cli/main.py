@@ -217,6 +217,7 @@ class _Commands(MutableMapping):
 cli.commands = _Commands({
     "bounds": "p3d_cli.cli.bounds",
     "check": "p3d_cli.cli.check",
+    "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "solve": "p3d_cli.cli.solve",
 })

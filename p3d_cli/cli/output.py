@@ -81,8 +81,9 @@ def field_names(record: dict) -> list[str]:
 
 
 def bare(value) -> str:
-    """A field for shell use: numbers in full precision, a flat list of numbers space-separated;
-    anything nested (an object, a matrix, a list of objects) as one line of JSON, which jq reads."""
+    """A field for shell use: numbers in full precision; a list (a vector, a matrix, names)
+    space-separated, one matrix row after another (``read`` takes them apart); an object, or a
+    list holding objects, as one line of JSON, which jq reads."""
     value = jsonable(value)
     if value is None:
         return "null"
@@ -90,11 +91,16 @@ def bare(value) -> str:
         return "true" if value else "false"
     if isinstance(value, float):
         return repr(value)
-    if isinstance(value, list) and not any(isinstance(v, (list, dict)) for v in value):
+    if isinstance(value, list) and not _has_object(value):
         return " ".join(bare(v) for v in value)
     if isinstance(value, (list, dict)):
         return dumps(value)
     return shown_name(str(value))   # one line, and encodable: a name's newline becomes \x0a
+
+
+def _has_object(value: list) -> bool:
+    """Whether a list holds an object (a dict) at any depth."""
+    return any(isinstance(v, dict) or (isinstance(v, list) and _has_object(v)) for v in value)
 
 
 #: Significant digits of ``--csv`` numbers by default: what a spreadsheet keeps (IEEE doubles

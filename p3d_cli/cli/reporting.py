@@ -175,7 +175,7 @@ class Batch:
         self.status = max(self.status, 1)
 
     def summary(self, failed_label: str = "failed check") -> str:
-        n = len(self.items)
+        n = max(len(self.items), len(self.entries))   # p3d diff adds the files that vanished
         parts = [f"{self.ok + self.warned} ok"]
         if self.failed:
             parts.append(f"{self.failed} {failed_label}")

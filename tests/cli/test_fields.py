@@ -29,9 +29,9 @@ def test_props_nested_field_is_json(cube):
     assert json.loads(result.stdout) == {"min": [0.5, 0.5, 0.5], "max": [1.5, 2.5, 3.5]}
 
 
-def test_props_matrix_field_is_json_and_indices_pick_items(cube):
+def test_props_matrix_field_is_row_after_row_and_indices_pick_items(cube):
     inertia = json.loads(run("props", cube, "--json").stdout)["inertia"]
-    assert json.loads(run("props", cube, "--field", "inertia").stdout) == inertia
+    assert run("props", cube, "--field", "inertia").stdout.split() == [repr(x) for row in inertia for x in row]
     result = run("props", cube, "--field", "center_of_mass.0", "--field", "center_of_mass.2",
                  "--field", "inertia.1.1", "--field", "bounds.max.1")
     assert result.exit_code == 0
