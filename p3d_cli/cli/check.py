@@ -162,8 +162,13 @@ def check_text(result: CheckResult) -> str:
     locations of each problem one per line."""
     r = result.report
     head = "ok" if result.ok else "FAILED " + ", ".join(result.failed)
-    lines = [f"{output.shown_name(result.source)}: {head}  ({result.format}, {plural(r.faces, 'face')}, "
-             f"{plural(r.shells, 'shell')}, volume {output.number(r.volume)})"]
+    name = output.shown_name(result.source)
+    details = f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, volume {output.number(r.volume)})"
+    lines = [f"{name}: {head}  {details}"]
+    if len(lines[0]) > 80 and len(name) <= 40:
+        # Break before the details when that makes the verdict fit; a name too long for any
+        # layout to fit keeps its verdict on one line, which greps better.
+        lines = [f"{name}: {head}", f"  {details}"]
     for key, noun, samples in _COUNTS:
         count = getattr(r, key)
         if count:
@@ -195,15 +200,23 @@ def _fit(text: str, indent: str, width: int = 80) -> list[str]:
 
 
 def _pack(head: str, items: list[str], tail: str, indent: str = "    ", width: int = 80) -> list[str]:
-    """``head`` + items joined by ``; `` + ``tail``, broken between items to fit ``width``."""
-    lines, line = [], head
+    """``head`` + items joined by ``; `` + ``tail``, broken between items to fit ``width`` (an
+    edge too long for a line of its own is broken between its two end points)."""
+    pieces = []
     for i, item in enumerate(items):
         text = item + (tail if i == len(items) - 1 else ";")
-        if line.strip() and len(line) + len(text) > width and line not in (head,):
+        if len(indent) + len(text) > width and ")-(" in text:
+            first, rest = text.split(")-(", 1)
+            pieces += [first + ")-", "  (" + rest]
+        else:
+            pieces.append(text)
+    lines, line = [], head
+    for piece in pieces:
+        if len(line) + len(piece) > width and line.strip():
             lines.append(line.rstrip())
             line = indent
-        line += text + " "
-    return lines + [line.rstrip()]
+        line += piece + " "
+    return [ln for ln in lines + [line.rstrip()] if ln.strip()]
 
 
 def _point(p) -> str:
