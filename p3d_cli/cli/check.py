@@ -163,7 +163,8 @@ def check_text(result: CheckResult) -> str:
     r = result.report
     head = "ok" if result.ok else "FAILED " + ", ".join(result.failed)
     name = output.shown_name(result.source)
-    details = f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, volume {output.number(r.volume)})"
+    details = (f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, "
+               f"volume {output.number(r.volume)})")
     lines = [f"{name}: {head}  {details}"]
     if len(lines[0]) > 80 and len(name) <= 40:
         # Break before the details when that makes the verdict fit; a name too long for any
