@@ -12,6 +12,7 @@ from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import (
     FiniteFloat,
     batch_options,
+    config_option,
     field_option,
     format_option,
     inputs_argument,
@@ -19,6 +20,7 @@ from p3d_cli.cli.options import (
 )
 from p3d_cli.cli.props import field, output_style, plural
 from p3d_cli.cli.reporting import Batch, Report
+from p3d_cli.config import Config
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.topology import CHECKS, CheckResult
 
@@ -36,9 +38,14 @@ _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("duplicate_faces", "duplicate face", "duplicate_face_samples"))
 
 
-def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), **limits) -> Report:
+def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), config: Config | None = None,
+                 **limits) -> Report:
     """One input's verdict in ``style`` (text, json, csv or fields), formatted where it was
-    computed (module level, so that worker processes can receive it)."""
+    computed (module level, so that worker processes can receive it). Without ``require``, the
+    project settings' ``require`` for the input applies (default: every check)."""
+    if limits.get("require") is None:
+        limits["require"] = parse_require(tuple((config or Config()).get("require", source, ())),
+                                          where=f"{getattr(config, 'path', None)}: require")
     result = measure.check(source, **limits)
     if style == "text":
         text = check_text(result)
@@ -84,7 +91,7 @@ def error_line(outcome, *, style: str) -> str | None:
     return output.dumps(record) if style == "json" else check_csv_line(record)
 
 
-def parse_require(values: tuple[str, ...]) -> tuple[str, ...]:
+def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:
     """``--require`` values (repeatable, comma-separated; ``all``, ``none``) as check names."""
     if not values:
         return tuple(CHECKS)
@@ -98,7 +105,7 @@ def parse_require(values: tuple[str, ...]) -> tuple[str, ...]:
             elif name in CHECKS:
                 names.append(name)
             else:
-                raise UsageError("--require", f"no check named {name!r}",
+                raise UsageError(where, f"no check named {name!r}",
                                  "checks are: " + ", ".join(CHECKS) + " (or all, none)")
     return tuple(dict.fromkeys(names))
 
@@ -248,8 +255,9 @@ def _sample_text(sample) -> str:
               help="Also fail a mesh with more than N faces.")
 @json_option
 @field_option
+@config_option
 @batch_options
-def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, batch):
+def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch):
     """Check that meshes are clean solids: one verdict per file, and an exit status.
 
     Each mesh is checked for being closed (every edge used by exactly two faces, in
@@ -278,11 +286,11 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, batch):
       p3d check part.stl --require closed,outward --min-volume 1e-6 --max-faces 200000
       find . -name '*.stl' | p3d check --files-from - --csv --jobs 8
     """
-    required = parse_require(require)
+    required = parse_require(require) if require else None   # None: the settings', or all
     style = output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
-    work = functools.partial(check_report, style=style, fields=fields, format=fmt, require=required,
-                             min_volume=min_volume, max_faces=max_faces)
+    work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
+                             require=required, min_volume=min_volume, max_faces=max_faces)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))

@@ -49,7 +49,8 @@ VECTOR3 = Vector3()
 
 
 def inputs_argument(f):
-    return click.argument("inputs", nargs=-1, metavar="INPUT...")(f)
+    # click.Path: shells complete file names for the inputs (no check here: specs are inputs too).
+    return click.argument("inputs", nargs=-1, metavar="INPUT...", type=click.Path())(f)
 
 
 def format_option(f):
@@ -242,3 +243,18 @@ def precision_option(f):
     return click.option("--precision", type=click.IntRange(1, 17), default=None, metavar="N",
                         help="Significant digits of numbers in the table (default 10) and in "
                              "--csv (default 15); --json always keeps full precision.")(f)
+
+
+def config_option(f):
+    """``--no-config`` alone (for commands without warnings), handed on as ``config: Config``."""
+    import functools
+
+    @functools.wraps(f)
+    def command(*args, no_config, **kwargs):
+        from p3d_cli.config import Config, load_config
+
+        return f(*args, config=Config() if no_config else load_config(), **kwargs)
+
+    return click.option("--no-config", is_flag=True,
+                        help="Ignore the project settings (p3d.toml, or [tool.p3d] in "
+                             "pyproject.toml, found from the working directory up).")(command)

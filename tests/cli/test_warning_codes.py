@@ -146,3 +146,15 @@ def test_bad_settings_are_one_clear_error(tmp_path, monkeypatch):
     assert "p3d.toml: unknown p3d setting 'densty'" in result.stderr and "Traceback" not in result.output
     (tmp_path / "p3d.toml").write_text("density = [\n")
     assert "not valid TOML" in run("props", "box").stderr
+
+
+def test_check_requirements_by_glob(tmp_path, monkeypatch):
+    (tmp_path / "scans").mkdir()
+    write_binary_stl(tmp_path / "scans" / "open.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    (tmp_path / "p3d.toml").write_text('[[paths]]\nglob = "scans/*"\nrequire = ["outward"]\n')
+    monkeypatch.chdir(tmp_path)
+    assert run("check", "scans/open.stl").exit_code == 0            # scans need only be outward
+    assert run("check", "open.stl").exit_code == 1                  # everything else: every check
+    assert run("check", "scans/open.stl", "--no-config").exit_code == 1
+    assert run("check", "scans/open.stl", "--require", "closed").exit_code == 1   # the command line wins
