@@ -55,10 +55,8 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
     if batch.csv:
         raise UsageError("--csv", "not an output of p3d diff", "use the default lines or --json")
     root = os.path.abspath(root or os.getcwd())
-    config = settings.config
-    rtols = bl.tolerances([*(x for x in [config.get("rtol")] if x is not None), *rtol], bl.QUANTITIES, "--rtol")
-    atols = bl.tolerances([*(x for x in [config.get("atol")] if x is not None), *atol],
-                          dict.fromkeys(bl.QUANTITIES, 0.0), "--atol")
+    limits = functools.partial(_tolerances, settings.config, rtol, atol)
+    limits(None)   # refuse bad tolerances before any input is read
     old = bl.read_baseline(baseline_file, root) if not (update and not os.path.exists(baseline_file)) else {}
     run = Batch("p3d diff", inputs, batch)
     work = functools.partial(props_report, style="json", fields=(), strict=False, settings=settings,
@@ -74,7 +72,7 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
             record = json.loads(outcome.result.text or "{}")
         key = bl.baseline_key(outcome.source, root)
         current[key] = record
-        changes = bl.compare(key, old[key], record, rtols, atols) if key in old else \
+        changes = bl.compare(key, old[key], record, *limits(outcome.source)) if key in old else \
             [bl.Change(key, "file", None, "appeared")]
         _report(run, key, changes, as_json)
     for key in old:
@@ -84,6 +82,16 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
         _write_baseline(baseline_file, current, root)
         run.status = 0
     return run.finish("changed")
+
+
+def _tolerances(config, rtol, atol, source: str | None) -> tuple[dict, dict]:
+    """``(rtol, atol)`` per quantity for ``source``: p3d's defaults, then the project settings
+    (the top level, then the matching ``[[paths]]``), then the command line."""
+    settings = config.settings if source is None else config.for_source(source)
+    rtols = bl.tolerances([*(x for x in [settings.get("rtol")] if x is not None), *rtol], bl.QUANTITIES, "--rtol")
+    atols = bl.tolerances([*(x for x in [settings.get("atol")] if x is not None), *atol],
+                          dict.fromkeys(bl.QUANTITIES, 0.0), "--atol")
+    return rtols, atols
 
 
 def _report(run: Batch, key: str, changes: list, as_json: bool) -> None:

@@ -134,3 +134,13 @@ def test_bad_baseline_and_bad_tolerance_are_clear_errors(project):
     assert missing.exit_code == 2 and "nope.ndjson: no such file" in missing.stderr
     tolerance = run("diff", "baseline.ndjson", "parts", "--rtol", "volum=1")
     assert tolerance.exit_code == 2 and "no quantity 'volum'" in tolerance.stderr
+
+
+def test_tolerances_from_project_settings_by_glob(project):
+    write_binary_stl(project / "parts" / "p1.stl", part(1) * 1.0001)
+    (project / "p3d.toml").write_text('[[paths]]\nglob = "parts/p1.stl"\nrtol = { volume = 1e-3, mass = 1e-3, '
+                                      'center_of_mass = 1e-3, inertia = 1e-3, principal_moments = 1e-3, '
+                                      '"bounds.min" = 1e-3, "bounds.max" = 1e-3 }\n')
+    assert run("diff", "baseline.ndjson", "parts").exit_code == 0
+    assert run("diff", "baseline.ndjson", "parts", "--no-config").exit_code == 1
+    assert run("diff", "baseline.ndjson", "parts", "--rtol", "inertia=1e-6").exit_code == 1   # command line wins
