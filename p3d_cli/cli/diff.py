@@ -102,7 +102,8 @@ def _report(run: Batch, key: str, changes: list, as_json: bool) -> None:
 
 
 def change_line(change: bl.Change) -> str:
-    """``parts/a.stl: volume 1 -> 1.0003 (+0.03%)``."""
+    """``parts/a.stl: volume 1 -> 1.0003 (+0.03%)``; a vector or matrix by the component that
+    moved most, ``inertia[1,1]``, with its quantity's relative change."""
     name = output.shown_name(change.source)
     if change.quantity == "file":
         what = {"appeared": "appeared (not in the baseline)", "vanished": "vanished (in the baseline, not found)",
@@ -110,7 +111,29 @@ def change_line(change: bl.Change) -> str:
         if change.old not in (None, "present", "read") and change.new == "read":
             what = "can be read now (the baseline has an error)"
         return f"{name}: {what}"
-    return f"{name}: {change.quantity} {_value(change.old)} -> {_value(change.new)}{_relative(change.relative)}"
+    quantity, old, new = change.quantity, change.old, change.new
+    if isinstance(old, list) and isinstance(new, list) and _shape(old) == _shape(new) and old:
+        # A vector or matrix: the component that moved most stands for it (the JSON has all).
+        index = max(_indices(old), key=lambda i: abs(_at(new, i) - _at(old, i)))
+        quantity = f"{quantity}[{','.join(map(str, index))}]"
+        old, new = _at(old, index), _at(new, index)
+    return f"{name}: {quantity} {_value(old)} -> {_value(new)}{_relative(change.relative)}"
+
+
+def _shape(value) -> tuple:
+    return (len(value),) + _shape(value[0]) if isinstance(value, list) and value else ()
+
+
+def _indices(value, prefix: tuple = ()) -> list[tuple]:
+    if isinstance(value, list):
+        return [i for k, v in enumerate(value) for i in _indices(v, prefix + (k,))]
+    return [prefix]
+
+
+def _at(value, index: tuple):
+    for k in index:
+        value = value[k]
+    return value
 
 
 def _value(value) -> str:
@@ -127,7 +150,7 @@ def _value(value) -> str:
 def _relative(relative) -> str:
     if relative is None:
         return ""
-    return f" ({relative:+.3g})" if abs(relative) < 1e-3 else f" ({relative * 100:+.3g}%)"
+    return f" ({relative * 100:+.3g}%)"
 
 
 def _write_baseline(path: str, records: dict[str, dict], root: str) -> None:

@@ -204,7 +204,8 @@ def props_table(result: PropsResult, precision: int = 10) -> str:
     vector = functools.partial(output.vector, precision=precision, width=max(17, precision + 7))
     lines = [
         output.shown_name(f.source),
-        f"  {f.format}, {plural(f.faces, 'face')}, closed: {closed}, method: {result.method}",
+        f"  {f.format}, " + ("" if f.format == "primitive" else f"{plural(f.faces, 'face')}, ")
+        + f"closed: {closed}, method: {result.method}",
         f"  volume            {number(p['volume'])}",
         f"  density           {number(p['density'])}",
         f"  mass              {number(p['mass'])}",

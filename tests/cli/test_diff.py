@@ -63,7 +63,8 @@ def test_scale_by_1_0001_is_reported_for_that_file_only(project):
     lines = changed_lines(result)
     assert lines and all(line.startswith("parts/p1.stl: ") for line in lines)
     volume = next(line for line in lines if line.startswith("parts/p1.stl: volume "))
-    assert "-> " in volume and "(+0.0003)" in volume        # 1.0001**3 - 1 = 3.0003e-4
+    assert "-> " in volume and volume.endswith(" (+0.03%)")        # 1.0001**3 - 1 = 3.0003e-4
+    assert all(len(line) <= 80 for line in lines), lines           # vectors by their largest change
     records = [json.loads(line) for line in run("diff", "baseline.ndjson", "parts", "--json").stdout.splitlines()]
     vol = next(r for r in records if r["quantity"] == "volume")
     assert vol["new"] / vol["old"] == pytest.approx(1.0001 ** 3, rel=1e-6)
