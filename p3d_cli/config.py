@@ -23,7 +23,6 @@ top-level settings, then p3d's defaults. ``units`` is accepted and kept for the 
 
 from __future__ import annotations
 
-import fnmatch
 import os
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,6 +59,8 @@ class Config:
         merged = dict(self.settings)
         if not self.paths or self.path is None:
             return merged
+        import fnmatch
+
         root = os.path.dirname(os.path.abspath(self.path))
         relative = os.path.relpath(os.path.abspath(source), root).replace(os.sep, "/")
         for pattern, settings in self.paths:
@@ -81,12 +82,26 @@ def find_config(start: str | None = None) -> str | None:
         if os.path.isfile(candidate):
             return candidate
         pyproject = os.path.join(directory, "pyproject.toml")
-        if os.path.isfile(pyproject) and "tool" in _read(pyproject) and "p3d" in _read(pyproject)["tool"]:
+        if os.path.isfile(pyproject) and _has_p3d_table(pyproject):
             return pyproject
         parent = os.path.dirname(directory)
         if parent == directory:
             return None
         directory = parent
+
+
+def _has_p3d_table(pyproject: str) -> bool:
+    """Whether a pyproject.toml has a ``[tool.p3d]`` table. The text is looked at first, so that
+    most files are never parsed (start-up time) and a broken file of another project's that
+    does not mention p3d cannot stop p3d."""
+    try:
+        with open(pyproject, encoding="utf-8", errors="replace") as f:
+            text = f.read()
+    except OSError:
+        return False
+    if "tool.p3d" not in text:
+        return False
+    return "p3d" in _read(pyproject).get("tool", {})
 
 
 def load_config(path: str | None = None, start: str | None = None) -> Config:

@@ -39,8 +39,9 @@ FALLBACK = "reader"
 #: below the default the library does not warn at all).
 THRESHOLDS: dict[str, float] = {"coarse-float32": 1e-6}
 
-#: Plain-string warnings -> codes: the first pattern that matches (``re.search``) wins.
-PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((code, re.compile(pattern)) for code, pattern in (
+#: Plain-string warnings -> codes: the first pattern (a regular expression, for ``re.search``;
+#: compiled on first use, not at import: start-up time) that matches wins.
+PATTERNS: tuple[tuple[str, str], ...] = (
     ("montecarlo-winding", r"Monte Carlo's inside test ignores the winding"),
     ("montecarlo-open", r"Monte Carlo on an open mesh"),
     ("montecarlo-empty", r"no Monte Carlo sample fell inside"),
@@ -55,7 +56,7 @@ PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((code, re.compile(patt
     ("unit-slip", r"\bunits?\b"),
     ("skipped-lines", r"(lines?|statements?)\b.*\b(ignored|skipped)|(ignored|skipped)\b.*\b(lines?|statements?)\b"),
     ("trailing-data", r"(bytes|values|numbers)\b.*\bignored"),
-))
+)
 
 
 class CodedWarning(str):
@@ -91,7 +92,7 @@ def code_of(warning: str) -> str:
     if isinstance(code, str):
         return code
     for name, pattern in PATTERNS:
-        if pattern.search(warning):
+        if re.search(pattern, warning):
             return name
     return FALLBACK
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import json
 import time
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import click
@@ -129,6 +128,7 @@ def summary_record(command: str, entries, skipped: dict[str, list[str]], status:
 def junit_xml(command: str, entries, seconds: float = 0.0) -> str:
     """The JUnit XML report: one ``<testsuite>`` for the command, one ``<testcase>`` per entry
     (the batch's wall time on the suite; inputs run in parallel have no time of their own)."""
+    import xml.etree.ElementTree as ET
     tally = counts(entries)
     suite_name = command
     # The skipped count goes on the suite only: Jenkins' schema has no such attribute on testsuites.
