@@ -19,6 +19,7 @@ from p3d_cli.placement import IDENTITY, Placement, watch_bounds
 from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
 from p3d_cli.solid import Solid
+from p3d_cli.warning_codes import CodedWarning
 
 #: A float32 file whose coordinate spacing exceeds this fraction of the part's size is
 #: coarse: the file itself, not the arithmetic, limits the accuracy (docs/method.md,
@@ -88,8 +89,9 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     facts = mesh_facts(solid, found)
     warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
     if found.inverted_tetrahedra:
-        warnings.append(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed inside "
-                        "out (negative orientation); each was counted with its positive volume")
+        warnings.append(CodedWarning(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed "
+                                     "inside out (negative orientation); each was counted with its positive "
+                                     "volume", "inverted-tetrahedra"))
     moments = found.moments
     if placed_bounds is not None:
         moments = placement.moments(moments)
@@ -158,40 +160,45 @@ def refuse_tessellate(solid: Solid, tessellate: int | None) -> None:
 
 
 def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[str]:
-    """Plain-words warnings for results that are not a clean solid's."""
-    out = []
+    """Plain-words warnings for results that are not a clean solid's, each a ``CodedWarning``
+    (``p3d_cli.warning_codes``: open, flat, inward, self-intersecting, coarse-float32)."""
+    out: list[str] = []
     if facts.closed is False:
-        out.append("mesh is not closed (some edge is not shared by exactly two faces in opposite "
+        out.append(CodedWarning("mesh is not closed (some edge is not shared by exactly two faces in opposite "
                    "directions, vertices matched by exact coordinates): an open surface has no "
-                   "well-defined volume, and these numbers depend on the formula and the origin")
+                   "well-defined volume, and these numbers depend on the formula and the origin", "open"))
     if moments.is_empty:
-        out.append("mesh encloses no volume (flat or degenerate): centre of mass and inertia are undefined")
+        out.append(CodedWarning("mesh encloses no volume (flat or degenerate): centre of mass and inertia are "
+                                "undefined", "flat"))
     elif moments.volume < 0:
         what = "closed but wound inward" if facts.closed else "wound mostly inward"
-        out.append(f"signed volume is negative: the mesh is {what} (faces point into the solid); "
-                   "mass and inertia carry the same negative sign; reverse the face winding to fix")
+        out.append(CodedWarning(f"signed volume is negative: the mesh is {what} (faces point into the solid); "
+                                "mass and inertia carry the same negative sign; reverse the face winding to "
+                                "fix", "inward"))
     elif facts.closed:
         principal = np.linalg.eigvalsh(inertia_from_second_moments(moments.central))
         if breaks_triangle_inequality(principal):
-            out.append("inertia is not a solid's (a principal moment is negative or breaks the "
-                       "triangle inequality): the mesh probably intersects itself")
+            out.append(CodedWarning("inertia is not a solid's (a principal moment is negative or breaks the "
+                                    "triangle inequality): the mesh probably intersects itself",
+                                    "self-intersecting"))
     coarse = _coarse_float32(facts)
     if coarse:
         out.append(coarse)
     return out
 
 
-def _coarse_float32(facts: MeshFacts) -> str | None:
+def _coarse_float32(facts: MeshFacts) -> CodedWarning | None:
     if facts.coordinate_dtype != "float32" or facts.bounds is None:
         return None
     extent = float(np.abs(np.concatenate([facts.bounds.min, facts.bounds.max])).max())
     size = facts.bounds.diagonal
     spacing = extent * 2.0 ** -23
     if size > 0 and spacing > COARSE_FLOAT32 * size:
-        return (f"coordinates are float32 and the part lies far from the origin: the file "
-                f"resolves only {spacing:.3g} ({spacing / size:.2g} of the part's size); the "
-                "file's precision, not p3d's arithmetic, limits these results; export in "
-                "float64 (ASCII or double PLY) or nearer the origin")
+        return CodedWarning(f"coordinates are float32 and the part lies far from the origin: the file "
+                            f"resolves only {spacing:.3g} ({spacing / size:.2g} of the part's size); the "
+                            "file's precision, not p3d's arithmetic, limits these results; export in "
+                            "float64 (ASCII or double PLY) or nearer the origin", "coarse-float32",
+                            spacing / size)
     return None
 
 

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from p3d_cli.warning_codes import code_of
+
 
 @dataclass(frozen=True)
 class Bounds:
@@ -188,6 +190,7 @@ class PropsResult:
     method : str
         ``exact`` (divergence theorem / closed form) or ``montecarlo``.
     warnings : tuple of str
+        Plain-words warnings; ``warning_codes`` gives their stable codes.
     uncertainty : dict or None
         Same keys as the estimates (``volume``, ``center_of_mass``, ``inertia``): standard
         errors for Monte Carlo, rounding-error bounds for the exact method.
@@ -210,6 +213,11 @@ class PropsResult:
     details: dict = field(default_factory=dict)
     units: dict | None = None
     parts: tuple["PropsResult", ...] = field(default_factory=tuple)
+
+    @property
+    def warning_codes(self) -> tuple[str, ...]:
+        """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
+        return tuple(code_of(w) for w in self.warnings)
 
 
 @dataclass(frozen=True)
@@ -236,3 +244,8 @@ class BoundsResult:
     bounds: Bounds
     faces: int = 0
     warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def warning_codes(self) -> tuple[str, ...]:
+        """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
+        return tuple(code_of(w) for w in self.warnings)

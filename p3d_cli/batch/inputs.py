@@ -15,35 +15,68 @@ from typing import Iterable, Iterator
 from p3d_cli.errors import InputError, P3DError, UsageError
 
 
-def expand_inputs(inputs: Iterable[str | InputError]) -> Iterator[str | InputError]:
+def expand_inputs(inputs: Iterable[str | InputError],
+                  skipped: dict[str, list[str]] | None = None) -> Iterator[str | InputError]:
     """Inputs as given, with each directory replaced by the mesh files under it (sorted).
 
-    A directory with no mesh files yields an ``InputError`` in its place; errors among the
-    inputs pass through.
+    A directory with no mesh files yields an ``InputError`` in its place (naming the kinds of
+    file it does hold); errors among the inputs pass through.
+
+    Parameters
+    ----------
+    inputs : iterable of str or InputError
+    skipped : dict, optional
+        Filled with the files a directory search passed over, by extension (lower case, with
+        its dot; ``""`` for none): ``{".3mf": ["exports/a.3mf"]}``.
     """
     from p3d_cli.io import is_mesh_path
 
+    skipped = {} if skipped is None else skipped
     for item in inputs:
         if isinstance(item, P3DError):
             yield item
         elif item != "-" and os.path.isdir(item):
-            found = []
+            found: list[str] = []
+            passed: dict[str, list[str]] = {}
             for root, dirs, files in os.walk(item):
                 dirs.sort()
-                found += [os.path.join(root, name) for name in sorted(files) if is_mesh_path(name)]
+                for name in sorted(files):
+                    path = os.path.join(root, name)
+                    if is_mesh_path(name):
+                        found.append(path)
+                    else:
+                        passed.setdefault(os.path.splitext(name)[1].lower(), []).append(path)
+            for extension, paths in passed.items():
+                skipped.setdefault(extension, []).extend(paths)
             if not found:
-                yield InputError(item, "directory holds no mesh files",
-                                 "p3d reads .stl, .obj, .ply, .off and meshio's formats")
+                yield _no_meshes(item, passed)
             yield from found
         else:
             yield item
 
 
-def read_file_list(files_from: str, stdin=None) -> list[str]:
+def extension_counts(skipped: dict[str, list[str]]) -> str:
+    """``2 .3mf, 1 .glb``: the skipped files by extension, most first."""
+    counts = sorted(((len(paths), ext or "without extension") for ext, paths in skipped.items()),
+                    key=lambda pair: (-pair[0], pair[1]))
+    return ", ".join(f"{n} {ext}" for n, ext in counts)
+
+
+def _no_meshes(directory: str, passed: dict[str, list[str]]) -> InputError:
+    hint = "p3d reads .stl, .obj, .ply, .off and meshio's formats"
+    if not passed:
+        return InputError(directory, "directory holds no mesh files", hint)
+    return InputError(directory, "directory holds no mesh files, only files p3d does not read ("
+                      + extension_counts(passed) + ")", hint + " (--format NAME reads a named file as NAME)")
+
+
+def read_file_list(files_from: str, stdin=None, null: bool = False) -> list[str]:
     """The paths listed in ``files_from``, one per line (``-``: standard input).
 
     Surrounding white space is stripped and blank lines are skipped; relative paths are
-    relative to the current directory.
+    relative to the current directory. With ``null``, paths are separated by NUL bytes instead
+    (``git ls-files -z``, ``find -print0``) and kept exactly, spaces and newlines included.
+    Bytes that are not UTF-8 are kept as surrogate escapes, so the names open as listed.
 
     Raises
     ------
@@ -52,13 +85,12 @@ def read_file_list(files_from: str, stdin=None) -> list[str]:
     """
     if files_from == "-":
         stream = stdin if stdin is not None else sys.stdin
-        text = stream.read()
-        if isinstance(text, bytes):
-            text = text.decode("utf-8", "surrogateescape")
+        data = stream.buffer.read() if null and hasattr(stream, "buffer") else stream.read()
+        text = data.decode("utf-8", "surrogateescape") if isinstance(data, bytes) else data
     else:
         try:
-            with open(files_from, encoding="utf-8", errors="surrogateescape") as f:
-                text = f.read()
+            with open(files_from, "rb") as f:
+                text = f.read().decode("utf-8", "surrogateescape")
         except FileNotFoundError:
             raise InputError(files_from, "no such file", "check the path of the list") from None
         except IsADirectoryError:
@@ -66,10 +98,13 @@ def read_file_list(files_from: str, stdin=None) -> list[str]:
                              "the list is a text file of paths; pass a directory as an input") from None
         except OSError as exc:
             raise InputError(files_from, f"cannot be read ({exc.strerror or exc})", "check the file") from None
+    if null:
+        return [name for name in text.split("\0") if name]
     return [line.strip() for line in text.splitlines() if line.strip()]
 
 
-def collect_inputs(inputs: Iterable[str], files_from: str | None, command: str) -> list[str | InputError]:
+def collect_inputs(inputs: Iterable[str], files_from: str | None, command: str, *,
+                   null: bool = False) -> list[str | InputError]:
     """All inputs of a batch, expanded: arguments first, then the ``--files-from`` list.
 
     Raises
@@ -79,20 +114,30 @@ def collect_inputs(inputs: Iterable[str], files_from: str | None, command: str) 
     InputError
         The list cannot be read.
     """
+    return collect(inputs, files_from, command, null=null)[0]
+
+
+def collect(inputs: Iterable[str], files_from: str | None, command: str, *,
+            null: bool = False) -> tuple[list[str | InputError], dict[str, list[str]]]:
+    """As ``collect_inputs``, and the files the directory searches skipped, by extension
+    (see ``expand_inputs``)."""
     given = list(inputs)
     if files_from is not None:
         if files_from == "-" and "-" in given:
             raise UsageError("files_from", "standard input cannot hold both the list and a mesh (-)",
                              "write the list to a file, or give the mesh by path")
-        listed = read_file_list(files_from)
+        listed = read_file_list(files_from, null=null)
         if not listed:
             raise UsageError("files_from", f"{'standard input' if files_from == '-' else files_from} "
-                             "lists no files", "write one path per line")
+                             "lists no files", "write one path per line" + (" (NUL-separated)" if null else ""))
         if files_from == "-" and "-" in listed:
             raise UsageError("files_from", "the list on standard input names - (standard input), which holds the list",
                              "give the mesh by path")
         given += listed
+    elif null:
+        raise UsageError("null", "given without files_from=", "-0 says how the --files-from list is separated")
     if not given:
         raise UsageError(command, "no input given",
                          "name mesh files, directories, - for standard input, or a list of files")
-    return list(expand_inputs(given))
+    skipped: dict[str, list[str]] = {}
+    return list(expand_inputs(given, skipped)), skipped

@@ -12,14 +12,18 @@ from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import (
     PLACEMENT_HELP,
     batch_options,
+    field_option,
     format_option,
     inputs_argument,
     json_option,
     placement_options,
+    precision_option,
     units_options,
+    warning_options,
 )
+from p3d_cli.cli.props import field, output_style, plural
 from p3d_cli.cli.reporting import Batch, Report
-from p3d_cli.errors import UsageError
+from p3d_cli.cli.settings import WarningFilter
 
 
 @click.command(help=f"""Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation
@@ -52,20 +56,22 @@ Examples:
 @inputs_argument
 @format_option
 @placement_options
-@units_options
 @json_option
+@field_option
+@precision_option
+@warning_options
 @batch_options
-def bounds(inputs, fmt, placement, tessellate, units, output_units, as_json, batch):
-    if as_json and batch.csv:
-        raise UsageError("--json/--csv", "both given", "choose one output format")
-    style = "csv" if batch.csv else "json" if as_json else "table"
+@units_options
+def bounds(inputs, fmt, placement, tessellate, units, output_units, as_json, fields, precision, settings, batch):
+    style = output_style(as_json, batch.csv, fields, "table")
     run = Batch("p3d bounds", inputs, batch)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate,
-                                 format=fmt, units=units, output_units=output_units),
+                                 format=fmt, units=units, output_units=output_units, fields=fields,
+                                 precision=precision, settings=settings),
                functools.partial(error_line, style=style))
-    return run.finish()
+    return run.finish("failed")
 
 
 #: Columns of ``p3d bounds --csv``.
@@ -73,33 +79,41 @@ CSV_COLUMNS = ("source", "format", "method", "faces", "min_x", "min_y", "min_z",
                "warnings", "error")
 
 
-def bounds_report(source: str, *, style: str, **options) -> Report:
-    """One input's bounds in ``style`` (table, json or csv), formatted where they were computed
-    (module level, so that worker processes can receive it)."""
+def bounds_report(source: str, *, style: str, fields: tuple[str, ...] = (), precision: int | None = None,
+                  settings: WarningFilter = WarningFilter(), **options) -> Report:
+    """One input's bounds in ``style`` (table, json, csv or fields), formatted where they were
+    computed (module level, so that worker processes can receive it)."""
     result = measure.bounds(source, **options)
-    notes = tuple(f"p3d: warning: {result.source}: {text}" for text in result.warnings)
+    kept = settings.keep(result.source, result.warnings)
     if style == "table":
-        return Report(bounds_table(result), notes)
+        return Report(bounds_table(result, precision or 10), source=result.source, warnings=kept)
     record = bounds_record(result)
-    return Report(output.dumps(record) if style == "json" else csv_row(record), notes)
+    if style == "fields":
+        text = "\t".join(output.bare(field(record, name)) for name in fields)
+    elif style == "json":
+        text = output.dumps(record)
+    else:
+        text = csv_row(record, precision or output.CSV_PRECISION)
+    return Report(text, source=result.source, warnings=kept)
 
 
-def csv_row(record: dict) -> str:
-    """The ``--csv`` row of a JSON record (or of an error record)."""
+def csv_row(record: dict, precision: int | None = None) -> str:
+    """The ``--csv`` row of a JSON record (or of an error record); warnings as their codes."""
     row = dict.fromkeys(CSV_COLUMNS)
     row.update({k: v for k, v in record.items() if k in row})
     for end in ("min", "max"):
         if record.get(end) is not None:
             row.update(zip((f"{end}_x", f"{end}_y", f"{end}_z"), (float(x) for x in record[end])))
-    row["warnings"] = " | ".join(record.get("warnings") or []) or None
-    return output.csv_line(row[k] for k in CSV_COLUMNS)
+    row["warnings"] = " ".join(record.get("warning_codes") or []) or None
+    return output.csv_line((row[k] for k in CSV_COLUMNS), precision)
 
 
 def error_line(outcome, *, style: str) -> str | None:
-    """The record of an input that could not be done: JSON or CSV; nothing in table style."""
+    """The record of an input that could not be done: JSON or CSV, an empty line for --field;
+    nothing in table style."""
     record = {"source": outcome.source, "error": error_message(outcome.error)}
-    if style == "table":
-        return None
+    if style in ("table", "fields"):
+        return None if style == "table" else ""
     return output.dumps(record) if style == "json" else csv_row(record)
 
 
@@ -116,17 +130,19 @@ def bounds_record(result) -> dict:
         "size": b.size,
         "center": b.center,
         "diagonal": b.diagonal,
-        "warnings": list(result.warnings),
+        "warnings": [str(w) for w in result.warnings],
+        "warning_codes": list(result.warning_codes),
     }
 
 
-def bounds_table(result) -> str:
+def bounds_table(result, precision: int = 10) -> str:
     b = result.bounds
-    faces = "" if result.format == "primitive" else f", {result.faces} faces"
+    faces = "" if result.format == "primitive" else f", {plural(result.faces, 'face')}"
+    vector = functools.partial(output.vector, precision=precision, width=max(17, precision + 7))
     return "\n".join([
-        f"{result.source}  ({result.format}{faces}, {result.method})",
-        f"  min      {output.vector(b.min)}",
-        f"  max      {output.vector(b.max)}",
-        f"  size     {output.vector(b.size)}",
-        f"  center   {output.vector(b.center)}",
+        f"{output.shown_name(result.source)}  ({result.format}{faces}, {result.method})",
+        f"  min      {vector(b.min)}",
+        f"  max      {vector(b.max)}",
+        f"  size     {vector(b.size)}",
+        f"  center   {vector(b.center)}",
     ])

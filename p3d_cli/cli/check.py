@@ -9,8 +9,18 @@ import click
 from p3d_cli import measure
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
-from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
+from p3d_cli.cli.options import (
+    FiniteFloat,
+    batch_options,
+    config_option,
+    field_option,
+    format_option,
+    inputs_argument,
+    json_option,
+)
+from p3d_cli.cli.props import field, output_style, plural
 from p3d_cli.cli.reporting import Batch, Report
+from p3d_cli.config import Config
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.topology import CHECKS, CheckResult
 
@@ -28,27 +38,60 @@ _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("duplicate_faces", "duplicate face", "duplicate_face_samples"))
 
 
-def check_report(source: str, *, style: str, **limits) -> Report:
-    """One input's verdict in ``style`` (text, json or csv), formatted where it was computed
-    (module level, so that worker processes can receive it)."""
+def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), config: Config | None = None,
+                 **limits) -> Report:
+    """One input's verdict in ``style`` (text, json, csv or fields), formatted where it was
+    computed (module level, so that worker processes can receive it). Without ``require``, the
+    project settings' ``require`` for the input applies (default: every check)."""
+    if limits.get("require") is None:
+        limits["require"] = parse_require(tuple((config or Config()).get("require", source, ())),
+                                          where=f"{getattr(config, 'path', None)}: require")
     result = measure.check(source, **limits)
     if style == "text":
         text = check_text(result)
     else:
         record = check_record(result)
-        text = output.dumps(record) if style == "json" else check_csv_line(record)
-    return Report(text, passed=result.ok)
+        if style == "fields":
+            text = "\t".join(output.bare(field(record, name)) for name in fields)
+        else:
+            text = output.dumps(record) if style == "json" else check_csv_line(record)
+    return Report(text, passed=result.ok, source=result.source, failures=failure_messages(result))
+
+
+def failure_messages(result: CheckResult) -> tuple[tuple[str, str], ...]:
+    """``(check, message)`` for each failed check, for CI reports."""
+    r = result.report
+    counts = {"closed": plural(r.boundary_edges, "boundary edge"),
+              "oriented": plural(r.misoriented_edges, "misoriented edge"),
+              "manifold": f"{plural(r.nonmanifold_edges, 'non-manifold edge')}, "
+                          f"{plural(r.nonmanifold_vertices, 'non-manifold vertex')}",
+              "no-degenerate": plural(r.degenerate_faces, "degenerate face"),
+              "no-duplicate": plural(r.duplicate_faces, "duplicate face")}
+    out = []
+    for name in result.failed:
+        if name == "min-volume":
+            text = f"signed volume {output.number(r.volume)} is below the min-volume limit"
+        elif name == "max-faces":
+            text = f"{plural(r.faces, 'face')}: over the max-faces limit"
+        elif name == "outward":
+            text = f"signed volume {output.number(r.volume)} is not positive (faces point inward)"
+        else:
+            detail = f" ({counts[name]})" if name in counts else ""
+            text = f"fails the {name} check{detail}: {CHECKS.get(name, name)}"
+        out.append((name, text))
+    return tuple(out)
 
 
 def error_line(outcome, *, style: str) -> str | None:
-    """The record of an input that could not be read: JSON or CSV; nothing in text style."""
+    """The record of an input that could not be read: JSON or CSV, an empty line for --field;
+    nothing in text style."""
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
-    if style == "text":
-        return None
+    if style in ("text", "fields"):
+        return None if style == "text" else ""
     return output.dumps(record) if style == "json" else check_csv_line(record)
 
 
-def parse_require(values: tuple[str, ...]) -> tuple[str, ...]:
+def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:
     """``--require`` values (repeatable, comma-separated; ``all``, ``none``) as check names."""
     if not values:
         return tuple(CHECKS)
@@ -62,7 +105,7 @@ def parse_require(values: tuple[str, ...]) -> tuple[str, ...]:
             elif name in CHECKS:
                 names.append(name)
             else:
-                raise UsageError("--require", f"no check named {name!r}",
+                raise UsageError(where, f"no check named {name!r}",
                                  "checks are: " + ", ".join(CHECKS) + " (or all, none)")
     return tuple(dict.fromkeys(names))
 
@@ -117,30 +160,75 @@ def check_csv_line(record: dict) -> str:
     return output.csv_line(row[key] for key in CSV_COLUMNS)
 
 
+#: Digits of the coordinates of problem locations in the text verdict (enough to find them).
+LOCATION_DIGITS = 7
+
+
 def check_text(result: CheckResult) -> str:
-    """A readable verdict for one input, with sample locations of each problem."""
+    """A readable verdict for one input: 80 columns (a long file name aside), with sample
+    locations of each problem one per line."""
     r = result.report
-    shells = f"{r.shells} shell{'s' if r.shells != 1 else ''}"
     head = "ok" if result.ok else "FAILED " + ", ".join(result.failed)
-    lines = [f"{result.source}: {head}  ({result.format}, {r.faces} faces, {shells}, "
-             f"volume {output.number(r.volume)})"]
+    name = output.shown_name(result.source)
+    details = (f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, "
+               f"volume {output.number(r.volume)})")
+    lines = [f"{name}: {head}  {details}"]
+    if len(lines[0]) > 80 and len(name) <= 40:
+        # Break before the details when that makes the verdict fit; a name too long for any
+        # layout to fit keeps its verdict on one line, which greps better.
+        lines = [f"{name}: {head}", f"  {details}"]
     for key, noun, samples in _COUNTS:
         count = getattr(r, key)
         if count:
-            where = "; ".join(_sample_text(s) for s in getattr(r, samples))
-            lines.append(f"  {count} {noun}{'s' if count != 1 else ''}{' (e.g. ' + where + ')' if where else ''}")
+            head = f"  {count} {noun}{'s' if count != 1 else ''}"
+            listed = [_sample_text(sample) for sample in getattr(r, samples)]
+            lines += _pack(head + " (e.g. ", listed, ")") if listed else [head]
     if r.volume <= 0:
-        lines.append("  signed volume is not positive: faces point inward (reverse the winding) or the "
-                     "mesh encloses nothing")
+        lines += _fit("signed volume is not positive: faces point inward (reverse the winding) or the "
+                      "mesh encloses nothing", "  ")
     if r.shells > 1:
-        listed = ", ".join(f"{output.number(s.volume)} ({s.faces} faces from face {s.first_face})"
-                           for s in r.shell_list[:10])
-        more = f", and {r.shells - 10} more" if r.shells > 10 else ""
-        lines.append(f"  shell volumes: {listed}{more}")
+        lines.append("  shell volumes:")
+        for s in r.shell_list[:10]:
+            lines.append(f"    {output.number(s.volume)} ({plural(s.faces, 'face')} from face {s.first_face})")
+        if r.shells > 10:
+            lines.append(f"    and {r.shells - 10} more")
     for name in ("min-volume", "max-faces"):
         if name in result.failed:
-            lines.append(f"  over the {name} limit" if name == "max-faces" else "  below the min-volume limit")
+            lines.append("  over the max-faces limit" if name == "max-faces" else "  below the min-volume limit")
     return "\n".join(lines)
+
+
+def _fit(text: str, indent: str, width: int = 80) -> list[str]:
+    """``text`` as lines of at most ``width`` columns, each starting with ``indent`` (the
+    continuation lines two spaces further in); breaks only at spaces."""
+    import textwrap
+
+    return textwrap.wrap(text, width, initial_indent=indent, subsequent_indent=indent + "  ",
+                         break_long_words=False, break_on_hyphens=False) or [indent]
+
+
+def _pack(head: str, items: list[str], tail: str, indent: str = "    ", width: int = 80) -> list[str]:
+    """``head`` + items joined by ``; `` + ``tail``, broken between items to fit ``width`` (an
+    edge too long for a line of its own is broken between its two end points)."""
+    pieces = []
+    for i, item in enumerate(items):
+        text = item + (tail if i == len(items) - 1 else ";")
+        if len(indent) + len(text) > width and ")-(" in text:
+            first, rest = text.split(")-(", 1)
+            pieces += [first + ")-", "  (" + rest]
+        else:
+            pieces.append(text)
+    lines, line = [], head
+    for piece in pieces:
+        if len(line) + len(piece) > width and line.strip():
+            lines.append(line.rstrip())
+            line = indent
+        line += piece + " "
+    return [ln for ln in lines + [line.rstrip()] if ln.strip()]
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(output.number(x, LOCATION_DIGITS) for x in p) + ")"
 
 
 def _sample_text(sample) -> str:
@@ -150,9 +238,9 @@ def _sample_text(sample) -> str:
         return f"face {sample[1]} repeats face {sample[0]}"
     faces = "face" + ("s " if len(sample.faces) != 1 else " ") + ",".join(map(str, sample.faces))
     if hasattr(sample, "points"):
-        a, b = (", ".join(output.number(x) for x in p) for p in sample.points)
-        return f"{faces} at ({a})-({b})"
-    return f"{faces} at ({', '.join(output.number(x) for x in sample.point)})"
+        a, b = (_point(p) for p in sample.points)
+        return f"{faces} at {a}-{b}"
+    return f"{faces} at {_point(sample.point)}"
 
 
 @click.command()
@@ -166,8 +254,10 @@ def _sample_text(sample) -> str:
 @click.option("--max-faces", type=click.IntRange(min=0), default=None, metavar="N",
               help="Also fail a mesh with more than N faces.")
 @json_option
+@field_option
+@config_option
 @batch_options
-def check(inputs, fmt, require, min_volume, max_faces, as_json, batch):
+def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch):
     """Check that meshes are clean solids: one verdict per file, and an exit status.
 
     Each mesh is checked for being closed (every edge used by exactly two faces, in
@@ -196,13 +286,11 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, batch):
       p3d check part.stl --require closed,outward --min-volume 1e-6 --max-faces 200000
       find . -name '*.stl' | p3d check --files-from - --csv --jobs 8
     """
-    required = parse_require(require)
-    if as_json and batch.csv:
-        raise UsageError("--json/--csv", "both given", "choose one output format")
-    style = "csv" if batch.csv else "json" if as_json else "text"
+    required = parse_require(require) if require else None   # None: the settings', or all
+    style = output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
-    work = functools.partial(check_report, style=style, format=fmt, require=required, min_volume=min_volume,
-                             max_faces=max_faces)
+    work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
+                             require=required, min_volume=min_volume, max_faces=max_faces)
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))

@@ -69,6 +69,8 @@ FLAGS = {
     "translate": "--translate", "require": "--require", "files_from": "--files-from",
     "dask": "--dask", "jobs": "--jobs", "steps": "--steps", "dt": "--dt", "trajectory": "--trajectory",
     "rpy": "--rpy", "units": "--units", "output_units": "--output-units",
+    "null": "-0/--null", "ignore_warning": "--ignore-warning", "rtol": "--rtol", "atol": "--atol",
+    "root": "--root",
 }
 
 
@@ -216,6 +218,7 @@ class _Commands(MutableMapping):
 cli.commands = _Commands({
     "bounds": "p3d_cli.cli.bounds",
     "check": "p3d_cli.cli.check",
+    "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "solve": "p3d_cli.cli.solve",
 })

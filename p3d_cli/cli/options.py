@@ -88,7 +88,8 @@ VECTOR3 = Vector3()
 
 
 def inputs_argument(f):
-    return click.argument("inputs", nargs=-1, metavar="INPUT...")(f)
+    # click.Path: shells complete file names for the inputs (no check here: specs are inputs too).
+    return click.argument("inputs", nargs=-1, metavar="INPUT...", type=click.Path())(f)
 
 
 def format_option(f):
@@ -136,16 +137,19 @@ def strict_option(f):
 
 
 def batch_options(f):
-    """``--files-from``, ``--jobs``, ``--dask``, ``--csv``, handed to the command as one
-    ``batch: BatchOptions`` argument (see ``p3d_cli.cli.reporting``)."""
+    """``--files-from``, ``-0``, ``--jobs``, ``--dask``, ``--csv``, ``--report``, ``--summary``,
+    handed to the command as one ``batch: BatchOptions`` argument (see ``p3d_cli.cli.reporting``)."""
     import functools
 
     from p3d_cli.cli.reporting import BatchOptions
+    from p3d_cli.cli.reports import parse_reports
 
     @functools.wraps(f)
-    def command(*args, files_from, jobs, dask, as_csv, **kwargs):
-        return f(*args, batch=BatchOptions(files_from, jobs, dask, as_csv), **kwargs)
+    def command(*args, files_from, null, jobs, dask, as_csv, reports, summary, **kwargs):
+        return f(*args, batch=BatchOptions(files_from, jobs, dask, as_csv, null, parse_reports(reports, summary)),
+                 **kwargs)
 
+    command = report_options(command)
     command = click.option("--csv", "as_csv", is_flag=True,
                            help="A CSV table: a header, then one row per input (error rows fill "
                                 "the error column).")(command)
@@ -156,7 +160,10 @@ def batch_options(f):
     command = click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
                            help="Worker processes on this machine (default: one per core; one "
                                 "input or -j 1 runs in this process).")(command)
-    command = click.option("--files-from", metavar="LIST", default=None,
+    command = click.option("--null", "-0", "null", is_flag=True,
+                           help="The --files-from list is NUL-separated (git ls-files -z, find "
+                                "-print0): names are kept exactly, spaces and newlines too.")(command)
+    command = click.option("--files-from", metavar="LIST", default=None, type=click.Path(),
                            help="Also read input paths from LIST, one per line (- for standard "
                                 "input).")(command)
     return command
@@ -219,3 +226,88 @@ def make_placement(scale, turns, quat, translate, rpy=None):
 
     return placement(scale=scale, turns=turns or None, quat=quat, rpy=rpy, translate=translate,
                      names=("--rotate", "--quat", "--rpy"))
+
+
+def report_options(f):
+    """``--report`` (repeatable) and ``--summary``: reports CI systems read (``p3d_cli.cli.reports``);
+    the command receives their raw values as ``reports`` and ``summary``."""
+    f = click.option("--summary", metavar="json:FILE", default=None,
+                     help="Write the counts (ok, warned, failed, errored, skipped, skipped by "
+                          "extension, warnings by code) as one JSON object to FILE.")(f)
+    f = click.option("--report", "reports", multiple=True, metavar="KIND[:FILE]",
+                     help="Also write a report for CI: junit:FILE (JUnit XML, one testcase per "
+                          "input), github (GitHub Actions annotations on stdout) or github:FILE. "
+                          "Repeatable.")(f)
+    return f
+
+
+def warning_options(f):
+    """``--ignore-warning``, ``--warning-threshold`` and ``--no-config``, handed to the command as
+    ``settings: p3d_cli.cli.settings.WarningFilter`` (with the project settings loaded)."""
+    import functools
+
+    from p3d_cli.warning_codes import CODES
+
+    @functools.wraps(f)
+    def command(*args, ignore_warning, warning_threshold, no_config, **kwargs):
+        return f(*args, settings=make_warning_filter(ignore_warning, warning_threshold, no_config), **kwargs)
+
+    command = click.option("--no-config", is_flag=True,
+                           help="Ignore the project settings (p3d.toml, or [tool.p3d] in "
+                                "pyproject.toml, found from the working directory up).")(command)
+    command = click.option("--warning-threshold", multiple=True, metavar="CODE=VALUE",
+                           help="Silence a warning whose measured value is at most VALUE "
+                                "(coarse-float32: spacing / part size, default 1e-6).")(command)
+    command = click.option("--ignore-warning", multiple=True, metavar="CODE",
+                           type=click.Choice(list(CODES)), show_choices=False,
+                           help="Do not show or count warnings with this code (repeatable): "
+                                + ", ".join(CODES) + ". JSON keeps them.")(command)
+    return command
+
+
+def make_warning_filter(ignore, thresholds, no_config: bool):
+    """The ``WarningFilter`` of the warning options (and the project settings, unless
+    ``no_config``).
+
+    Raises
+    ------
+    UsageError, FormatError
+    """
+    from p3d_cli.cli.settings import WarningFilter, parse_thresholds
+    from p3d_cli.config import Config, load_config
+
+    config = Config() if no_config else load_config()
+    limits = parse_thresholds(f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items())
+    limits.update(parse_thresholds(thresholds))
+    return WarningFilter(frozenset(ignore), limits, config)
+
+
+def field_option(f):
+    """``--field NAME`` (repeatable), as ``fields: tuple[str, ...]``."""
+    return click.option("--field", "fields", multiple=True, metavar="NAME",
+                        help="Print only this JSON field, bare (repeatable; dots for nesting and "
+                             "list indices: bounds.min, center_of_mass.0). Nested values print as "
+                             "JSON; several fields go on one line, tab-separated; an input that "
+                             "fails prints an empty line.")(f)
+
+
+def precision_option(f):
+    """``--precision N`` (significant digits of the table and of --csv), as ``precision``."""
+    return click.option("--precision", type=click.IntRange(1, 17), default=None, metavar="N",
+                        help="Significant digits of numbers in the table (default 10) and in "
+                             "--csv (default 15); --json always keeps full precision.")(f)
+
+
+def config_option(f):
+    """``--no-config`` alone (for commands without warnings), handed on as ``config: Config``."""
+    import functools
+
+    @functools.wraps(f)
+    def command(*args, no_config, **kwargs):
+        from p3d_cli.config import Config, load_config
+
+        return f(*args, config=Config() if no_config else load_config(), **kwargs)
+
+    return click.option("--no-config", is_flag=True,
+                        help="Ignore the project settings (p3d.toml, or [tool.p3d] in "
+                             "pyproject.toml, found from the working directory up).")(command)

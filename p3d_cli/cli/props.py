@@ -14,14 +14,19 @@ from p3d_cli.cli.options import (
     VECTOR3,
     batch_options,
     density_options,
+    field_option,
     format_option,
     inputs_argument,
     json_option,
     placement_options,
+    precision_option,
     strict_option,
     units_options,
+    warning_options,
 )
 from p3d_cli.cli.reporting import Batch, Report
+from p3d_cli.cli.rounding import snapped
+from p3d_cli.cli.settings import WarningFilter
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
 from p3d_cli.results import PropsResult
 
@@ -33,10 +38,10 @@ from p3d_cli.results import PropsResult
 @click.option("--about", type=VECTOR3, default=None, metavar="X,Y,Z",
               help="Also report the inertia about this point.")
 @json_option
-@click.option("--field", "fields", multiple=True, metavar="NAME",
-              help="Print only this JSON field, bare (repeatable; dots for nesting, e.g. "
-                   "bounds.min). Several fields go on one line, tab-separated.")
+@field_option
+@precision_option
 @strict_option
+@warning_options
 @click.option("--method", type=click.Choice(["exact", "montecarlo"]), default="exact", show_default=True,
               help="exact: divergence theorem / closed form, with rounding-error bounds. montecarlo: "
                    "sample the bounding box with an inside test, with standard errors (an "
@@ -48,13 +53,13 @@ from p3d_cli.results import PropsResult
 @click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
               help="Monte Carlo: pick the sample count for this relative standard error of the volume.")
 @placement_options
+@batch_options
 @units_options
 @click.option("--combine", is_flag=True,
               help="Measure the inputs as one assembly (one placement and density for all; "
                    "--mass is the whole's): each part and the whole, as for an assembly file.")
-@batch_options
-def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch,
-          placement, tessellate, units, output_units, combine):
+def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict, settings, method, samples, seed,
+          tolerance, batch, placement, tessellate, units, output_units, combine):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -87,20 +92,19 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
     in SI (or --output-units) and every output says its units. An assembly file (YAML with
     parts:, docs/assemblies.md) is measured part by part and as a whole.
     """
-    if batch.csv and (as_json or fields):
-        raise UsageError("--csv", "given with --json or --field", "choose one output format")
-    style = "csv" if batch.csv else "fields" if fields else "json" if as_json else "table"
+    style = output_style(as_json, batch.csv, fields, "table")
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
                    units=units, output_units=output_units)
     measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
-    work = functools.partial(props_report, style=style, fields=fields, strict=strict, **options)
+    work = functools.partial(props_report, style=style, fields=fields, strict=strict, settings=settings,
+                             precision=precision, **options)
     if batch.csv:
-        click.echo(output.csv_line(CSV_COLUMNS))
+        click.echo(output.csv_line(csv_columns(about is not None)))
     if combine:
         return combined(run, work)
-    run.report(work, functools.partial(error_line, style=style))
+    run.report(work, functools.partial(error_line, style=style, about=about is not None))
     status = run.finish("with warnings (--strict)")
     if run.failed and not run.errors:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
@@ -118,6 +122,8 @@ def combined(run: Batch, work) -> int:
     report = work(combine(run.items, "combined"))
     for line in report.notes:
         click.echo(line, err=True)
+    for code, text in report.warnings:
+        click.echo(f"p3d: warning: [{code}] {report.source}: {text}", err=True)
     click.echo(report.text)
     if not report.passed:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
@@ -125,7 +131,16 @@ def combined(run: Batch, work) -> int:
     return 0
 
 
-def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **options) -> Report:
+def output_style(as_json: bool, as_csv: bool, fields, default: str) -> str:
+    """``csv``, ``fields``, ``json`` or ``default``; two of them at once is a usage error."""
+    given = [flag for flag, on in (("--json", as_json), ("--csv", as_csv), ("--field", bool(fields))) if on]
+    if len(given) > 1:
+        raise UsageError("/".join(given), "both given", "choose one output format")
+    return "csv" if as_csv else "fields" if fields else "json" if as_json else default
+
+
+def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, settings: WarningFilter = WarningFilter(),
+                 precision: int | None = None, **options) -> Report:
     """One input's output in ``style`` (table, json, csv or fields), formatted where it was
     computed (module level, so that worker processes can receive it).
 
@@ -134,35 +149,45 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **op
     FieldError
         A name in ``fields`` that the result does not have.
     """
+    if options.get("density") is None and options.get("mass") is None:
+        options["density"] = settings.config.get("density", src)
     result = measure.props(src, **options)
-    notes = tuple(f"p3d: warning: {result.facts.source}: {text}" for text in result.warnings)
+    kept = settings.keep(result.facts.source, result.warnings)
     if style == "table":
-        text = props_table(result)
+        text = props_table(result, precision or 10)
     else:
         record = props_record(result)
         if style == "csv":
+            about = options.get("about") is not None
             rows = [{**part, "source": f"{record['source']}#{part['name']}"} for part in record.get("parts", ())]
-            text = "\n".join(output.csv_line(props_row(row)) for row in rows + [record])
+            text = "\n".join(output.csv_line(props_row(snapped(row), about), precision or output.CSV_PRECISION)
+                             for row in rows + [record])
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
             text = output.dumps(record)
-    return Report(text, notes, passed=not (strict and result.warnings))
+    failed = strict and bool(kept)
+    return Report(text, passed=not failed, source=result.facts.source, warnings=kept,
+                  failures=kept if failed else ())
 
 
 def field(record: dict, name: str):
-    """``record``'s field ``name`` (dots for nesting)."""
+    """``record``'s field ``name`` (dots for nesting, integers for list items)."""
     try:
         return output.field_value(record, name)
     except KeyError:
-        raise FieldError("--field", f"no field named {name!r}", "fields are: " + ", ".join(record)) from None
+        raise FieldError("--field", f"no field named {name!r}",
+                         "fields are: " + ", ".join(output.field_names(record))) from None
 
 
-def error_line(outcome, *, style: str) -> str | None:
-    """The record of an input that could not be done: JSON or CSV; nothing in the other styles."""
+def error_line(outcome, *, style: str, about: bool = False) -> str | None:
+    """The record of an input that could not be done: JSON or CSV, an empty line for --field
+    (so that lines stay aligned with inputs); nothing in the table."""
     record = {"source": outcome.source, "error": error_message(outcome.error)}
     if style == "csv":
-        return output.csv_line(props_row(record))
+        return output.csv_line(props_row(record, about))
+    if style == "fields":
+        return ""
     return output.dumps(record) if style == "json" else None
 
 
@@ -186,13 +211,14 @@ def props_record(result: PropsResult) -> dict:
         "inertia_origin": p.inertia_origin,
         "principal_moments": p.principal_moments,
         "principal_axes": p.principal_axes,
+        "second_moments": p.second_moments,
         "principal_quaternion": p.principal_quaternion,
         "principal_rpy": p.principal_rpy,
-        "second_moments": p.second_moments,
         "bounds": None if f.bounds is None else {"min": f.bounds.min, "max": f.bounds.max},
         "coordinate_dtype": f.coordinate_dtype,
         "inertia_convention": INERTIA_CONVENTION,
-        "warnings": list(result.warnings),
+        "warnings": [str(w) for w in result.warnings],
+        "warning_codes": list(result.warning_codes),
         "uncertainty": result.uncertainty,
     }
     if p.about is not None:
@@ -205,63 +231,105 @@ def props_record(result: PropsResult) -> dict:
     return record
 
 
-def units_line(units: dict | None) -> str:
-    """The table's statement of units."""
+def plural(count: int, noun: str) -> str:
+    """``1 face``, ``12 faces``."""
+    return f"{count} {noun}{'' if count == 1 else 's'}"
+
+
+def units_line(units: dict | None) -> list[str]:
+    """The table's statement of units, 80 columns wide."""
     if not units or units.get("system") == "mesh":
-        return "  units             the mesh's own (no units given)"
-    return (f"  units             length {units['length']}, mass {units['mass']}, inertia {units['inertia']} "
-            f"(mesh in {units['mesh_length']})")
+        return ["  units             the mesh's own (no units given)"]
+    return [f"  units             length {units['length']}, mass {units['mass']}, inertia {units['inertia']} "
+            f"(mesh in {units['mesh_length']})"]
 
 
-def props_table(result: PropsResult) -> str:
-    """A readable block for one input (for an assembly: each part's block, then the whole)."""
-    blocks = [props_table(part) for part in result.parts]
-    p, f = result.properties, result.facts
+def props_table(result: PropsResult, precision: int = 10) -> str:
+    """A readable block for one input, 80 columns wide (a long file name aside); values within
+    their rounding bound of zero as 0. For an assembly: each part's block, then the whole."""
+    blocks = [props_table(part, precision) for part in result.parts]
+    f = result.facts
+    p = snapped(props_record(result))
     closed = {True: "yes", False: "NO", None: "n/a"}[f.closed]
+    number = functools.partial(output.number, precision=precision)
+    vector = functools.partial(output.vector, precision=precision, width=max(17, precision + 7))
     name = f"part {result.details['name']}: " if "name" in result.details else ""
     whole = "whole " if result.parts else ""
     lines = [
-        f"{whole}{name}{f.source}  ({f.format}, {f.faces} faces, closed: {closed}, method: {result.method})",
-        units_line(result.units),
-        f"  volume            {output.number(p.volume)}",
-        f"  density           {output.number(p.density)}",
-        f"  mass              {output.number(p.mass)}",
-        f"  center of mass    {output.vector(p.center_of_mass)}",
+        whole + name + output.shown_name(f.source),
+        f"  {f.format}, " + ("" if f.format == "primitive" else f"{plural(f.faces, 'face')}, ")
+        + f"closed: {closed}, method: {result.method}",
+        *units_line(result.units),
+        f"  volume            {number(p['volume'])}",
+        f"  density           {number(p['density'])}",
+        f"  mass              {number(p['mass'])}",
+        f"  center of mass    {vector(p['center_of_mass'])}",
     ]
-    if p.inertia is None:
+    if p["inertia"] is None:
         lines.append("  inertia           - (no volume)")
     else:
-        lines.append("  inertia about the centre of mass (" + INERTIA_CONVENTION + ")")
-        lines += [f"                    {output.vector(row)}" for row in p.inertia]
+        lines.append("  inertia about the centre of mass")
+        lines.append("    (" + INERTIA_CONVENTION + ")")
+        lines += [f"                    {vector(row)}" for row in p["inertia"]]
         lines.append("  inertia about the origin")
-        lines += [f"                    {output.vector(row)}" for row in p.inertia_origin]
-        if p.inertia_about is not None:
-            lines.append(f"  inertia about ({', '.join(output.number(x) for x in p.about)})")
-            lines += [f"                    {output.vector(row)}" for row in p.inertia_about]
-        lines.append(f"  principal moments {output.vector(p.principal_moments)}")
+        lines += [f"                    {vector(row)}" for row in p["inertia_origin"]]
+        if p.get("inertia_about") is not None:
+            lines.append(f"  inertia about ({', '.join(number(x) for x in p['about'])})")
+            lines += [f"                    {vector(row)}" for row in p["inertia_about"]]
+        lines.append(f"  principal moments {vector(p['principal_moments'])}")
         lines.append("  principal axes (rows; right-handed)")
-        lines += [f"                    {output.vector(row)}" for row in p.principal_axes]
+        lines += [f"                    {vector(row)}" for row in p["principal_axes"]]
     if f.bounds is not None:
-        lines.append(f"  bounds min        {output.vector(f.bounds.min)}")
-        lines.append(f"  bounds max        {output.vector(f.bounds.max)}")
+        lines.append(f"  bounds min        {vector(f.bounds.min)}")
+        lines.append(f"  bounds max        {vector(f.bounds.max)}")
     return "\n".join(blocks + lines)
 
 
-#: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention.
+#: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention;
+#: ``i1..i3`` the principal moments (ascending); ``warnings`` the warnings' codes, space-separated.
 CSV_COLUMNS = ("source", "format", "method", "faces", "closed", "volume", "mass", "density",
-                     "com_x", "com_y", "com_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz",
-                     "warnings", "error")
+               "com_x", "com_y", "com_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz",
+               "i1", "i2", "i3", "min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
+               "warnings", "error")
+
+#: With ``--about``: the point and the inertia about it, before ``warnings``.
+ABOUT_COLUMNS = ("about_x", "about_y", "about_z", "about_ixx", "about_iyy", "about_izz", "about_ixy",
+                 "about_ixz", "about_iyz")
 
 
-def props_row(record: dict) -> list:
+def csv_columns(about: bool = False) -> tuple[str, ...]:
+    """The header of ``--csv`` (with the ``--about`` columns when asked for)."""
+    if not about:
+        return CSV_COLUMNS
+    return CSV_COLUMNS[:-2] + ABOUT_COLUMNS + CSV_COLUMNS[-2:]
+
+
+def _tensor(prefix: str, matrix) -> dict:
+    i = np.asarray(matrix)
+    return {f"{prefix}ixx": i[0, 0], f"{prefix}iyy": i[1, 1], f"{prefix}izz": i[2, 2],
+            f"{prefix}ixy": i[0, 1], f"{prefix}ixz": i[0, 2], f"{prefix}iyz": i[1, 2]}
+
+
+def _xyz(prefix: str, vector) -> dict:
+    return dict(zip((f"{prefix}x", f"{prefix}y", f"{prefix}z"), (float(x) for x in vector)))
+
+
+def props_row(record: dict, about: bool = False) -> list:
     """The ``--csv`` cells of a ``props_record`` (or of an error record), in column order."""
-    row = dict.fromkeys(CSV_COLUMNS)
+    columns = csv_columns(about)
+    row = dict.fromkeys(columns)
     row.update({k: v for k, v in record.items() if k in row})
-    com, inertia = record.get("center_of_mass"), record.get("inertia")
-    if com is not None:
-        row["com_x"], row["com_y"], row["com_z"] = (float(x) for x in com)
-    if inertia is not None:
-        i = np.asarray(inertia)
-        row.update(ixx=i[0, 0], iyy=i[1, 1], izz=i[2, 2], ixy=i[0, 1], ixz=i[0, 2], iyz=i[1, 2])
-    row["warnings"] = " | ".join(record.get("warnings") or []) or None
-    return [row[k] for k in CSV_COLUMNS]
+    if record.get("center_of_mass") is not None:
+        row.update(_xyz("com_", record["center_of_mass"]))
+    if record.get("inertia") is not None:
+        row.update(_tensor("", record["inertia"]))
+    if record.get("principal_moments") is not None:
+        row.update(zip(("i1", "i2", "i3"), (float(x) for x in record["principal_moments"])))
+    if record.get("bounds") is not None:
+        row.update(_xyz("min_", record["bounds"]["min"]), **_xyz("max_", record["bounds"]["max"]))
+    if about and record.get("about") is not None:
+        row.update(_xyz("about_", record["about"]))
+        if record.get("inertia_about") is not None:
+            row.update(_tensor("about_", record["inertia_about"]))
+    row["warnings"] = " ".join(record.get("warning_codes") or []) or None
+    return [row[k] for k in columns]

@@ -8,13 +8,17 @@ work function returns a ``Report``: its output, formatted where it was computed.
 from __future__ import annotations
 
 import sys
+import time
 from dataclasses import dataclass
 from typing import Callable, Generator
 
 import click
 
-from p3d_cli.batch import Outcome, collect_inputs, run_each
+from p3d_cli.batch import Outcome, run_each
+from p3d_cli.batch.inputs import collect, extension_counts
 from p3d_cli.cli.main import error_message, exit_status
+from p3d_cli.cli.output import shown_name
+from p3d_cli.cli.reports import Entry, ReportOptions, write_reports
 from p3d_cli.errors import UsageError
 
 #: Batches with more inputs than this get a progress bar, when stderr is a terminal.
@@ -35,14 +39,24 @@ class Report:
     text : str or None
         For standard output (without its line end); None prints nothing.
     notes : tuple of str
-        Whole lines for standard error (warnings), written above any progress bar.
+        Whole lines for standard error, written above any progress bar.
     passed : bool
         False counts the input as failing a requirement (exit status 1).
+    source : str or None
+        The input, as reports name it.
+    warnings : tuple of (code, text)
+        Warnings not ignored: written to stderr as ``p3d: warning: [code] source: text``,
+        counted (``warned``) and reported.
+    failures : tuple of (code, text)
+        Why the input failed a requirement, for reports (``--report``).
     """
 
     text: str | None = None
     notes: tuple[str, ...] = ()
     passed: bool = True
+    source: str | None = None
+    warnings: tuple[tuple[str, str], ...] = ()
+    failures: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -53,6 +67,8 @@ class BatchOptions:
     jobs: int | None = None
     dask: str | None = None
     csv: bool = False
+    null: bool = False
+    reports: ReportOptions = ReportOptions()
 
 
 class Batch:
@@ -71,11 +87,14 @@ class Batch:
         if options.dask is not None and options.jobs is not None:
             raise UsageError("--jobs/--dask", "both given",
                              "--dask runs on the cluster's workers; drop --jobs")
-        self.items = collect_inputs(inputs, options.files_from, command)
+        self.command = command
+        self.items, self.skipped = collect(inputs, options.files_from, command, null=options.null)
         self.options = options
-        self.ok = self.failed = self.errors = 0
+        self.ok = self.warned = self.failed = self.errors = 0
         self.status = 0
+        self.entries: list[Entry] = []
         self._bar = None
+        self._started = time.monotonic()
 
     def outcomes(self, work: Callable[[str], object]) -> Generator[Outcome, None, None]:
         """``run_each`` over the inputs, with a progress bar on a terminal's stderr."""
@@ -109,12 +128,28 @@ class Batch:
             else:
                 report = outcome.result
                 assert isinstance(report, Report)  # the command's work function returns one
-                for line in report.notes:
-                    self.note(line)
-                self.passed() if report.passed else self.fail()
                 text = report.text
+                self.record(report, outcome.source)
             if text is not None:
                 click.echo(text)
+
+    def record(self, report: Report, source: str) -> None:
+        """Write a report's notes and warnings to stderr, and count and record its verdict."""
+        source = report.source if report.source is not None else source
+        for line in report.notes:
+            self.note(line)
+        for code, text in report.warnings:
+            self.note(f"p3d: warning: [{code}] {shown_name(source)}: {text}")
+        if not report.passed:
+            self.fail()
+            state = "failed"
+        elif report.warnings:
+            self.warned += 1
+            state = "warned"
+        else:
+            self.passed()
+            state = "ok"
+        self.entries.append(Entry(source, state, report.failures, report.warnings))
 
     def note(self, text: str) -> None:
         """One line on stderr (written above the progress bar, if there is one)."""
@@ -125,9 +160,11 @@ class Batch:
 
     def error(self, outcome: Outcome) -> None:
         """Report an input that could not be done, and count it."""
-        self.note(f"p3d: error: {error_message(outcome.error)}")
+        message = error_message(outcome.error)
+        self.note(f"p3d: error: {message}")
         self.errors += 1
         self.status = max(self.status, exit_status(outcome.error))
+        self.entries.append(Entry(outcome.source, "errored", (("error", message),)))
 
     def passed(self) -> None:
         self.ok += 1
@@ -138,22 +175,37 @@ class Batch:
         self.status = max(self.status, 1)
 
     def summary(self, failed_label: str = "failed check") -> str:
-        n = len(self.items)
-        parts = [f"{self.ok} ok"]
+        n = max(len(self.items), len(self.entries))   # p3d diff adds the files that vanished
+        parts = [f"{self.ok + self.warned} ok"]
         if self.failed:
             parts.append(f"{self.failed} {failed_label}")
         if self.errors:
             parts.append(f"{self.errors} error{'s' if self.errors != 1 else ''}")
-        return f"{n} file{'s' if n != 1 else ''}: " + ", ".join(parts)
+        line = f"{n} file{'s' if n != 1 else ''}: " + ", ".join(parts)
+        if self.warned:
+            codes: dict[str, int] = {}
+            for entry in self.entries:
+                if entry.state == "warned":
+                    for code in dict.fromkeys(code for code, _ in entry.warnings):
+                        codes[code] = codes.get(code, 0) + 1
+            line += (f"; {self.warned} of the ok with warnings ("
+                     + ", ".join(f"{code}: {count}" for code, count in codes.items()) + ")")
+        if self.skipped:
+            line += "; skipped files p3d does not read: " + extension_counts(self.skipped)
+        return line
 
     def finish(self, failed_label: str = "failed check") -> int:
-        """Print the summary (for more than one input) and return the exit status.
+        """Print the summary (for more than one input, or when files were skipped), write the
+        reports asked for, and return the exit status.
 
         The status is the worst seen: 3 a bug on some input, 2 some input could not be read,
         1 some input failed a requirement, 0 all passed.
         """
-        if len(self.items) > 1:
+        if len(self.items) > 1 or self.skipped:
             click.echo(f"p3d: {self.summary(failed_label)}", err=True)
+        if self.options.reports.wanted:
+            write_reports(self.options.reports, self.command, self.entries, self.skipped, self.status,
+                          time.monotonic() - self._started)
         return self.status
 
 

@@ -93,36 +93,44 @@ def solve_record(result: SolveResult) -> dict:
 
 
 def solve_table(where: str, result: SolveResult) -> str:
-    """A readable summary."""
+    """A readable summary, 80 columns wide (a long scene path or body name aside): one labelled
+    line per vector."""
     num, vec = output.number, _short_vector
     n_c = len(result.constraints)
     redundancy = ("no redundancy" if result.redundant == 0 else
                   f"{result.redundant} redundant, solved in the minimum-norm sense")
     lines = [f"{where}: {len(result.bodies)} bodies, {n_c} constraint{'s' if n_c != 1 else ''}, "
-             f"{result.islands} island{'s' if result.islands != 1 else ''}; rank {result.rank} of "
-             f"{result.equations} equations ({redundancy})"]
+             f"{result.islands} island{'s' if result.islands != 1 else ''}",
+             f"  rank {result.rank} of {result.equations} equations ({redundancy})"]
     if result.steps:
         lines.append(f"stepped {result.steps} steps to t = {num(result.time)}; largest joint drift "
                      f"{num(result.max_position_error)}")
     lines.append("bodies (world frame; velocity of the centre of mass):")
-    width = max(len(b.name) for b in result.bodies)
     for b in result.bodies:
-        state = "fixed" if b.fixed else ("" if b.constrained else "(free, unchanged by constraints)")
-        lines.append(f"  {b.name:<{width}}  position {vec(b.position)}  rotation {vec(b.rotation)}  {state}".rstrip())
+        state = "  fixed" if b.fixed else ("" if b.constrained else "  (free, unchanged by constraints)")
+        lines.append(f"  {b.name}{state}")
+        lines.append(f"    position          {vec(b.position)}")
+        lines.append(f"    rotation          {vec(b.rotation)}")
         if not b.fixed:
-            lines.append(f"  {'':<{width}}  velocity {vec(b.velocity)}  angular velocity {vec(b.angular_velocity)}")
+            lines.append(f"    velocity          {vec(b.velocity)}")
+            lines.append(f"    angular velocity  {vec(b.angular_velocity)}")
     if result.constraints:
         lines.append("constraints (impulse on b, world frame; error: remaining velocity error):")
         for i, c in enumerate(result.constraints):
             impulse = num(c.impulse) if isinstance(c.impulse, float) else vec(c.impulse)
-            extra = f"  angular {vec(c.angular_impulse)}" if c.angular_impulse is not None else ""
-            lines.append(f"  [{i}] {c.type:<5} {c.a} -> {c.b}  impulse {impulse}{extra}  error {num(c.error)}"
-                         f"  position error {num(c.position_error)}")
+            lines.append(f"  [{i}] {c.type} {c.a} -> {c.b}")
+            lines.append(f"    impulse           {impulse}")
+            if c.angular_impulse is not None:
+                lines.append(f"    angular impulse   {vec(c.angular_impulse)}")
+            lines.append(f"    error {num(c.error)}, position error {num(c.position_error)}")
     ke = result.kinetic_energy
     lines.append(f"kinetic energy: {num(ke[0])} -> {num(ke[1])}")
-    lines.append(f"momentum: {vec(result.momentum[0])} -> {vec(result.momentum[1])}")
-    lines.append(f"angular momentum (about the origin): {vec(result.angular_momentum[0])} -> "
-                 f"{vec(result.angular_momentum[1])}")
+    lines.append("momentum:")
+    lines.append(f"  before  {vec(result.momentum[0])}")
+    lines.append(f"  after   {vec(result.momentum[1])}")
+    lines.append("angular momentum (about the origin):")
+    lines.append(f"  before  {vec(result.angular_momentum[0])}")
+    lines.append(f"  after   {vec(result.angular_momentum[1])}")
     return "\n".join(lines)
 
 

@@ -1,0 +1,164 @@
+"""``p3d diff``: compare meshes with a recorded baseline of their mass properties."""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+
+import click
+
+from p3d_cli import baseline as bl
+from p3d_cli.cli import output
+from p3d_cli.cli.main import error_message
+from p3d_cli.cli.options import batch_options, density_options, format_option, json_option, warning_options
+from p3d_cli.cli.props import props_report
+from p3d_cli.cli.reporting import Batch, Report
+from p3d_cli.errors import UsageError
+
+
+@click.command()
+@click.argument("baseline_file", metavar="BASELINE", type=click.Path(dir_okay=False))
+@click.argument("inputs", nargs=-1, metavar="INPUT...", type=click.Path())
+@format_option
+@density_options
+@click.option("--rtol", multiple=True, metavar="[QUANTITY=]REL",
+              help="Relative tolerance (default 1e-9), for every quantity or one "
+                   "(volume, mass, density, center_of_mass, inertia, principal_moments, bounds.min, "
+                   "bounds.max). Repeatable.")
+@click.option("--atol", multiple=True, metavar="[QUANTITY=]ABS",
+              help="Absolute tolerance (default 0), for every quantity or one. Repeatable.")
+@click.option("--root", type=click.Path(file_okay=False), default=None,
+              help="Baseline paths are relative to this directory (default: the working directory).")
+@click.option("--update", is_flag=True, help="Rewrite BASELINE with the current state (exit 0).")
+@json_option
+@warning_options
+@batch_options
+def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as_json, settings, batch):
+    """Compare meshes with a baseline of their mass properties; exit 1 if anything changed.
+
+    The baseline is the output of p3d props --json (one record per line), keyed by each
+    file's path relative to --root, so that it works in any checkout. A change is a quantity
+    that moved beyond |new - old| <= atol + rtol * scale (scale: the largest magnitude of the
+    old value, of the whole vector or matrix), a different face count, a mesh that is no
+    longer closed (or now is), a new warning code, a file that appeared, vanished or can no
+    longer be read. Each change is one line on stdout (--json: one record).
+
+    \b
+    Examples:
+      p3d props parts/ --json > baseline.ndjson
+      p3d diff baseline.ndjson parts/
+      p3d diff baseline.ndjson parts/ --rtol volume=1e-6 --report junit:p3d.xml
+      git ls-files -z '*.stl' | p3d diff baseline.ndjson --files-from - -0
+      p3d diff baseline.ndjson parts/ --update
+    """
+    if batch.csv:
+        raise UsageError("--csv", "not an output of p3d diff", "use the default lines or --json")
+    root = os.path.abspath(root or os.getcwd())
+    limits = functools.partial(_tolerances, settings.config, rtol, atol)
+    limits(None)   # refuse bad tolerances before any input is read
+    old = bl.read_baseline(baseline_file, root) if not (update and not os.path.exists(baseline_file)) else {}
+    run = Batch("p3d diff", inputs, batch)
+    work = functools.partial(props_report, style="json", fields=(), strict=False, settings=settings,
+                             density=density, mass=mass, format=fmt, placement=None, method="exact")
+    current: dict[str, dict] = {}
+    for outcome in run.outcomes(work):
+        if outcome.error is not None:
+            if outcome.error.ends_batch:
+                raise outcome.error
+            record = {"source": outcome.source, "error": error_message(outcome.error)}
+        else:
+            assert isinstance(outcome.result, Report)
+            record = json.loads(outcome.result.text or "{}")
+        key = bl.baseline_key(outcome.source, root)
+        current[key] = record
+        changes = bl.compare(key, old[key], record, *limits(outcome.source)) if key in old else \
+            [bl.Change(key, "file", None, "appeared")]
+        _report(run, key, changes, as_json)
+    for key in old:
+        if key not in current:
+            _report(run, key, [bl.Change(key, "file", "present", "vanished")], as_json)
+    if update:
+        _write_baseline(baseline_file, current, root)
+        run.status = 0
+    return run.finish("changed")
+
+
+def _tolerances(config, rtol, atol, source: str | None) -> tuple[dict, dict]:
+    """``(rtol, atol)`` per quantity for ``source``: p3d's defaults, then the project settings
+    (the top level, then the matching ``[[paths]]``), then the command line."""
+    settings = config.settings if source is None else config.for_source(source)
+    rtols = bl.tolerances([*(x for x in [settings.get("rtol")] if x is not None), *rtol], bl.QUANTITIES, "--rtol")
+    atols = bl.tolerances([*(x for x in [settings.get("atol")] if x is not None), *atol],
+                          dict.fromkeys(bl.QUANTITIES, 0.0), "--atol")
+    return rtols, atols
+
+
+def _report(run: Batch, key: str, changes: list, as_json: bool) -> None:
+    for change in changes:
+        click.echo(output.dumps(change.record()) if as_json else change_line(change))
+    failures = tuple((c.quantity, change_line(c)) for c in changes)
+    run.record(Report(passed=not changes, source=key, failures=failures), key)
+
+
+def change_line(change: bl.Change) -> str:
+    """``parts/a.stl: volume 1 -> 1.0003 (+0.03%)``; a vector or matrix by the component that
+    moved most, ``inertia[1,1]``, with its quantity's relative change."""
+    name = output.shown_name(change.source)
+    if change.quantity == "file":
+        what = {"appeared": "appeared (not in the baseline)", "vanished": "vanished (in the baseline, not found)",
+                "read": "can be read again"}.get(change.new, f"cannot be read now: {change.new}")
+        if change.old not in (None, "present", "read") and change.new == "read":
+            what = "can be read now (the baseline has an error)"
+        return f"{name}: {what}"
+    quantity, old, new = change.quantity, change.old, change.new
+    if isinstance(old, list) and isinstance(new, list) and _shape(old) == _shape(new) and old:
+        # A vector or matrix: the component that moved most stands for it (the JSON has all).
+        index = max(_indices(old), key=lambda i: abs(_at(new, i) - _at(old, i)))
+        quantity = f"{quantity}[{','.join(map(str, index))}]"
+        old, new = _at(old, index), _at(new, index)
+    return f"{name}: {quantity} {_value(old)} -> {_value(new)}{_relative(change.relative)}"
+
+
+def _shape(value) -> tuple:
+    return (len(value),) + _shape(value[0]) if isinstance(value, list) and value else ()
+
+
+def _indices(value, prefix: tuple = ()) -> list[tuple]:
+    if isinstance(value, list):
+        return [i for k, v in enumerate(value) for i in _indices(v, prefix + (k,))]
+    return [prefix]
+
+
+def _at(value, index: tuple):
+    for k in index:
+        value = value[k]
+    return value
+
+
+def _value(value) -> str:
+    """A JSON value for the change line: numbers to 10 digits, vectors and matrices bracketed."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return output.dumps(value)
+    if isinstance(value, (int, float)):
+        return output.number(value)
+    if isinstance(value, list) and all(isinstance(x, (int, float, list)) for x in value):
+        return "[" + ", ".join(_value(x) for x in value) + "]"
+    return output.dumps(value)
+
+
+def _relative(relative) -> str:
+    if relative is None:
+        return ""
+    return f" ({relative * 100:+.3g}%)"
+
+
+def _write_baseline(path: str, records: dict[str, dict], root: str) -> None:
+    from p3d_cli.errors import InputError
+
+    text = "".join(output.dumps({**record, "source": key}) + "\n" for key, record in sorted(records.items()))
+    try:
+        with open(path, "w", encoding="utf-8", errors="surrogateescape") as f:
+            f.write(text)
+    except OSError as exc:
+        raise InputError(path, f"cannot be written ({exc.strerror or exc})", "check the path") from None

@@ -1,0 +1,65 @@
+"""What the command line resolves once per input: which warnings count, and the project
+settings (``p3d_cli.config``) that apply to the input."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from p3d_cli.config import Config
+from p3d_cli.warning_codes import THRESHOLDS, check_codes, code_of, is_ignored
+
+
+@dataclass(frozen=True)
+class WarningFilter:
+    """The warnings a command's user silenced, and the project settings (picklable: it
+    travels to worker processes with the work).
+
+    Attributes
+    ----------
+    ignore : frozenset of str
+        Codes given with ``--ignore-warning``.
+    thresholds : dict
+        ``--warning-threshold CODE=VALUE``: a warning whose measured value is at most VALUE
+        is silenced.
+    config : Config
+        The project settings (``ignore-warnings``, ``warning-thresholds`` per path glob).
+    """
+
+    ignore: frozenset = frozenset()
+    thresholds: dict = field(default_factory=dict)
+    config: Config = Config()
+
+    def keep(self, source: str, warnings) -> tuple[tuple[str, str], ...]:
+        """``(code, text)`` of each warning of ``source`` that is not silenced."""
+        settings = self.config.for_source(source)
+        ignore = self.ignore | frozenset(settings.get("ignore-warnings", ()))
+        thresholds = {**settings.get("warning-thresholds", {}), **self.thresholds}
+        return tuple((code_of(w), str(w)) for w in warnings if not is_ignored(w, ignore, thresholds))
+
+
+def parse_thresholds(values, where: str = "--warning-threshold") -> dict[str, float]:
+    """``CODE=VALUE`` pairs; only codes with a threshold, and not below the library's default
+    (below it the library does not warn at all, so the setting could not be honoured).
+
+    Raises
+    ------
+    UsageError
+    """
+    from p3d_cli.errors import UsageError
+
+    out = {}
+    for value in values:
+        code, _, number = str(value).partition("=")
+        try:
+            limit = float(number)
+        except ValueError:
+            raise UsageError(where, f"{value!r} is not CODE=NUMBER", "e.g. coarse-float32=1e-5") from None
+        check_codes([code], where)
+        if code not in THRESHOLDS:
+            raise UsageError(where, f"warning {code!r} has no threshold",
+                             "thresholds: " + ", ".join(f"{k} (default {v:g})" for k, v in THRESHOLDS.items()))
+        if not limit >= THRESHOLDS[code]:
+            raise UsageError(where, f"{code} threshold {limit:g} is below p3d's {THRESHOLDS[code]:g}",
+                             "a threshold can only be raised (p3d does not warn below its default)")
+        out[code] = limit
+    return out

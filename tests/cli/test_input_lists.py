@@ -1,0 +1,54 @@
+"""Inputs: NUL-separated lists (-0), and files a directory search skips, counted and named."""
+
+from __future__ import annotations
+
+import json
+
+from click.testing import CliRunner
+
+from conftest import cube_triangles, write_binary_stl
+from p3d_cli.cli.main import cli
+
+
+def run(*args, input=None):
+    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
+
+
+def test_nul_separated_list_keeps_spaces_and_newlines(tmp_path):
+    names = [tmp_path / "a b.stl", tmp_path / "c\nd.stl", tmp_path / " lead.stl"]
+    for i, path in enumerate(names):
+        write_binary_stl(path, cube_triangles() * (i + 1))
+    listing = tmp_path / "list"
+    listing.write_bytes(b"".join(bytes(p) + b"\0" for p in names))
+    for source, stdin in ((listing, None), ("-", listing.read_bytes())):
+        result = run("props", "--files-from", source, "-0", "--json", input=stdin)
+        assert result.exit_code == 0, result.stderr
+        records = [json.loads(line) for line in result.stdout.splitlines()]
+        assert [r["source"] for r in records] == [str(p) for p in names]
+        assert [r["volume"] for r in records] == [1.0, 8.0, 27.0]
+
+
+def test_null_without_a_list_is_a_usage_error():
+    result = run("props", "box", "--null")
+    assert result.exit_code == 2 and "-0/--null: given without --files-from" in result.stderr
+
+
+def test_skipped_files_are_counted_by_extension(tmp_path):
+    for name in ("a.3mf", "b.3mf", "c.glb", "README"):
+        (tmp_path / name).write_bytes(b"x")
+    write_binary_stl(tmp_path / "part.stl", cube_triangles())
+    summary = tmp_path / "summary.json"
+    result = run("props", tmp_path, "--summary", f"json:{summary}")
+    assert result.exit_code == 0
+    assert "skipped files p3d does not read: 2 .3mf, 1 .glb, 1 without extension" in result.stderr
+    counts = json.loads(summary.read_text())
+    assert counts["skipped_by_extension"] == {"": 1, ".3mf": 2, ".glb": 1} and counts["skipped"] == 4
+    assert (counts["inputs"], counts["ok"]) == (1, 1)
+
+
+def test_directory_of_only_unread_files_says_what_it_holds(tmp_path):
+    for name in ("a.3mf", "b.dae", "c.glb"):
+        (tmp_path / name).write_bytes(b"x")
+    result = run("check", tmp_path)
+    assert result.exit_code == 2
+    assert "directory holds no mesh files, only files p3d does not read (1 .3mf, 1 .dae, 1 .glb)" in result.stderr
