@@ -45,12 +45,14 @@ class Edges:
 
 
 def next_corner(c: np.ndarray) -> np.ndarray:
-    """The next corner of the same face (``3 f + (k + 1) % 3``)."""
-    return c + np.where(c % 3 == 2, -2, 1)
+    """The next corner of the same face (``3 f + (k + 1) % 3``), as int64."""
+    out = np.array(c, dtype=np.int64, ndmin=1) + 1
+    out[out % 3 == 0] -= 3
+    return out if np.ndim(c) else out[0]
 
 
 def group_edges(corners: Corners, packed: bool | None = None) -> Edges:
-    """The edges of the grouped corners.
+    """The edges of the grouped corners; frees ``corners.keys`` once read.
 
     Parameters
     ----------
@@ -61,56 +63,101 @@ def group_edges(corners: Corners, packed: bool | None = None) -> Edges:
     m, sides = corners.count, corners.ids.size
     side_bits = max(int(sides - 1).bit_length(), 1)
     fits = (max(m * m - 1, 1)).bit_length() + side_bits + 1 <= 63
-    packed = fits if packed is None else packed and fits
-    keys, extra = _emit_sides(corners, side_bits, packed)
-    if packed:
+    if fits and packed is not False:
+        keys = _emit_packed(corners, side_bits)
+        corners.keys = None
         keys.sort(kind="stable")                        # timsort: runs per vertex
-        side = ((keys >> 1) & ((1 << side_bits) - 1)).astype(corners.ids.dtype)
-        forward = (keys & 1).astype(bool)
-        edge_of = lambda a, b: keys[a:b] >> (side_bits + 1)  # noqa: E731
+        side, forward, starts = _unpack(keys, side_bits)
+        del keys
     else:
-        order = np.lexsort((extra, keys))
-        keys, extra = keys[order], extra[order]
+        edge, extra = _emit_unpacked(corners)
+        corners.keys = None
+        order = np.lexsort((extra, edge))
+        edge, extra = edge[order], extra[order]
         side, forward = (extra >> 1).astype(corners.ids.dtype), (extra & 1).astype(bool)
-        edge_of = lambda a, b: keys[a:b]                # noqa: E731
-    starts = _group_starts(edge_of, keys.size)
-    del keys, extra
-    counts = np.diff(np.append(starts, side.size))
+        starts = _group_starts(lambda a, b: edge[a:b], edge.size)
+    index = np.int32 if side.size < 2**31 else np.int64
+    starts = starts.astype(index)
+    counts = np.diff(np.append(starts, index(side.size)))
     pairs = np.flatnonzero(counts == 2)
     same_way = forward[starts[pairs]] == forward[starts[pairs] + 1]
     return Edges(side, forward, starts, counts, boundary=np.flatnonzero(counts == 1),
                  nonmanifold=np.flatnonzero(counts > 2), misoriented=pairs[same_way])
 
 
-def _emit_sides(corners: Corners, side_bits: int, packed: bool):
-    """Every non-degenerate side once, at its smaller-id end, in the corners' sorted order."""
-    ids, first, m = corners.ids, corners.first, np.int64(corners.count)
-    out_keys, out_extra = [], []
+def _chunk_sides(corners: Corners, lo: int, hi: int):
+    """For sorted positions ``lo:hi``: vertex ``v``, corner ``c``, and the sides at ``c``.
+
+    Side ``c`` runs ``v -> w`` (to the next corner); side ``before`` runs ``u -> v``.
+    """
+    first = corners.first
+    c = corners.corner(lo, hi)
+    # Vertex of each sorted position, from the group boundaries (no gather).
+    va = int(np.searchsorted(first, lo, side="right")) - 1
+    vb = int(np.searchsorted(first, hi, side="left"))
+    counts = np.minimum(first[va + 1:vb + 1], hi) - np.maximum(first[va:vb], lo)
+    v = np.repeat(np.arange(va, vb, dtype=np.int64), counts)
+    slot = c % 3
+    after = c + 1
+    after[slot == 2] -= 3
+    before = c - 1
+    before[slot == 0] += 3
+    return v, c, corners.ids[after], before, corners.ids[before]
+
+
+def _emit_packed(corners: Corners, side_bits: int) -> np.ndarray:
+    """Every non-degenerate side once, at its smaller-id end, in the corners' sorted order:
+    ``(lo * m + hi) << (side_bits + 1) | side << 1 | (lo first)``."""
+    ids, m, shift = corners.ids, np.int64(corners.count), np.int64(side_bits + 1)
+    out = np.empty(ids.size, dtype=np.int64)        # each side is taken once at most
+    filled = 0
     for lo in range(0, ids.size, CHUNK):
-        hi = min(lo + CHUNK, ids.size)
-        c = corners.corner(lo, hi)
-        # Vertex of each sorted position, from the group boundaries (no gather).
-        va = int(np.searchsorted(first, lo, side="right")) - 1
-        vb = int(np.searchsorted(first, hi, side="left"))
-        counts = (np.minimum(first[va + 1:vb + 1], hi) - np.maximum(first[va:vb], lo))
-        v = np.repeat(np.arange(va, vb, dtype=np.int64), counts)
-        slot = c % 3
-        after = c + np.where(slot == 2, -2, 1)
-        before = c + np.where(slot == 0, 2, -1)
-        w = ids[after].astype(np.int64)                 # side c runs v -> w
-        u = ids[before].astype(np.int64)                # side `before` runs u -> v
+        v, c, w, before, u = _chunk_sides(corners, lo, min(lo + CHUNK, ids.size))
+        key_out = v * m
+        key_out += w
+        key_out <<= shift
+        key_out |= (c << 1) | 1
+        key_in = v * m
+        key_in += u
+        key_in <<= shift
+        key_in |= before << 1
+        for key, take in ((key_out, v < w), (key_in, u > v)):
+            part = key[take]
+            out[filled:filled + part.size] = part
+            filled += part.size
+    return out[:filled]
+
+
+def _emit_unpacked(corners: Corners):
+    """As ``_emit_packed``, for meshes too large to pack: edge keys and ``side << 1 | fwd``."""
+    ids, m = corners.ids, np.int64(corners.count)
+    edges, extras = [], []
+    for lo in range(0, ids.size, CHUNK):
+        v, c, w, before, u = _chunk_sides(corners, lo, min(lo + CHUNK, ids.size))
         take_out, take_in = v < w, u > v
-        edge = np.concatenate([v[take_out] * m + w[take_out], v[take_in] * m + u[take_in]])
-        extra = np.concatenate([(c[take_out] << 1) | 1, before[take_in] << 1])
-        if packed:
-            out_keys.append((edge << (side_bits + 1)) | extra)
-        else:
-            out_keys.append(edge)
-            out_extra.append(extra)
-    empty = np.zeros(0, dtype=np.int64)
-    keys = np.concatenate(out_keys) if out_keys else empty
-    extra = np.concatenate(out_extra) if out_extra else None
-    return keys, extra
+        edges += [v[take_out] * m + w[take_out], v[take_in] * m + u[take_in]]
+        extras += [(c[take_out] << 1) | 1, before[take_in] << 1]
+    return np.concatenate(edges), np.concatenate(extras)
+
+
+def _unpack(keys: np.ndarray, side_bits: int):
+    """Sides, directions and edge group starts of the sorted packed keys, in slices."""
+    side = np.empty(keys.size, dtype=np.int32 if keys.size < 2**31 else np.int64)
+    forward = np.empty(keys.size, dtype=bool)
+    mask, shift = np.int64((1 << side_bits) - 1), np.int64(side_bits + 1)
+    starts, previous = [], None
+    for lo in range(0, keys.size, CHUNK):
+        part = keys[lo:lo + CHUNK]
+        side[lo:lo + part.size] = (part >> 1) & mask
+        forward[lo:lo + part.size] = part & 1
+        edge = part >> shift
+        new = np.empty(edge.size, dtype=bool)
+        new[0] = previous is None or edge[0] != previous
+        np.not_equal(edge[1:], edge[:-1], out=new[1:])
+        starts.append(np.flatnonzero(new) + lo)
+        previous = edge[-1]
+    starts = np.concatenate(starts) if starts else np.zeros(0, dtype=np.int64)
+    return side, forward, starts
 
 
 def _group_starts(edge_of, size: int) -> np.ndarray:

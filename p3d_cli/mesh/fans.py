@@ -74,10 +74,7 @@ def _walk(ids, first_corner, degree, edges: Edges, clean_pair, clean) -> np.ndar
     vertices = np.flatnonzero(clean)
     if vertices.size == 0:
         return length
-    twin = np.full(ids.size, -1, dtype=np.int64)
-    pair_start = edges.starts[clean_pair]
-    a, b = edges.side[pair_start].astype(np.int64), edges.side[pair_start + 1].astype(np.int64)
-    twin[a], twin[b] = b, a
+    twin = _twins(ids.size, edges, clean_pair)
     start = first_corner[vertices].astype(np.int64)
     current = start
     for step in range(1, WALK + 1):
@@ -89,6 +86,24 @@ def _walk(ids, first_corner, degree, edges: Edges, clean_pair, clean) -> np.ndar
         if vertices.size == 0:
             break
     return length
+
+
+def _twins(size: int, edges: Edges, clean_pair: np.ndarray) -> np.ndarray:
+    """``twin[s]``: the other side of side ``s``'s edge, for the clean pairs (-1 elsewhere)."""
+    twin = np.full(size, -1, dtype=np.int32 if size < 2**31 else np.int64)
+    side, step = edges.side, 1 << 16
+    if side.size == 2 * edges.count and clean_pair.all():     # closed: pairs are adjacent
+        for lo in range(0, side.size, 2 * step):
+            pair = side[lo:lo + 2 * step].astype(np.int64)
+            twin[pair[0::2]] = pair[1::2]
+            twin[pair[1::2]] = pair[0::2]
+        return twin
+    starts = edges.starts[clean_pair].astype(np.int64)
+    for lo in range(0, starts.size, step):
+        first = starts[lo:lo + step]
+        a, b = side[first].astype(np.int64), side[first + 1].astype(np.int64)
+        twin[a], twin[b] = b, a
+    return twin
 
 
 def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray) -> np.ndarray:

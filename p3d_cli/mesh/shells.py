@@ -29,22 +29,42 @@ class Components:
 
 def roots(size: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The root (smallest node) of every node's component, for edges ``a[i] -- b[i]``."""
-    dtype = np.int32 if size < 2**31 else np.int64
-    parent = np.arange(size, dtype=dtype)
-    a, b = np.asarray(a, dtype=dtype), np.asarray(b, dtype=dtype)
-    while a.size:
-        ra, rb = parent[a], parent[b]
-        apart = ra != rb
-        if not apart.any():
-            break
-        a, b, ra, rb = a[apart], b[apart], ra[apart], rb[apart]
-        np.minimum.at(parent, np.maximum(ra, rb), np.minimum(ra, rb))
-        while True:  # pointer jumping: parents only ever decrease, so this ends
-            jumped = parent[parent]
-            if np.array_equal(jumped, parent):
-                break
-            parent = jumped
+    a, b = np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)
+    return chunked_roots(size, lambda: iter([(a, b)]))
+
+
+def chunked_roots(size: int, arcs) -> np.ndarray:
+    """``roots`` for edges given in pieces: ``arcs()`` iterates over ``(a, b)`` int64 pairs of
+    arrays, and is called once per round (so the edges are never held whole)."""
+    # int64 throughout: numpy gathers with int64 indices about twice as fast as with int32.
+    parent = np.arange(size, dtype=np.int64)
+    # First round: every node is its own root, so hook without looking roots up.
+    for a, b in arcs():
+        np.minimum.at(parent, np.maximum(a, b), np.minimum(a, b))
+    _jump(parent)
+    merged = True
+    while merged:
+        merged = False
+        for a, b in arcs():
+            ra, rb = parent[a], parent[b]
+            apart = ra != rb
+            if apart.any():
+                merged = True
+                ra, rb = ra[apart], rb[apart]
+                np.minimum.at(parent, np.maximum(ra, rb), np.minimum(ra, rb))
+        if merged:
+            _jump(parent)
     return parent
+
+
+def _jump(parent: np.ndarray) -> None:
+    """Pointer jumping in place until every node points at its root (parents only ever
+    decrease, so this ends)."""
+    while True:
+        jumped = parent[parent]
+        if np.array_equal(jumped, parent):
+            return
+        parent[:] = jumped
 
 
 def components(size: int, a: np.ndarray, b: np.ndarray) -> Components:
@@ -60,20 +80,38 @@ def components(size: int, a: np.ndarray, b: np.ndarray) -> Components:
     Components
         Labels numbered in order of each component's smallest node.
     """
-    parent = roots(size, a, b)
+    return _numbered(roots(size, a, b))
+
+
+def _numbered(parent: np.ndarray) -> Components:
+    size = parent.size
     # Roots are the smallest node of their component: numbering them in node order numbers
     # the components by first member, with no sort.
     is_root = parent == np.arange(size, dtype=parent.dtype)
-    label_of = np.cumsum(is_root, dtype=np.int64) - 1
+    label_of = np.cumsum(is_root, dtype=np.int32 if size < 2**31 else np.int64) - 1
     return Components(label_of[parent], int(is_root.sum()))
 
 
 def shells(n: int, edges: Edges) -> Components:
     """Faces joined across shared edges: consecutive sides of each edge group."""
-    later = np.ones(edges.side.size, dtype=bool)
-    later[edges.starts] = False
-    at = np.flatnonzero(later)
-    return components(n, edges.side[at - 1] // 3, edges.side[at] // 3)
+    side, step = edges.side, 1 << 16
+    if side.size == 2 * edges.count and (edges.counts == 2).all():   # closed meshes
+
+        def arcs():
+            for lo in range(0, side.size, 2 * step):
+                pair = side[lo:lo + 2 * step].astype(np.int64) // 3
+                yield pair[0::2], pair[1::2]
+    else:
+        later = np.ones(side.size, dtype=bool)
+        later[edges.starts] = False
+
+        def arcs():
+            for lo in range(1, side.size, step):
+                hi = min(lo + step, side.size)
+                keep = later[lo:hi]
+                yield (side[lo - 1:hi - 1][keep].astype(np.int64) // 3,
+                       side[lo:hi][keep].astype(np.int64) // 3)
+    return _numbered(chunked_roots(n, arcs))
 
 
 def shell_volumes(blocks, n: int, found: Components, volume: float) -> list[Shell]:

@@ -124,10 +124,9 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         zero_area.append(zero_area_faces(cols) + first_face)
 
     corners = group_corners(blocks, n, on_block=per_block)
-    edges = group_edges(corners)
     first_corner = corners.corner_at(corners.first[:-1])
-    degree = np.diff(corners.first)
-    corners.keys = None                                 # free the sorted keys
+    degree = np.diff(corners.first).astype(np.int32)
+    edges = group_edges(corners)                        # frees the sorted corner keys
     ids = corners.ids
     found = shells(n, edges)
     nonmanifold = nonmanifold_vertices(ids, corners.count, first_corner, degree, edges)

@@ -19,13 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.mesh.closed import _column_hashes, corner_hashes
-from p3d_cli.mesh.integrals import MomentSums, columns, origin_from_bounds
+from p3d_cli.mesh.integrals import columns, origin_from_bounds
+from p3d_cli.mesh.volume import SignedVolume
 
 #: Corners handled per vectorised step of the passes over the sorted keys (cache-sized).
 CHUNK = 1 << 16
-#: Faces per moment-sum block: the block size of ``triangle_moments``, so that the streamed
-#: volume is bit-identical to ``triangle_moments(triangles).volume``.
-MOMENT_BLOCK = 65536
 
 
 @dataclass
@@ -159,48 +157,41 @@ def _confirm(blocks, ids, keys, first, bits, origin):
     """
     mask = np.uint64((1 << bits) - 1)
     first_corner = (keys[first[:-1]] & mask).astype(np.int64)
-    points = None
+    m = first.size - 1
+    # One array per axis, so that each comparison is a 1-D gather (float64: the widened,
+    # exact coordinates, which compare equal exactly when the stored ones do).
+    axes = None
     bad = []
-    sums = MomentSums(origin)
-    pending, pending_size, done = [], 0, 0
+    volume = SignedVolume(origin)
+    done = 0
     for block in blocks():
-        block = np.asarray(block)
-        k = len(block)
+        cols = columns(block)                       # (slot, axis, face), contiguous
+        k = cols.shape[2]
         if k == 0:
             continue
-        if points is None:
-            points = np.zeros((first.size - 1, 3), dtype=block.dtype)
-        flat = block.reshape(-1, 3)
-        vid = ids[3 * done:3 * (done + k)]
-        # A vertex's first corner is its earliest in file order: it is in this block or before.
-        own = first_corner[vid] == np.arange(3 * done, 3 * (done + k))
-        points[vid[own]] = flat[own]
-        differ = (points[vid] != flat).any(axis=1)
-        if differ.any():
-            bad.append(vid[differ])
-        pending.append(block)
-        pending_size += k
-        if pending_size >= MOMENT_BLOCK:
-            pending_size = _add_moments(sums, pending, MOMENT_BLOCK)
+        if axes is None:  # float32 input: float32 coordinates (exact), half the memory
+            axes = np.zeros((3, m), dtype=np.asarray(block).dtype)
+        corner = np.arange(3 * done, 3 * (done + k), dtype=np.int64).reshape(k, 3)
+        vid = ids[3 * done:3 * (done + k)].reshape(k, 3).astype(np.int64)
+        # A vertex's first corner is its earliest in file order: in this block or before.
+        # So set the first corners' coordinates of the whole block, then compare every corner.
+        for slot in range(3):
+            v = vid[:, slot]
+            own = first_corner[v] == corner[:, slot]
+            for axis in range(3):
+                axes[axis, v[own]] = cols[slot, axis, own]
+        for slot in range(3):
+            v = vid[:, slot]
+            differ = axes[0, v] != cols[slot, 0]
+            differ |= axes[1, v] != cols[slot, 1]
+            differ |= axes[2, v] != cols[slot, 2]
+            if differ.any():
+                bad.append(v[differ])
+        volume.add_columns(cols)
         done += k
-    if pending:
-        _add_moments(sums, pending, MOMENT_BLOCK, final=True)
-    volume = float(sums.moments().volume) if done else 0.0
-    if points is None:
-        points = np.zeros((0, 3))
+    points = np.ascontiguousarray(axes.T) if axes is not None else np.zeros((m, 3))
     mixed = np.unique(np.concatenate(bad)) if bad else np.zeros(0, dtype=np.int64)
-    return points, volume, mixed
-
-
-def _add_moments(sums: MomentSums, pending: list, size: int, final: bool = False) -> int:
-    """Feed ``pending`` blocks to ``sums`` in blocks of exactly ``size`` faces (the last may be
-    short when ``final``); keep the remainder in ``pending``. Returns its size."""
-    joined = np.concatenate(pending) if len(pending) > 1 else pending[0]
-    stop = len(joined) if final else len(joined) - len(joined) % size
-    for start in range(0, stop, size):
-        sums.add_triangles(joined[start:start + size])
-    pending[:] = [joined[stop:]] if stop < len(joined) else []
-    return len(joined) - stop
+    return points, volume.volume(), mixed
 
 
 def _split_groups(blocks, keys, ids, first, points, bits, mixed):
