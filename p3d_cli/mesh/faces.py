@@ -35,12 +35,13 @@ def zero_area_faces(cols: np.ndarray) -> np.ndarray:
     """
     a, b, c = cols[0], cols[1], cols[2]
     certain = np.zeros(cols.shape[2], dtype=bool)
-    for i, j in ((0, 1), (1, 2), (2, 0)):
-        # orient2d(a, b, c) on the (i, j) plane: (a_i - c_i)(b_j - c_j) - (a_j - c_j)(b_i - c_i)
-        left = (a[i] - c[i]) * (b[j] - c[j])
-        right = (a[j] - c[j]) * (b[i] - c[i])
-        bound = _ORIENT_BOUND * (np.abs(left) + np.abs(right)) + _UNDERFLOW
-        with np.errstate(invalid="ignore"):             # inf - inf: undecided, done exactly
+    # Overflow gives inf or nan, which no bound certifies: those faces are done exactly.
+    with np.errstate(over="ignore", invalid="ignore"):
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            # orient2d(a, b, c) on the (i, j) plane: (a_i - c_i)(b_j - c_j) - (a_j - c_j)(b_i - c_i)
+            left = (a[i] - c[i]) * (b[j] - c[j])
+            right = (a[j] - c[j]) * (b[i] - c[i])
+            bound = _ORIENT_BOUND * (np.abs(left) + np.abs(right)) + _UNDERFLOW
             certain |= np.abs(left - right) > bound
     undecided = np.flatnonzero(~certain)
     if undecided.size == 0:
