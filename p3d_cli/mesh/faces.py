@@ -93,3 +93,42 @@ def duplicate_faces(ids: np.ndarray, candidates: np.ndarray | None = None) -> np
         return np.zeros((0, 2), dtype=np.int64)
     pairs = np.stack([faces[first_of_group[group[dup]]], faces[order[dup]]], axis=1)
     return pairs[np.argsort(pairs[:, 1], kind="stable")].astype(np.int64)
+
+
+def duplicate_candidates(n: int, side: np.ndarray, starts: np.ndarray, counts: np.ndarray,
+                         repeated: np.ndarray) -> np.ndarray:
+    """Faces (ascending) that can have a duplicate; ``duplicate_faces`` needs look at no other.
+
+    A face with three distinct vertices and a duplicate shares all three edges with it, so
+    each of its edges is used at least twice; when all three are used exactly twice, the face
+    across every one of them is the duplicate, the same face three times. So a face is a
+    candidate only when it has a repeated vertex, or an edge used three or more times, or
+    three edges used twice with one and the same face across them.
+
+    Parameters
+    ----------
+    side, starts, counts
+        The sorted sides (``3 f + k``) and their edge groups (``edges.Edges``).
+    repeated : (r,) int
+        Faces with a repeated vertex.
+    """
+    candidate = np.zeros(n, dtype=bool)
+    candidate[repeated] = True
+    # across[3 f + k]: the face across side k of face f when that edge is used twice, else
+    # -1; then a face is a candidate when the same face is across all three sides.
+    across = np.full(3 * n, -1, dtype=np.int64 if n >= 2**31 else np.int32)
+    step = 1 << 16
+    for lo in range(0, starts.size, step):
+        group_counts = counts[lo:lo + step]
+        group_starts = starts[lo:lo + step].astype(np.int64)
+        crowded = group_starts[group_counts > 2]
+        if crowded.size:
+            sizes = group_counts[group_counts > 2].astype(np.int64)
+            offsets = np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+            candidate[side[np.repeat(crowded, sizes) + offsets] // 3] = True
+        first = group_starts[group_counts == 2]
+        s1, s2 = side[first].astype(np.int64), side[first + 1].astype(np.int64)
+        across[s1], across[s2] = s2 // 3, s1 // 3
+    across = across.reshape(n, 3)
+    candidate |= (across[:, 0] >= 0) & (across[:, 0] == across[:, 1]) & (across[:, 1] == across[:, 2])
+    return np.flatnonzero(candidate)

@@ -70,27 +70,38 @@ def _mark_ends(mark: np.ndarray, ids: np.ndarray, edges: Edges, groups: np.ndarr
 
 def _walk(ids, first_corner, degree, edges: Edges, clean_pair, clean) -> np.ndarray:
     """Length of the fan cycle through each clean vertex's first corner (0: not walked)."""
-    length = np.zeros(first_corner.size, dtype=np.int64)
+    length = np.zeros(first_corner.size, dtype=np.int32)
     vertices = np.flatnonzero(clean)
     if vertices.size == 0:
         return length
     twin = _twins(ids.size, edges, clean_pair)
+    # In slices of vertices, so that the walk's temporaries stay small beside the corners.
+    for lo in range(0, vertices.size, 1 << 16):
+        _walk_some(twin, first_corner, vertices[lo:lo + (1 << 16)], length)
+    return length
+
+
+def _walk_some(twin, first_corner, vertices, length) -> None:
     start = first_corner[vertices].astype(np.int64)
     current = start
     for step in range(1, WALK + 1):
-        current = next_corner(twin[current])
+        current = next_corner(twin[current].astype(np.int64))
         back = current == start
-        length[vertices[back]] = step
-        keep = ~back
-        vertices, start, current = vertices[keep], start[keep], current[keep]
-        if vertices.size == 0:
-            break
-    return length
+        if back.any():              # most vertices come back together: compress rarely
+            length[vertices[back]] = step
+            keep = ~back
+            vertices, start, current = vertices[keep], start[keep], current[keep]
+            if vertices.size == 0:
+                return
 
 
 def _twins(size: int, edges: Edges, clean_pair: np.ndarray) -> np.ndarray:
     """``twin[s]``: the other side of side ``s``'s edge, for the clean pairs (-1 elsewhere)."""
-    twin = np.full(size, -1, dtype=np.int32 if size < 2**31 else np.int64)
+    if edges.spare is not None and edges.spare.size == size:
+        twin = edges.spare
+        twin[:] = -1
+    else:
+        twin = np.full(size, -1, dtype=np.int32 if size < 2**31 else np.int64)
     side, step = edges.side, 1 << 16
     if side.size == 2 * edges.count and clean_pair.all():     # closed: pairs are adjacent
         for lo in range(0, side.size, 2 * step):
@@ -107,28 +118,34 @@ def _twins(size: int, edges: Edges, clean_pair: np.ndarray) -> np.ndarray:
 
 
 def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray) -> np.ndarray:
-    """Fans per vertex (for the ``selected`` vertices; 0 elsewhere), by union-find on corners."""
-    n = len(faces)
-    pair_start = edges.starts[edges.counts == 2]
-    s1 = edges.side[pair_start].astype(np.int64)
-    s2 = edges.side[pair_start + 1].astype(np.int64)
+    """Fans per vertex (for the ``selected`` vertices; 0 elsewhere), by union-find on the
+    corners at those vertices only (so an open mesh with a few boundary vertices pays for a
+    few corners, not for all of them)."""
+    point_face = (faces[:, 0] == faces[:, 1]) & (faces[:, 1] == faces[:, 2])
+    # Corners of faces with three equal corners touch nothing: leave them out of the count.
+    corners = np.flatnonzero(selected[ids] & ~np.repeat(point_face, 3))
+    if corners.size == 0:
+        return np.zeros(selected.size, dtype=np.int64)
     a, b = [], []
-    for end in (ids[s1], ids[next_corner(s1)]):       # the edge's two vertices
-        keep = selected[end]
-        x1, x2, vertex = s1[keep], s2[keep], end[keep]
-        # A side runs from its own corner to the next one: take the corner at `vertex`.
-        a.append(np.where(ids[x1] == vertex, x1, next_corner(x1)))
-        b.append(np.where(ids[x2] == vertex, x2, next_corner(x2)))
-    twins = np.flatnonzero(repeated)
+    pair_start = np.flatnonzero(edges.counts == 2)
+    for lo in range(0, pair_start.size, 1 << 16):
+        first = edges.starts[pair_start[lo:lo + (1 << 16)]].astype(np.int64)
+        s1, s2 = edges.side[first].astype(np.int64), edges.side[first + 1].astype(np.int64)
+        for end in (ids[s1], ids[next_corner(s1)]):   # the edge's two vertices
+            keep = selected[end]
+            x1, x2, vertex = s1[keep], s2[keep], end[keep]
+            # A side runs from its own corner to the next one: take the corner at `vertex`.
+            a.append(np.where(ids[x1] == vertex, x1, next_corner(x1)))
+            b.append(np.where(ids[x2] == vertex, x2, next_corner(x2)))
+    twins = np.flatnonzero(repeated & ~point_face)
     for i, j in ((0, 1), (1, 2), (2, 0)):
         same = twins[(faces[twins, i] == faces[twins, j]) & selected[faces[twins, i]]]
         a.append(3 * same + i)
         b.append(3 * same + j)
-    parent = roots(3 * n, np.concatenate(a), np.concatenate(b))
-    point_face = (faces[:, 0] == faces[:, 1]) & (faces[:, 1] == faces[:, 2])
-    # Corners of faces with three equal corners touch nothing: leave them out of the count.
-    corner = np.flatnonzero(selected[ids] & ~np.repeat(point_face, 3))
-    fan_roots = corner[parent[corner] == corner]
+    a, b = np.concatenate(a), np.concatenate(b)
+    live = np.isin(a, corners) & np.isin(b, corners)
+    parent = roots(corners.size, np.searchsorted(corners, a[live]), np.searchsorted(corners, b[live]))
+    fan_roots = corners[parent == np.arange(corners.size)]
     return np.bincount(ids[fan_roots], minlength=selected.size)
 
 

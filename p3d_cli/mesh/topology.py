@@ -42,7 +42,7 @@ import numpy as np
 
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
-from p3d_cli.mesh.faces import duplicate_faces, repeated_vertex_faces, zero_area_faces
+from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
@@ -124,28 +124,36 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         zero_area.append(zero_area_faces(cols) + first_face)
 
     corners = group_corners(blocks, n, on_block=per_block)
-    first_corner = corners.corner_at(corners.first[:-1])
+    first_corner = corners.corner_at(corners.first[:-1]).astype(corners.ids.dtype)
     degree = np.diff(corners.first).astype(np.int32)
     edges = group_edges(corners)                        # frees the sorted corner keys
+    m, corners.first = corners.count, None              # not needed any more: memory
+    edges.forward = None
     ids = corners.ids
+    nonmanifold = nonmanifold_vertices(ids, m, first_corner, degree, edges)
+    del first_corner, degree
+    # The sides were unpacked into the sorted keys' buffer, half of which held the twins:
+    # compact them and let the buffer go before the shells' union-find (peak memory).
+    edges.spare = None
+    edges.side = edges.side.copy()
     found = shells(n, edges)
-    nonmanifold = nonmanifold_vertices(ids, corners.count, first_corner, degree, edges)
     faces = ids.reshape(n, 3)
-    # With every edge used by exactly two faces, a face and its duplicate share all three
-    # edges and nothing else: they are a shell of two faces. Only such small shells (and
-    # point faces, shells of one) can hold duplicates then.
-    candidates = None
+    repeated = repeated_vertex_faces(faces)
     if edges.count and (edges.counts == 2).all():
+        # Every edge used twice: a face and its duplicate share all three edges and nothing
+        # else, a shell of two faces (point faces are shells of one): only those can be.
         small = np.bincount(found.labels, minlength=found.count) <= 2
         candidates = np.flatnonzero(small[found.labels])
+    else:
+        candidates = duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)
     duplicates = duplicate_faces(faces, candidates)
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
     points = corners.points
     return TopologyReport(
-        faces=n, vertices=corners.count, edges=edges.count,
+        faces=n, vertices=m, edges=edges.count,
         boundary_edges=int(edges.boundary.size), nonmanifold_edges=int(edges.nonmanifold.size),
         misoriented_edges=int(edges.misoriented.size), nonmanifold_vertices=int(nonmanifold.size),
-        zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated_vertex_faces(faces).size),
+        zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated.size),
         degenerate_faces=int(zero.size), duplicate_faces=int(duplicates.shape[0]),
         shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, corners.volume)),
         volume=corners.volume,

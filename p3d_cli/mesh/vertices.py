@@ -38,7 +38,7 @@ class Corners:
         Sorted packed keys: ``keys & mask`` is the corner index, grouped by vertex id.
     bits : int
         Bits of the corner index in ``keys``.
-    first : (m + 1,) int64
+    first : (m + 1,) int32 or int64
         Vertex ``v``'s corners are at sorted positions ``first[v]:first[v + 1]``.
     points : (m, 3) float
         Coordinates of each vertex (as stored in the input, not widened).
@@ -142,10 +142,10 @@ def _ids_from_sorted(keys: np.ndarray, n: int, bits: int):
         vid = np.cumsum(new, dtype=ids.dtype)
         vid += count - 1
         ids[(part & mask).astype(np.int64)] = vid
-        starts.append(np.flatnonzero(new) + lo)
+        starts.append((np.flatnonzero(new) + lo).astype(ids.dtype))
         count = int(vid[-1]) + 1
         previous = prefix[-1]
-    first = np.concatenate(starts + [np.array([keys.size])]).astype(np.int64)
+    first = np.concatenate(starts + [np.array([keys.size], dtype=ids.dtype)])
     return ids, first
 
 

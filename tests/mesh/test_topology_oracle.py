@@ -206,3 +206,17 @@ def test_streamed_volume_is_bit_identical_to_triangle_moments(n, dtype):
     for lo in range(0, n, 7777):                   # blocks that straddle the sum blocks
         got.add(t[lo:lo + 7777])
     assert got.volume() == expected
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 40))
+def test_duplicate_candidates_hold_every_duplicate(seed, n):
+    from p3d_cli.mesh.faces import duplicate_candidates, repeated_vertex_faces
+
+    t = soup(seed, n, points=5)
+    t = np.concatenate([t, t[: n // 2, [1, 2, 0]]])        # plenty of duplicates
+    corners = group_corners(_array_blocks(t), len(t))
+    ids = corners.ids.reshape(-1, 3)
+    edges = group_edges(corners)
+    candidates = duplicate_candidates(len(t), edges.side, edges.starts, edges.counts,
+                                      repeated_vertex_faces(ids))
+    assert np.array_equal(duplicate_faces(ids, candidates), duplicate_faces(ids))
