@@ -139,14 +139,7 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     found = shells(n, edges)
     faces = ids.reshape(n, 3)
     repeated = repeated_vertex_faces(faces)
-    if edges.count and (edges.counts == 2).all():
-        # Every edge used twice: a face and its duplicate share all three edges and nothing
-        # else, a shell of two faces (point faces are shells of one): only those can be.
-        small = np.bincount(found.labels, minlength=found.count) <= 2
-        candidates = np.flatnonzero(small[found.labels])
-    else:
-        candidates = duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)
-    duplicates = duplicate_faces(faces, candidates)
+    duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
     points = corners.points
     return TopologyReport(
@@ -165,6 +158,16 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
+
+
+def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> np.ndarray:
+    """The faces that can have a duplicate (``faces.duplicate_candidates``), cheaper when
+    every edge is used twice: a face and its duplicate then share all three edges and
+    nothing else, a shell of two faces (point faces are shells of one)."""
+    if edges.count and (edges.counts == 2).all():
+        small = np.bincount(found.labels, minlength=found.count) <= 2
+        return np.flatnonzero(small[found.labels])
+    return duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)
 
 
 def _check_finite(where: str, first_face: int, cols: np.ndarray) -> None:
