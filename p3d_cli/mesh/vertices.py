@@ -156,8 +156,9 @@ def _confirm(blocks, ids, keys, first, bits, origin):
     all at one point (hash groups to split).
     """
     mask = np.uint64((1 << bits) - 1)
-    first_corner = (keys[first[:-1]] & mask).astype(np.int64)
     m = first.size - 1
+    is_first = np.zeros(keys.size, dtype=bool)     # a sequential mask, not a gather per corner
+    is_first[(keys[first[:-1]] & mask).astype(np.int64)] = True
     # One array per axis, so that each comparison is a 1-D gather (float64: the widened,
     # exact coordinates, which compare equal exactly when the stored ones do).
     axes = None
@@ -171,13 +172,13 @@ def _confirm(blocks, ids, keys, first, bits, origin):
             continue
         if axes is None:  # float32 input: float32 coordinates (exact), half the memory
             axes = np.zeros((3, m), dtype=np.asarray(block).dtype)
-        corner = np.arange(3 * done, 3 * (done + k), dtype=np.int64).reshape(k, 3)
+        own_block = is_first[3 * done:3 * (done + k)].reshape(k, 3)
         vid = ids[3 * done:3 * (done + k)].reshape(k, 3).astype(np.int64)
         # A vertex's first corner is its earliest in file order: in this block or before.
         # So set the first corners' coordinates of the whole block, then compare every corner.
         for slot in range(3):
             v = vid[:, slot]
-            own = first_corner[v] == corner[:, slot]
+            own = own_block[:, slot]
             for axis in range(3):
                 axes[axis, v[own]] = cols[slot, axis, own]
         for slot in range(3):
