@@ -119,11 +119,9 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     zero_area: list[np.ndarray] = []
 
     def per_block(first_face: int, cols: np.ndarray, block) -> None:
-        if where is not None:
-            _check_finite(where, first_face, cols)
         zero_area.append(zero_area_faces(cols) + first_face)
 
-    corners = group_corners(blocks, n, on_block=per_block)
+    corners = group_corners(blocks, n, on_block=per_block, where=where)
     first_corner = corners.corner_at(corners.first[:-1]).astype(corners.ids.dtype)
     degree = np.diff(corners.first).astype(np.int32)
     edges = group_edges(corners)                        # frees the sorted corner keys
@@ -168,18 +166,6 @@ def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> 
         small = np.bincount(found.labels, minlength=found.count) <= 2
         return np.flatnonzero(small[found.labels])
     return duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)
-
-
-def _check_finite(where: str, first_face: int, cols: np.ndarray) -> None:
-    from p3d_cli.errors import InputError
-
-    # min and max propagate NaN and show any infinity: a finite check for the price of two
-    # reductions, and the exact face only when there is one.
-    if np.isfinite(cols.min()) and np.isfinite(cols.max()):
-        return
-    bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
-    raise InputError(where, f"face {first_face + bad} has a NaN or infinite coordinate",
-                     "repair or re-export the mesh")
 
 
 def _edge_samples(edges: Edges, groups: np.ndarray, ids: np.ndarray, points: np.ndarray):

@@ -66,7 +66,7 @@ class Corners:
         return (self.keys[positions] & np.uint64((1 << self.bits) - 1)).astype(np.int64)
 
 
-def group_corners(blocks, n: int, on_block=None, hasher=None) -> Corners:
+def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None = None) -> Corners:
     """Exact vertex ids of the corners of ``n`` triangles read from ``blocks()``.
 
     Parameters
@@ -79,12 +79,14 @@ def group_corners(blocks, n: int, on_block=None, hasher=None) -> Corners:
     on_block : callable, optional
         Called as ``on_block(first_face, cols, block)`` for every block of the first pass
         (``cols`` the ``(3, 3, k)`` float64 columns), for per-face work done in the same read.
+    where : str, optional
+        The input's name: when given, a NaN or infinite coordinate raises ``InputError``.
     hasher : callable, optional
         ``hasher(cols) -> (3, k) uint64`` corner hashes; default ``closed.corner_hashes``'
         (any function works: the groups are confirmed exactly).
     """
     bits = max(int(3 * n - 1).bit_length(), 1)
-    keys, lo, hi, float32 = _hashed_keys(blocks, n, bits, on_block, hasher)
+    keys, lo, hi, float32 = _hashed_keys(blocks, n, bits, on_block, hasher, where)
     keys.sort()
     ids, first = _ids_from_sorted(keys, n, bits)
     points, volume, mixed = _confirm(blocks, ids, keys, first, bits,
@@ -94,7 +96,7 @@ def group_corners(blocks, n: int, on_block=None, hasher=None) -> Corners:
     return Corners(ids, keys, bits, first, points, volume)
 
 
-def _hashed_keys(blocks, n: int, bits: int, on_block, hasher):
+def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
     """Pass 1: the packed keys ``(hash high bits) | corner index``, and the bounds."""
     keys = np.empty(3 * n, dtype=np.uint64)
     high = np.uint64(((1 << 64) - 1) ^ ((1 << bits) - 1))
@@ -108,6 +110,13 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher):
             continue
         float32 = np.asarray(block).dtype == np.float32
         block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
+        # min and max propagate NaN and show any infinity: a finite check for free.
+        if where is not None and not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
+            from p3d_cli.errors import InputError
+
+            bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
+            raise InputError(where, f"face {done + bad} has a NaN or infinite coordinate",
+                             "repair or re-export the mesh")
         lo = block_lo if lo is None else np.minimum(lo, block_lo)
         hi = block_hi if hi is None else np.maximum(hi, block_hi)
         if on_block is not None:
