@@ -47,7 +47,7 @@ from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
 from p3d_cli.mesh.verdicts import CHECKS, CheckResult, check_source, passes
-from p3d_cli.mesh.vertices import group_corners
+from p3d_cli.mesh.vertices import corner_coords, group_corners
 
 __all__ = ["CHECKS", "CheckResult", "Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
            "TopologyReport", "VertexSample", "check_source", "components", "corner_vertex_ids",
@@ -122,6 +122,7 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         zero_area.append(zero_area_faces(cols) + first_face)
 
     corners = group_corners(blocks, n, on_block=per_block, where=where)
+    corners.points = None       # memory: the few sample points are read again at the end
     first_corner = corners.corner_at(corners.first[:-1]).astype(corners.ids.dtype)
     degree = np.diff(corners.first).astype(np.int32)
     edges = group_edges(corners)                        # frees the sorted corner keys
@@ -139,7 +140,14 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
-    points = corners.points
+    edge_samples = [_edge_samples(edges, groups, ids)
+                    for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
+    vertex_samples = [int(v) for v in nonmanifold[:SAMPLES]]
+    points = _sample_points(blocks, ids, [v for samples in edge_samples for _, a, b in samples
+                                          for v in (a, b)] + vertex_samples)
+    boundary, nonmanifold_edges, misoriented = (
+        tuple(EdgeSample(faces, (points[a], points[b])) for faces, a, b in samples)
+        for samples in edge_samples)
     return TopologyReport(
         faces=n, vertices=m, edges=edges.count,
         boundary_edges=int(edges.boundary.size), nonmanifold_edges=int(edges.nonmanifold.size),
@@ -147,12 +155,10 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated.size),
         degenerate_faces=int(zero.size), duplicate_faces=int(duplicates.shape[0]),
         shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, corners.volume)),
-        volume=corners.volume,
-        boundary_edge_samples=_edge_samples(edges, edges.boundary, ids, points),
-        nonmanifold_edge_samples=_edge_samples(edges, edges.nonmanifold, ids, points),
-        misoriented_edge_samples=_edge_samples(edges, edges.misoriented, ids, points),
-        nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, int(v)), _point(points[v]))
-                                         for v in nonmanifold[:SAMPLES]),
+        volume=corners.volume, boundary_edge_samples=boundary,
+        nonmanifold_edge_samples=nonmanifold_edges, misoriented_edge_samples=misoriented,
+        nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
+                                         for v in vertex_samples),
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
@@ -168,7 +174,8 @@ def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> 
     return duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)
 
 
-def _edge_samples(edges: Edges, groups: np.ndarray, ids: np.ndarray, points: np.ndarray):
+def _edge_samples(edges: Edges, groups: np.ndarray, ids: np.ndarray) -> list:
+    """``(faces, lo vertex, hi vertex)`` of the first ``SAMPLES`` problem edges in file order."""
     out = []
     # The problems met first in file order (each group's first side is its lowest face).
     first = np.argsort(edges.side[edges.starts[groups]] // 3, kind="stable")[:SAMPLES]
@@ -177,12 +184,19 @@ def _edge_samples(edges: Edges, groups: np.ndarray, ids: np.ndarray, points: np.
         faces = tuple(int(f) for f in edges.side[s:s + c] // 3)
         side = np.int64(edges.side[s])
         a, b = int(ids[side]), int(ids[next_corner(side)])
-        out.append(EdgeSample(faces, (_point(points[min(a, b)]), _point(points[max(a, b)]))))
-    return tuple(out)
+        out.append((faces, min(a, b), max(a, b)))
+    return out
 
 
-def _point(p) -> tuple[float, float, float]:
-    return (float(p[0]) + 0.0, float(p[1]) + 0.0, float(p[2]) + 0.0)
+def _sample_points(blocks, ids: np.ndarray, vertices: list) -> dict:
+    """Coordinates of the given vertices (``-0.0`` as ``0.0``), from one more pass if any."""
+    wanted = np.unique(np.asarray(vertices, dtype=np.int64))
+    if wanted.size == 0:
+        return {}
+    hit = np.flatnonzero(np.isin(ids, wanted))
+    _, first = np.unique(ids[hit], return_index=True)    # each vertex's first corner
+    coords = corner_coords(blocks, hit[first])
+    return {int(v): (float(x), float(y), float(z)) for v, (x, y, z) in zip(wanted, coords)}
 
 
 def _empty_report() -> TopologyReport:

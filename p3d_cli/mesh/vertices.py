@@ -215,7 +215,7 @@ def _split_groups(blocks, keys, ids, first, points, bits, mixed):
     positions = np.concatenate([np.arange(a, b) for a, b in
                                 zip(first[mixed].tolist(), first[mixed + 1].tolist())])
     corners = (keys[positions] & mask).astype(np.int64)
-    coords = _corner_coords(blocks, corners)
+    coords = corner_coords(blocks, corners)
     full = corner_hashes(coords)
     owner = ids[corners].astype(np.int64)
     order = np.lexsort((corners, coords[:, 2], coords[:, 1], coords[:, 0], full, owner))
@@ -245,7 +245,7 @@ def _split_groups(blocks, keys, ids, first, points, bits, mixed):
     return (new_ids.astype(ids.dtype), np.append(starts, len(keys)).astype(np.int64), new_points)
 
 
-def _corner_coords(blocks, corners: np.ndarray) -> np.ndarray:
+def corner_coords(blocks, corners: np.ndarray) -> np.ndarray:
     """Float64 coordinates of the given corner indices (one more pass over the blocks)."""
     out = np.empty((len(corners), 3))
     order = np.argsort(corners)
