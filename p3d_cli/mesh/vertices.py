@@ -108,6 +108,8 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
         k = cols.shape[2]
         if k == 0:
             continue
+        if done + k > n:
+            _count_error(where, n, f"more than {n}")
         float32 = np.asarray(block).dtype == np.float32
         block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
         # min and max propagate NaN and show any infinity: a finite check for free.
@@ -130,10 +132,15 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
         out |= np.arange(3 * done, 3 * (done + k), dtype=np.uint64).reshape(k, 3)
         done += k
     if done != n:
-        from p3d_cli.errors import FormatError
-
-        raise FormatError("mesh", f"expected {n} faces but read {done}", "the input is truncated")
+        _count_error(where, n, str(done))
     return keys, lo, hi, float32
+
+
+def _count_error(where: str | None, n: int, read: str):
+    from p3d_cli.errors import FormatError
+
+    raise FormatError(where or "<mesh>", f"expected {n} faces but read {read}",
+                      "the file is truncated or corrupt; export it again")
 
 
 def _ids_from_sorted(keys: np.ndarray, n: int, bits: int):

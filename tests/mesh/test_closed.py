@@ -62,3 +62,17 @@ def test_analyze_closed_flag_agrees_with_exact_test(seed, n):
     t = np.concatenate([t, t[::-1, ::-1]])  # often balanced: the doubtful path runs
     found = analyze(array_source("test", t, "float64"), "test")
     assert found.closed == closed_exact(t)
+
+
+def test_check_source_with_a_wrong_face_count_is_a_format_error():
+    import pytest
+
+    from p3d_cli.errors import FormatError
+    from p3d_cli.io.source import MeshSource
+    from p3d_cli.mesh.topology import check_source
+
+    t = cube_triangles()
+    for count in (11, 13):
+        mesh = MeshSource("stl-binary", count, "float64", lambda: iter([t[:6], t[6:]]))
+        with pytest.raises(FormatError, match=f"expected {count} faces"):
+            check_source(mesh, "cube.stl")
