@@ -73,7 +73,7 @@ def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None 
     ----------
     blocks : callable
         Returns an iterator over ``(k, 3, 3)`` float arrays, the triangles in file order;
-        called twice.
+        called twice (three times when a hash group must be split).
     n : int
         Number of triangles.
     on_block : callable, optional
