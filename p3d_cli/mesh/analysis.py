@@ -13,7 +13,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.closed import closed_exact, column_edge_keys, keys_pair_up
+from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_sums
 from p3d_cli.results import Bounds, Moments
 
@@ -96,15 +96,20 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
                           "the file is truncated or corrupt; export it again")
     is_closed = None
     if keys is not None:
-        is_closed = keys_pair_up(keys[:filled])
-        if not is_closed and filled:
-            # A 64-bit hash collision can only make a closed mesh look open: confirm exactly.
-            is_closed = closed_exact(source.triangles())
+        keys = keys[:filled]
+        is_closed = keys_pair_up(keys)
+        if not is_closed:
+            # A 64-bit hash collision can only make a closed mesh look open: most failures
+            # prove openness from the sorted keys alone; the few doubtful edges are compared
+            # exactly in one more pass.
+            doubtful = doubtful_edges(keys)
+            del keys
+            is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
     bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
     moments = sums.moments()
     if is_closed is False:
         # An open surface bounds no solid: its divergence-theorem sums depend on the origin of
-        # the tetrahedra (FACTS.md). Report the convention of the reference tools, signed
+        # the tetrahedra. Report the convention of the reference tools, signed
         # tetrahedra from the world origin, rather than one that moves with our local origin.
         about_world = MomentSums(np.zeros(3))
         for block in source.read_blocks():

@@ -5,9 +5,13 @@ directions, vertices being matched by their exact coordinates (no tolerance, no 
 ``-0.0`` equals ``0.0``). This needs no vertex merging: each corner's coordinates are hashed
 to 64 bits, each directed edge to a key whose high 63 bits identify the undirected edge and
 whose low bit gives its direction; the mesh is closed when, after one sort, the keys pair up as
-(direction 0, direction 1) with no third use. A hash collision could only make a closed mesh
-look open (never the reverse, barring a second, matching collision), so a "not closed" verdict
-is confirmed with exact vertex ids before it is reported.
+(direction 0, direction 1) with no third use. A hash collision could only make a closed mesh look open (never the reverse, barring a second,
+matching collision), so a "not closed" verdict is confirmed: a key used once, twice the same
+way, an odd number of times or unevenly in the two directions proves an exact edge that is not
+used once each way (equal edges have equal keys); only balanced groups of four or more sides,
+which two colliding closed edges would make, have their end points compared exactly
+(``doubtful_edges``, ``sides_pair_up_exactly``). An open mesh costs one more pass over its
+sorted keys, not a vertex merge.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 _S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
 _ONE = np.uint64(1)
+_MAX = np.uint64(0xFFFFFFFFFFFFFFFF)
 
 
 def _mix(z: np.ndarray, scratch: np.ndarray | None = None) -> np.ndarray:
@@ -59,23 +64,9 @@ def corner_hashes(triangles: np.ndarray) -> np.ndarray:
     return _mix(h)
 
 
-def column_edge_keys(columns: np.ndarray) -> np.ndarray:
-    """``directed_edge_keys(corner_hashes(triangles))`` for triangles given as columns.
-
-    The same keys (in another order, which the sort makes irrelevant), computed with reused
-    buffers from the layout the one-pass analysis already holds.
-
-    Parameters
-    ----------
-    columns : (3, 3, n) float64
-        Vertex slot, axis, triangle; exact world coordinates (not shifted).
-
-    Returns
-    -------
-    (m,) uint64
-    """
+def _column_hashes(columns: np.ndarray, scratch: np.ndarray) -> np.ndarray:
+    """``corner_hashes`` of triangles given as ``(3, 3, n)`` columns, as ``(3, n)`` (slot, face)."""
     n = columns.shape[2]
-    scratch = np.empty((3, n), dtype=np.uint64)
     # Same hash as corner_hashes: mix(mix(mix(x ^ G) ^ y) ^ z) of the float64 bits, after
     # adding 0.0 so that -0.0 and 0.0 hash alike.
     coord = np.empty((3, n))
@@ -86,7 +77,17 @@ def column_edge_keys(columns: np.ndarray) -> np.ndarray:
     _mix(h, scratch)
     h ^= np.add(columns[:, 2], 0.0, out=coord).view(np.uint64)
     _mix(h, scratch)
+    return h
+
+
+def _side_keys(h: np.ndarray, scratch: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Directed edge keys of the sides 0→1, 1→2, 2→0 given ``(3, n)`` corner hashes.
+
+    Returns the keys ``(3, n)`` flattened (sides whose ends hash alike left out: they bound
+    nothing) and the mask of kept sides (None when every side is kept).
+    """
     start, end = h, h[[1, 2, 0]]            # edges 0→1, 1→2, 2→0 of every triangle
+    keep = None
     if (start == end).any():                # rare: a degenerate edge bounds nothing
         keep = start != end
         start, end = start[keep], end[keep]
@@ -99,34 +100,28 @@ def column_edge_keys(columns: np.ndarray) -> np.ndarray:
     _mix(key, scratch)
     key &= ~_ONE
     key |= forward
-    return key.reshape(-1)
+    return key.reshape(-1), keep
 
 
-def directed_edge_keys(hashes: np.ndarray) -> np.ndarray:
-    """Keys of the directed edges (0→1, 1→2, 2→0) of each triangle.
+def column_edge_keys(columns: np.ndarray) -> np.ndarray:
+    """Keys of the directed edges (0→1, 1→2, 2→0) of triangles given as columns.
+
+    Bit 0 of a key is the direction (1 when the edge runs from the smaller corner hash to the
+    larger), the other bits identify the undirected edge; sides whose two ends are the same
+    point are left out (they bound nothing). Computed with reused buffers from the layout the
+    one-pass analysis already holds.
 
     Parameters
     ----------
-    hashes : (n, 3) uint64
-        Corner hashes from ``corner_hashes``.
+    columns : (3, 3, n) float64
+        Vertex slot, axis, triangle; exact world coordinates (not shifted).
 
     Returns
     -------
     (m,) uint64
-        Bit 0 is the direction (1 when the edge runs from the smaller hash to the larger), the
-        other bits identify the undirected edge. Edges whose two ends are the same point are
-        left out: they bound nothing.
     """
-    start = hashes.reshape(-1)
-    end = np.roll(hashes, -1, axis=1).reshape(-1)
-    keep = start != end
-    start, end = start[keep], end[keep]
-    low = np.minimum(start, end)
-    high = np.maximum(start, end)
-    key = _mix(low * _GOLDEN + high)
-    key &= ~np.uint64(1)
-    key |= (start < end).astype(np.uint64)
-    return key
+    scratch = np.empty((3, columns.shape[2]), dtype=np.uint64)
+    return _side_keys(_column_hashes(columns, scratch), scratch)[0]
 
 
 def keys_pair_up(keys: np.ndarray) -> bool:
@@ -134,9 +129,9 @@ def keys_pair_up(keys: np.ndarray) -> bool:
 
     Sorts ``keys`` in place.
     """
+    keys.sort()
     if keys.size == 0 or keys.size % 2:
         return False
-    keys.sort()
     pairs = keys.reshape(-1, 2)
     # Each pair must be (2e, 2e + 1): one edge, direction 0 then 1. That also rules out a third
     # use of an edge: sorted, the next pair starts at or above 2e + 1, and being even, above it.
@@ -147,6 +142,92 @@ def keys_pair_up(keys: np.ndarray) -> bool:
         if (first & _ONE).any() or not np.array_equal(first + _ONE, second):
             return False
     return True
+
+
+def doubtful_edges(keys: np.ndarray) -> np.ndarray:
+    """The edge keys (direction bit cleared) that may still pair up exactly, in sorted ``keys``
+    that ``keys_pair_up`` rejected; empty when the mesh is certainly open.
+
+    Equal edges have equal keys, so all the sides of one exact edge share a key group. A key
+    group of 1, 2 or an odd number of sides, or with unequal numbers of the two directions,
+    therefore holds an exact edge that is not used exactly once each way: the mesh is open
+    whatever the hash did. Only a group of 4, 6, ... balanced sides can be two or more
+    closed edges whose 64-bit keys collided; those need the exact test.
+    """
+    found = []
+    step, start = 1 << 18, 0
+    while start < keys.size:
+        # A slice of whole key groups (a group is the keys 2e and 2e + 1), so that the
+        # temporaries stay small beside the keys.
+        stop = min(start + step, keys.size)
+        last = keys[stop - 1] | _ONE
+        if stop < keys.size and last != _MAX:
+            stop = int(np.searchsorted(keys, last + _ONE))
+        elif stop < keys.size:
+            stop = keys.size
+        part = keys[start:stop]
+        edge = part >> _ONE
+        starts = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
+        counts = np.diff(np.append(starts, part.size))
+        forward = np.add.reduceat((part & _ONE).astype(np.int32), starts)
+        bad = ~((counts == 2) & (forward == 1))
+        if ((counts[bad] < 4) | (2 * forward[bad] != counts[bad])).any():
+            return keys[:0]                 # proven open: the usual case, found early
+        found.append(edge[starts[bad]])
+        start = stop
+    return np.concatenate(found) if found else keys[:0]
+
+
+def sides_pair_up_exactly(source_blocks, doubtful: np.ndarray) -> bool:
+    """Whether the sides whose keys are in ``doubtful`` (from ``doubtful_edges``) pair up when
+    their end points are compared exactly (one use each way of every exact edge).
+
+    Parameters
+    ----------
+    source_blocks : iterable of (k, 3, 3) arrays
+        The triangles again, in blocks.
+    doubtful : (d,) uint64, sorted
+    """
+    from p3d_cli.mesh.integrals import columns as to_columns
+
+    ends = []
+    for block in source_blocks:
+        cols = to_columns(block)
+        if cols.shape[2] == 0:
+            continue
+        scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)
+        h = _column_hashes(cols, scratch)
+        keys, keep = _side_keys(h, scratch)
+        hit = np.isin(keys >> _ONE, doubtful)
+        if not hit.any():
+            continue
+        # Corner coordinates in the keys' (slot, face) layout, +0.0 so -0.0 equals 0.0.
+        corners = np.moveaxis(cols, 1, 2) + 0.0            # (slot, face, axis)
+        start, end = corners, corners[[1, 2, 0]]
+        if keep is not None:
+            start, end = start[keep], end[keep]
+        start, end = start.reshape(-1, 3)[hit], end.reshape(-1, 3)[hit]
+        ends.append(np.concatenate([start, end], axis=1))
+    if not ends:
+        return False
+    sides = np.concatenate(ends)
+    start, end = sides[:, :3], sides[:, 3:]
+    # Undirected edge: its two end points in lexicographic order; direction: which came first.
+    swap = _lex_less(end, start)
+    lo = np.where(swap[:, None], end, start)
+    hi = np.where(swap[:, None], start, end)
+    _, inverse, counts = np.unique(np.concatenate([lo, hi], axis=1), axis=0,
+                                   return_inverse=True, return_counts=True)
+    forward = np.bincount(inverse.reshape(-1), weights=~swap, minlength=counts.size)
+    return bool((counts == 2).all() and (forward == 1).all())
+
+
+def _lex_less(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise ``tuple(a) < tuple(b)`` for ``(k, 3)`` arrays."""
+    less = a[:, 2] < b[:, 2]
+    for axis in (1, 0):
+        less = (a[:, axis] < b[:, axis]) | ((a[:, axis] == b[:, axis]) & less)
+    return less
 
 
 def vertex_ids(points: np.ndarray) -> np.ndarray:

@@ -1,0 +1,104 @@
+"""``p3d check``'s verdicts: the named checks, and one mesh's result against them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from p3d_cli.mesh.report import TopologyReport
+
+#: The checks ``p3d check --require`` can ask for, and what each needs.
+CHECKS = {
+    "closed": "every edge used by exactly two faces, in opposite directions",
+    "oriented": "no edge used twice in the same direction",
+    "outward": "positive total signed volume (faces wound counter-clockwise seen from outside)",
+    "manifold": "no edge used by more than two faces, no vertex joining separate fans of faces",
+    "no-degenerate": "no face with zero area or a repeated vertex",
+    "no-duplicate": "no two faces with the same three vertices",
+}
+
+
+def passes(report: TopologyReport, check: str) -> bool:
+    """Whether ``report`` passes the named check (a key of ``CHECKS``)."""
+    if check == "closed":
+        return report.closed
+    if check == "oriented":
+        return report.oriented
+    if check == "outward":
+        return report.volume > 0
+    if check == "manifold":
+        return report.manifold
+    if check == "no-degenerate":
+        return report.degenerate_faces == 0
+    if check == "no-duplicate":
+        return report.duplicate_faces == 0
+    raise KeyError(check)
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One mesh's verdict.
+
+    Attributes
+    ----------
+    source : str
+    format : str
+    report : TopologyReport
+    required : tuple of str
+        The checks asked for (keys of ``CHECKS``).
+    failed : tuple of str
+        The required checks that failed, then ``min-volume`` / ``max-faces`` if a limit was
+        broken.
+    """
+
+    source: str
+    format: str
+    report: TopologyReport
+    required: tuple[str, ...]
+    failed: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+
+def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
+                 max_faces: int | None = None) -> CheckResult:
+    """Check a loaded mesh against the required checks and limits.
+
+    The triangles are read block by block (twice, and once more for the volumes of several
+    shells), never held whole.
+
+    Parameters
+    ----------
+    mesh : p3d_cli.io.MeshSource
+    source : str
+        The input's name (``-`` for standard input).
+    required : iterable of str
+        Keys of ``CHECKS``.
+    min_volume : float, optional
+        Fail when the total signed volume is below this.
+    max_faces : int, optional
+        Fail when the mesh has more faces than this.
+
+    Raises
+    ------
+    InputError
+        A volume mesh, no faces, or a NaN or infinite coordinate.
+    """
+    from p3d_cli.errors import InputError
+    from p3d_cli.mesh.topology import topology_of_blocks
+
+    where = "<stdin>" if source == "-" else source
+    if mesh.tetrahedra is not None:
+        raise InputError(where, "is a volume (tetrahedral) mesh; p3d check inspects triangle surfaces",
+                         "export the boundary surface")
+    if mesh.face_count == 0:
+        raise InputError(where, "the mesh has no faces", "export it again with its faces")
+    report = topology_of_blocks(mesh.read_blocks, mesh.face_count, where)
+    required = tuple(required)
+    failed = [name for name in required if not passes(report, name)]
+    if min_volume is not None and not report.volume >= min_volume:
+        failed.append("min-volume")
+    if max_faces is not None and report.faces > max_faces:
+        failed.append("max-faces")
+    return CheckResult(source, mesh.format, report, required, tuple(failed))

@@ -1,0 +1,70 @@
+"""Zero area decided exactly: the filtered predicate against fractions.Fraction."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from conftest import write_ascii_stl
+from p3d_cli.io import load_mesh
+from p3d_cli.mesh.faces import zero_area_faces
+from p3d_cli.mesh.integrals import columns
+from p3d_cli.mesh.topology import check_source, topology
+from test_topology_oracle import exact_zero_area
+
+#: Three nearly collinear float64 points whose float64 cross product rounds to exactly
+#: (0, 0, 0), while the exact one is about (2.9e-16, 0, -5.5e-17): not degenerate.
+SLIVER = [[0.2997118905373848, 0.42268722119765845, 0.028319671145462966],
+          [0.42399516703694873, 1.0933116358912889, 0.675509182719713],
+          [0.6725617200360766, 2.4345604652785493, 1.9698882058682132]]
+
+
+def test_sliver_whose_float_cross_product_vanishes_is_not_degenerate():
+    t = np.array([SLIVER])
+    assert not np.cross(t[0, 1] - t[0, 0], t[0, 2] - t[0, 0]).any()   # the old test said zero
+    assert not exact_zero_area(t[0])
+    r = topology(t)
+    assert r.zero_area_faces == 0 and r.degenerate_faces == 0
+
+
+def test_sliver_in_a_file_is_judged_on_the_files_own_floats(tmp_path):
+    collinear = [[0.0, 0.0, 0.0], [0.5, 0.25, 0.125], [1.0, 0.5, 0.25]]   # exactly collinear
+    path = tmp_path / "slivers.stl"
+    write_ascii_stl(path, np.array([SLIVER, collinear]))
+    mesh = load_mesh(str(path))
+    floats = mesh.triangles()
+    expected = [f for f in range(len(floats)) if exact_zero_area(floats[f])]
+    assert expected == [1]
+    r = check_source(mesh, str(path)).report
+    assert r.zero_area_faces == 1 and r.degenerate_face_samples == (1,)
+
+
+def nearly_collinear(seed: int, n: int, dtype) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(-2, 2, (n, 3))
+    d = rng.uniform(-1, 1, (n, 3))
+    s = rng.integers(-3, 4, (n, 1)).astype(float)
+    t = np.stack([a, a + d, a + s * d], axis=1)
+    # Some exactly representable collinear faces, some repeated corners, some tiny offsets.
+    t[::5, 2] = t[::5, 0]
+    t[1::5] = np.round(t[1::5] * 8) / 8
+    t[1::5, 2] = 2 * t[1::5, 1] - t[1::5, 0]
+    t[2::5, 2] += rng.choice([0.0, 1e-17, 1e-300, 1e300], size=(len(t[2::5]), 1))
+    with np.errstate(over="ignore"):
+        return t.astype(dtype)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 60), st.sampled_from([np.float32, np.float64]))
+def test_zero_area_matches_exact_rational_arithmetic(seed, n, dtype):
+    t = nearly_collinear(seed, n, dtype)
+    t = t[np.isfinite(t).all(axis=(1, 2))]
+    expected = [f for f in range(len(t)) if exact_zero_area(t[f])]
+    assert zero_area_faces(columns(t)).tolist() == expected
+
+
+def test_huge_and_tiny_coordinates_are_decided_exactly():
+    t = np.array([[[0, 0, 0], [1e-300, 0, 0], [0, 1e-300, 0]],       # products underflow
+                  [[0, 0, 0], [1e300, 1e300, 0], [-1e300, -1e300, 0]],  # products overflow
+                  [[0, 0, 0], [1e300, 1e300, 0], [-1e300, 1e300, 0]]])
+    assert zero_area_faces(columns(t)).tolist() == [1]
