@@ -214,30 +214,24 @@ def clopper_pearson(k: float, n: int, alpha: float = ALPHA) -> tuple[float, floa
 
     Each misses with probability at most ``alpha / 2`` (Clopper & Pearson 1934): ``hi`` solves
     ``P(X <= k; n, hi) = alpha/2`` and ``lo`` solves ``P(X >= k; n, lo) = alpha/2``, found by
-    bisection. A fractional ``k`` (half-inside points of an open mesh) is rounded outward.
+    bisection on ``log p``. A fractional ``k`` (half-inside points of an open mesh) is rounded
+    outward. ``k`` is small here (below ``MIN_INSIDE``), so the binomial sums are short.
     """
-    def root(g: Callable[[float], float]) -> float:    # bisection for decreasing g on [0, 1]
-        lo, hi = 0.0, 1.0
-        for _ in range(100):                                # 2^-100: far below any N's 1/N
-            lo, hi = (0.5 * (lo + hi), hi) if g(0.5 * (lo + hi)) > 0 else (lo, 0.5 * (lo + hi))
-        return hi
+    def root(kk: int, level: float) -> float:
+        """The p at which ``P(X <= kk; n, p)``, falling in p, equals ``level``."""
+        j = np.arange(kk + 1.0)
+        log_choose = np.concatenate([[0.0], np.cumsum(np.log((n - j[:-1]) / j[1:]))])   # log C(n, j)
+        lo, hi = -700.0, 0.0                     # log p; 60 halvings leave a 1e-15 relative error
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            cdf = np.exp(log_choose + j * mid + (n - j) * math.log1p(-math.exp(mid))).sum()
+            lo, hi = (mid, hi) if cdf > level else (lo, mid)
+        return math.exp(hi)
 
     k_lo, k_hi = math.floor(k), math.ceil(k)
-    hi = 1.0 if k_hi >= n else root(lambda p: _binomial_cdf(k_hi, n, p) - alpha / 2)
-    lo = 0.0 if k_lo <= 0 else root(lambda p: _binomial_cdf(k_lo - 1, n, p) - (1 - alpha / 2))
+    hi = 1.0 if k_hi >= n else root(k_hi, alpha / 2)
+    lo = 0.0 if k_lo <= 0 else root(k_lo - 1, 1 - alpha / 2)
     return lo, hi
-
-
-def _binomial_cdf(k: int, n: int, p: float) -> float:
-    """``P(X <= k)`` for ``X ~ Binomial(n, p)``, summed from log-probabilities (k is small)."""
-    if p <= 0.0 or k >= n:
-        return 1.0
-    if p >= 1.0:
-        return 0.0
-    j = np.arange(k + 1, dtype=np.float64)
-    # log C(n, j) = Σ_{i<j} log((n - i) / (i + 1)), built cumulatively.
-    log_choose = np.concatenate([[0.0], np.cumsum(np.log(n - j[:-1]) - np.log(j[1:]))])
-    return float(np.exp(log_choose + j * math.log(p) + (n - j) * math.log1p(-p)).sum())
 
 
 def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: int,
