@@ -16,9 +16,12 @@ and the inertia ``I = ρ (tr(C) E - C)``. Each is a smooth function ``g`` of the
 the Jacobian of ``g`` (taken by central differences; ``g`` is a rational function, smooth where
 ``m0 > 0``). The tests check these stated errors against the spread over many seeds.
 
-Sampling is plain (independent, uniform): its error ``∝ 1/√N`` is slow but honest and needs
-no assumptions about the shape. Working in box-normalised coordinates keeps the sums well
-scaled whatever the part's size or distance from the origin.
+Sampling is plain (independent, uniform): slow (error ``∝ 1/√N``) but honest, whatever the
+shape. Box-normalised coordinates keep the sums well scaled whatever the part's size, and
+points drawn about a local ``origin`` (the translation, or a mesh's box centre) reach the inside
+test unrounded however far the part is (world coordinates at 3e15 are 0.5 apart). With fewer
+than ``MIN_INSIDE`` points inside, the delta method is not trusted (one point gives the centre
+a zero error) and ``conservative_errors`` states bounds (docs/accuracy.md, "Few samples inside").
 """
 
 from __future__ import annotations
@@ -48,6 +51,11 @@ DEFAULT_SEED = 0
 PILOT_SAMPLES = 20_000
 MIN_SAMPLES = 1_000
 MAX_SAMPLES = 100_000_000
+#: Fewest inside samples for delta-method standard errors; below it, conservative bounds (at 300
+#: inside, inertia's ±3σ misses up to 0.8 % of runs on thin rotated solids: docs/accuracy.md).
+MIN_INSIDE = 1_000
+#: 2 Φ(-3) ≈ 0.0027, the Gaussian ±3σ miss rate: conservative bounds hold at 1 - ALPHA.
+ALPHA = math.erfc(3.0 / math.sqrt(2.0))
 
 _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
@@ -66,6 +74,8 @@ class Estimate:
         ``m0, m1 (3), m2 (xx, yy, zz, xy, xz, yz)``.
     covariance : (10, 10) float64
         Sample covariance of the summands (divide by ``samples`` for the mean's).
+    origin : (3,) float64 or None
+        The world position of the frame of ``bounds`` (None: the world origin).
     """
 
     bounds: Bounds
@@ -73,10 +83,21 @@ class Estimate:
     seed: int | tuple[int, int]
     mean: np.ndarray
     covariance: np.ndarray
+    origin: np.ndarray | None = None
 
     @property
     def box_volume(self) -> float:
         return float(np.prod(self.bounds.size))
+
+    @property
+    def inside(self) -> float:
+        """How many samples fell inside (a sum of weights: half-inside points count 0.5)."""
+        return float(self.mean[0] * self.samples)
+
+    @property
+    def conservative(self) -> bool:
+        """True when too few samples fell inside for standard errors (``MIN_INSIDE``)."""
+        return self.inside < MIN_INSIDE
 
     def moments(self) -> Moments:
         """The estimated ``Moments`` (volume is unsigned: the inside test ignores winding)."""
@@ -85,12 +106,15 @@ class Estimate:
         volume = self.box_volume * m[0]
         if not m[0] > 0:
             return Moments(0.0, None, None)
-        center = centre + half * m[1:4] / m[0]
+        center = centre + half * m[1:4] / m[0]      # in the sampled frame, then moved once
+        if self.origin is not None:
+            center = self.origin + center
         central = _central(m, self.box_volume) * np.outer(half, half)
         return Moments(float(volume), center, central)
 
     def uncertainty(self, density: float | None = None, mass: float | None = None) -> dict:
-        """Standard errors of the reported quantities, keyed like the estimates.
+        """Standard errors of the reported quantities, keyed like the estimates (with fewer
+        than ``MIN_INSIDE`` samples inside, the bounds of ``conservative_errors``).
 
         Returns
         -------
@@ -99,8 +123,8 @@ class Estimate:
             (3, 3); the last two None when no sample fell inside.
         """
         m = self.mean
-        if not m[0] > 0:
-            return {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
+        if self.conservative:
+            return conservative_errors(self, density, mass)
         f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, density, mass)  # noqa: E731
         jac = _jacobian(f, m, step=1e-6 * m[0])
         cov = jac @ self.covariance @ jac.T / self.samples
@@ -129,8 +153,7 @@ def _reported(m, box_volume, half, density, mass) -> np.ndarray:
 
 
 def _jacobian(f: Callable, x: np.ndarray, step: float) -> np.ndarray:
-    """Central-difference Jacobian of ``f`` at ``x`` (error ~ step², far below what an error
-    estimate needs)."""
+    """Central-difference Jacobian of ``f`` at ``x`` (error ~ step², far below an error's)."""
     cols = []
     for k in range(len(x)):
         d = np.zeros_like(x)
@@ -139,18 +162,95 @@ def _jacobian(f: Callable, x: np.ndarray, step: float) -> np.ndarray:
     return np.array(cols).T
 
 
+def conservative_errors(est: Estimate, density: float | None = None, mass: float | None = None) -> dict:
+    """Error bounds for few inside samples: a third of half-widths that each hold with
+    probability at least ``1 - ALPHA``, so ``±3`` of them misses no more often than a Gaussian
+    ``±3σ``, whatever the shape (docs/accuracy.md, "Few samples inside").
+
+    Volume and mass: Clopper-Pearson on the inside fraction (``k = 0`` gives ``≈ 6.6 / N``, the
+    "rule of three" at this level). Centre: given the count ``k`` the inside points are
+    independent and uniform in the solid, with normalised coordinates in [-1, 1], so Hoeffding's
+    inequality (1963, thm. 2) bounds their mean's error by ``2 √(ln(2/ALPHA) / 2k)``; the box
+    caps it. Inertia: Hoeffding on the 3 first and 6 second means and Clopper-Pearson on the
+    mass, each at ``ALPHA / 10`` so that all ten hold together, propagated through
+    ``cov = s - a aᵀ`` and ``I = M (tr(D) E - D)``, ``D = H cov H``; capped by the box (a
+    coordinate in [-1, 1] has variance at most 1: Popoviciu's inequality).
+    """
+    k, m, half, box = est.inside, est.mean, 0.5 * est.bounds.size, est.box_volume
+
+    def volume_halfwidth(alpha: float) -> float:
+        lo, hi = clopper_pearson(k, est.samples, alpha)
+        return box * max(hi - m[0], m[0] - lo)
+
+    volume = box * m[0]
+    rho = density_for(volume, density, mass)
+    dv = volume_halfwidth(ALPHA)
+    out = {"volume": dv / 3, "mass": 0.0 if mass is not None else rho * dv / 3,
+           "center_of_mass": None, "inertia": None}
+    if not k > 0:
+        return out
+    hoeffding = lambda alpha: math.sqrt(math.log(2.0 / alpha) / (2.0 * k))  # noqa: E731
+    a = m[1:4] / m[0]
+    out["center_of_mass"] = half * np.minimum(2.0 * hoeffding(ALPHA), 1.0 + np.abs(a)) / 3
+    eye = np.eye(3, dtype=bool)
+    t = hoeffding(ALPHA / 10)
+    cov = _central(m, box) / volume                  # s - a aᵀ, normalised coordinates
+    ea, es = 2.0 * t, np.where(eye, 1.0, 2.0) * t   # ranges: u_i in [-1, 1], u_i² in [0, 1], u_i u_j in [-1, 1]
+    dcov = es + ea * (np.abs(a)[:, None] + np.abs(a)[None, :]) + ea * ea
+    var = np.diag(cov)
+    cap = np.where(eye, np.maximum(var, 1.0 - var)[:, None], np.abs(cov) + 1.0)
+    hh = np.outer(half, half)
+    d, dd = hh * cov, hh * np.minimum(dcov, cap)
+    f = np.trace(d) * np.eye(3) - d
+    df = np.where(eye, np.trace(dd) - dd, dd)       # I_xx = M (D_yy + D_zz); I_xy = -M D_xy
+    total = rho * volume
+    dm = 0.0 if mass is not None else rho * volume_halfwidth(ALPHA / 10)
+    out["inertia"] = (dm * (np.abs(f) + df) + total * df) / 3
+    return out
+
+
+def clopper_pearson(k: float, n: int, alpha: float = ALPHA) -> tuple[float, float]:
+    """Exact bounds ``(lo, hi)`` on a binomial fraction from ``k`` successes in ``n`` trials.
+
+    Each misses with probability at most ``alpha / 2`` (Clopper & Pearson 1934): ``hi`` solves
+    ``P(X <= k; n, hi) = alpha/2`` and ``lo`` solves ``P(X >= k; n, lo) = alpha/2``, found by
+    bisection on ``log p``. A fractional ``k`` (half-inside points of an open mesh) is rounded
+    outward. ``k`` is small here (below ``MIN_INSIDE``), so the binomial sums are short.
+    """
+    def root(kk: int, level: float) -> float:
+        """The p at which ``P(X <= kk; n, p)``, falling in p, equals ``level``."""
+        j = np.arange(kk + 1.0)
+        log_choose = np.concatenate([[0.0], np.cumsum(np.log((n - j[:-1]) / j[1:]))])   # log C(n, j)
+        lo, hi = -700.0, 0.0                     # log p; 60 halvings leave a 1e-15 relative error
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            cdf = np.exp(log_choose + j * mid + (n - j) * math.log1p(-math.exp(mid))).sum()
+            lo, hi = (mid, hi) if cdf > level else (lo, mid)
+        return math.exp(hi)
+
+    k_lo, k_hi = math.floor(k), math.ceil(k)
+    hi = 1.0 if k_hi >= n else root(k_hi, alpha / 2)
+    lo = 0.0 if k_lo <= 0 else root(k_lo - 1, 1 - alpha / 2)
+    return lo, hi
+
+
 def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: int,
-           seed: int | tuple[int, int] = DEFAULT_SEED) -> Estimate:
+           seed: int | tuple[int, int] = DEFAULT_SEED, *, origin=None) -> Estimate:
     """Draw ``samples`` points uniformly in ``bounds`` and average the inside indicator.
 
     Parameters
     ----------
     inside : callable
-        ``inside(points (k, 3) float64 world) -> (k,) bool or float`` indicator in [0, 1].
+        ``inside(points (k, 3) float64) -> (k,) bool or float`` indicator in [0, 1], for points
+        in the frame of ``bounds``.
     bounds : Bounds
+        The box to sample, relative to ``origin``.
     samples : int
     seed : int, or a pair of ints
         numpy's ``default_rng`` seed (a pair gives an independent stream, e.g. for a pilot run).
+    origin : (3,) array_like, optional
+        The world position of the frame of ``bounds`` and ``inside`` (default: the world
+        origin). A far part sampled about a local origin keeps its points unrounded.
 
     Returns
     -------
@@ -178,7 +278,9 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
         done += k
     mean = total / samples
     covariance = (outer - samples * np.outer(mean, mean)) / (samples - 1)
-    return Estimate(bounds, samples, seed, mean, covariance)
+    if origin is not None:
+        origin = np.asarray(origin, dtype=np.float64).reshape(3)
+    return Estimate(bounds, samples, seed, mean, covariance, origin)
 
 
 def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
@@ -187,7 +289,9 @@ def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
 
     A pilot run (its own random stream, derived from ``seed``) estimates the inside fraction
     ``p`` and the indicator's variance ``s²``; the volume's relative standard error is
-    ``s / (p √N)``, so ``N = s² / (p² tolerance²)``, clipped to [MIN_SAMPLES, MAX_SAMPLES].
+    ``s / (p √N)``, so ``N = s² / (p² tolerance²)``, raised to put 1.25 ``MIN_INSIDE`` points
+    inside (standard errors, not bounds) and clipped to [MIN_SAMPLES, MAX_SAMPLES] (a cap that
+    falls short of the tolerance is warned about by ``montecarlo_props``).
     """
     if not (tolerance > 0 and math.isfinite(tolerance)):
         raise UsageError("tolerance", f"{tolerance!r} is not a positive relative error",
@@ -196,7 +300,7 @@ def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
     p, var = pilot.mean[0], pilot.covariance[0, 0]
     if not p > 0:
         return MAX_SAMPLES
-    need = var / (p * p * tolerance * tolerance)
+    need = max(var / (p * p * tolerance * tolerance), 1.25 * MIN_INSIDE / p)
     return int(min(MAX_SAMPLES, max(MIN_SAMPLES, math.ceil(need))))
 
 
@@ -209,13 +313,14 @@ def triangles_inside(triangles: np.ndarray) -> Callable[[np.ndarray], np.ndarray
 
 
 def montecarlo_moments(inside: Callable, bounds: Bounds, *, samples: int | None = None,
-                       seed: int = DEFAULT_SEED, tolerance: float | None = None) -> Estimate:
-    """Run the estimate with ``samples`` points, or as many as ``tolerance`` needs."""
+                       seed: int = DEFAULT_SEED, tolerance: float | None = None, origin=None) -> Estimate:
+    """Run the estimate with ``samples`` points, or as many as ``tolerance`` needs (``bounds``
+    and ``inside`` relative to ``origin``, as for ``sample``)."""
     if tolerance is not None:
         samples = samples_for_tolerance(inside, bounds, tolerance, seed)
     elif samples is None:
         samples = DEFAULT_SAMPLES
-    return sample(inside, bounds, samples, seed)
+    return sample(inside, bounds, samples, seed, origin=origin)
 
 
 def montecarlo_props(solid: Solid, placement: Placement = IDENTITY, *, samples: int | None = None,
@@ -240,45 +345,67 @@ def montecarlo_props(solid: Solid, placement: Placement = IDENTITY, *, samples: 
     Returns
     -------
     PropsResult
-        ``method`` is ``"montecarlo"``; ``uncertainty`` holds standard errors.
+        ``method`` is ``"montecarlo"``; ``uncertainty`` holds standard errors, or (with a
+        warning) conservative bounds when fewer than ``MIN_INSIDE`` samples fell inside.
 
     Raises
     ------
     InputError, UsageError
     """
     seed = DEFAULT_SEED if seed is None else int(seed)
-    if solid.shape is not None:
-        inside, bounds, facts, warnings = _shape_setup(solid, placement)
-    else:
-        inside, bounds, facts, warnings = _mesh_setup(solid, placement)
-    if bounds is None or not (np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size))):
-        estimate = None
-        moments = Moments(0.0, None, None)
-    else:
-        estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance)
+    setup = _shape_setup if solid.shape is not None else _mesh_setup
+    inside, bounds, origin, facts, warnings = setup(solid, placement)
+    estimate, moments = None, Moments(0.0, None, None)
+    if np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size)):
+        estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance,
+                                      origin=origin)
         moments = estimate.moments()
-    if moments.is_empty:
-        warnings.append("no Monte Carlo sample fell inside the solid: centre of mass and inertia "
-                        "are undefined; use more samples or check the mesh")
-        if mass is not None:
-            raise UsageError("mass", "the Monte Carlo estimate found no volume, so no density "
-                             "follows from a mass", "give density=, or more samples=")
+    if moments.is_empty and mass is not None:
+        raise UsageError("mass", "the Monte Carlo estimate found no volume, so no density "
+                         "follows from a mass", "give density=, or more samples=")
     props = mass_properties(moments, density=density, mass=mass, about=about)
     if estimate is None:
         uncertainty = {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
+        warnings.append("the solid's bounding box is flat, so nothing was sampled: centre of mass "
+                        "and inertia are undefined")
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
+        warnings += sampling_warnings(estimate, uncertainty["volume"], tolerance)
     details: dict = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
     if not placement.is_identity:
         details["placement"] = placement.describe()
     return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty, details)
 
 
+def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[str]:
+    """Warnings for too few samples inside, and for a ``tolerance`` the sample cap did not meet."""
+    out = []
+    k, n = estimate.inside, estimate.samples
+    if not k > 0:
+        out.append(f"no Monte Carlo sample of {n} fell inside the solid: centre of mass and inertia "
+                   "are undefined, and the volume's uncertainty is a conservative bound, not a "
+                   "standard error; use more samples or check the mesh")
+    elif estimate.conservative:
+        out.append(f"only {k:g} of {n} Monte Carlo samples fell inside the solid (fewer than "
+                   f"{MIN_INSIDE}): the uncertainties are conservative bounds, not standard errors; "
+                   f"use about {math.ceil(1.25 * MIN_INSIDE * n / k):d} samples or more for standard errors")
+    volume = estimate.box_volume * estimate.mean[0]
+    if tolerance is not None and n >= MAX_SAMPLES and not volume_error <= tolerance * volume:
+        got = f"{volume_error / volume:.2g}" if volume > 0 else "unbounded"
+        out.append(f"tolerance={tolerance:g} needs more than the cap of {MAX_SAMPLES} samples: stopped there "
+                   f"with a relative volume error of {got}; accept it, or loosen the tolerance")
+    return out
+
+
 def _shape_setup(solid: Solid, placement: Placement):
+    """The placed shape's inside test and box, relative to its translation (so that the shape's
+    own test sees ``q = (p - t) R`` computed without ever forming the far world point ``p``)."""
     scaled = placement.shape(solid.shape)
-    bounds = scaled.bounds(placement.rotation, placement.translation)
-    facts = MeshFacts(solid.source, "primitive", 0, None, bounds)
-    return placement.inside(scaled.inside), bounds, facts, list(solid.warnings)
+    rotation = placement.rotation
+    bounds = scaled.bounds(rotation, None)
+    facts = MeshFacts(solid.source, "primitive", 0, None, scaled.bounds(rotation, placement.translation))
+    inside = scaled.inside if rotation is None else (lambda q: scaled.inside(q @ rotation))
+    return inside, bounds, placement.translation, facts, list(solid.warnings)
 
 
 def _mesh_setup(solid: Solid, placement: Placement):
@@ -300,13 +427,16 @@ def _mesh_setup(solid: Solid, placement: Placement):
     if facts.closed is False:
         warnings.append("Monte Carlo on an open mesh: a point whose up and down rays disagree "
                         "(the ray escapes through a hole) counts as half inside")
-    flat = np.asarray(triangles, dtype=np.float64).reshape(-1, 3)
-    if not placement.is_identity:
-        flat = placement.points(flat)
+    # Sample about the scaled, rotated mesh's box centre; the translation is added once, at the end.
+    flat = Placement(placement.scale, placement.rotation).points(np.asarray(triangles, dtype=np.float64).reshape(-1, 3))
+    lo, hi = flat.min(axis=0), flat.max(axis=0)
+    shift = np.zeros(3) if placement.translation is None else placement.translation
+    facts = dataclasses.replace(facts, bounds=Bounds(lo + shift, hi + shift))   # rounding is monotone
+    flat = flat - 0.5 * (lo + hi)       # a new array: the mesh's own stays as read
     bounds = Bounds(flat.min(axis=0), flat.max(axis=0))
-    facts = dataclasses.replace(facts, bounds=bounds)
-    return triangles_inside(flat.reshape(-1, 3, 3)), bounds, facts, warnings
+    return triangles_inside(flat.reshape(-1, 3, 3)), bounds, 0.5 * (lo + hi) + shift, facts, warnings
 
 
 __all__ = ["Estimate", "sample", "samples_for_tolerance", "montecarlo_moments", "montecarlo_props",
-           "triangles_inside", "DEFAULT_SAMPLES", "DEFAULT_SEED"]
+           "triangles_inside", "conservative_errors", "clopper_pearson", "sampling_warnings",
+           "DEFAULT_SAMPLES", "DEFAULT_SEED", "MIN_INSIDE", "ALPHA"]
