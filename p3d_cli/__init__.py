@@ -57,7 +57,7 @@ _API = {
     "MeshFacts": "p3d_cli.results",
     "Moments": "p3d_cli.results",
     "Bounds": "p3d_cli.results",
-    "CheckResult": "p3d_cli.mesh.topology",
+    "CheckResult": "p3d_cli.mesh.verdicts",
     # constraint scenes
     "load_scene": "p3d_cli.constraints",
     "parse_scene": "p3d_cli.constraints",
@@ -109,7 +109,7 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.io.formats import FORMATS
     from p3d_cli.io.source import MeshSource
     from p3d_cli.measure import bounds, check, props
-    from p3d_cli.mesh.topology import CheckResult
+    from p3d_cli.mesh.verdicts import CheckResult
     from p3d_cli.placement import Placement
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
     from p3d_cli.rotation import (

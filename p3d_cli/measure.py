@@ -172,7 +172,7 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     thing : str, os.PathLike, array_like, (vertices, faces) or MeshSource
         A mesh (shapes are clean solids by construction and are refused).
     require : iterable of str, optional
-        The checks that must pass (``p3d_cli.mesh.topology.CHECKS``; default all).
+        The checks that must pass (``p3d_cli.mesh.verdicts.CHECKS``; default all).
     min_volume : float, optional
         Also fail a mesh whose signed volume is below this.
     max_faces : int, optional
@@ -189,7 +189,7 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     ------
     P3DError
     """
-    from p3d_cli.mesh.topology import CHECKS, check_source
+    from p3d_cli.mesh.verdicts import CHECKS, check_source
 
     required = tuple(CHECKS) if require is None else tuple(require)
     unknown = [name for name in required if name not in CHECKS]

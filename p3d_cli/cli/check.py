@@ -22,7 +22,7 @@ from p3d_cli.cli.props import field, output_style, plural
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.config import Config
 from p3d_cli.errors import UsageError
-from p3d_cli.mesh.topology import CHECKS, CheckResult
+from p3d_cli.mesh.verdicts import CHECKS, CheckResult
 
 #: Columns of ``--csv``, in order (the flat keys of the JSON record, then ``error``).
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",

@@ -5,11 +5,11 @@ directions, vertices being matched by their exact coordinates (no tolerance, no 
 ``-0.0`` equals ``0.0``). This needs no vertex merging: each corner's coordinates are hashed
 to 64 bits, each directed edge to a key whose high 63 bits identify the undirected edge and
 whose low bit gives its direction; the mesh is closed when, after one sort, the keys pair up as
-(direction 0, direction 1) with no third use. A hash collision could only make a closed mesh look open (never the reverse, barring a second,
-matching collision), so a "not closed" verdict is confirmed: a key used once, twice the same
-way, an odd number of times or unevenly in the two directions proves an exact edge that is not
-used once each way (equal edges have equal keys); only balanced groups of four or more sides,
-which two colliding closed edges would make, have their end points compared exactly
+(direction 0, direction 1) with no third use. A hash collision could only make a closed mesh
+look open (never the reverse, barring a second, matching collision), so a "not closed" verdict
+is confirmed: a key used once, twice the same way, an odd number of times or unevenly in the
+two directions proves an exact edge that is not used once each way (equal edges have equal
+keys); only balanced groups of four or more sides, which two colliding closed edges would make, have their end points compared exactly
 (``doubtful_edges``, ``sides_pair_up_exactly``). An open mesh costs one more pass over its
 sorted keys, not a vertex merge.
 """

@@ -195,7 +195,7 @@ def _unpack(keys: np.ndarray, side_bits: int):
         np.not_equal(edge[1:], edge[:-1], out=new[1:])
         starts.append((np.flatnonzero(new) + lo).astype(side.dtype))
         previous = edge[-1]
-    starts = np.concatenate(starts) if starts else np.zeros(0, dtype=side.dtype)
+    starts = np.concatenate(starts) if starts else np.zeros(0, dtype=side.dtype)  # type: ignore[assignment]  # the list becomes its array
     return side, forward, starts
 
 

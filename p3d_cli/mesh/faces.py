@@ -129,6 +129,6 @@ def duplicate_candidates(n: int, side: np.ndarray, starts: np.ndarray, counts: n
         first = group_starts[group_counts == 2]
         s1, s2 = side[first].astype(np.int64), side[first + 1].astype(np.int64)
         across[s1], across[s2] = s2 // 3, s1 // 3
-    across = across.reshape(n, 3)
+    across = across.reshape(n, 3)  # type: ignore[assignment]  # the list becomes its array
     candidate |= (across[:, 0] >= 0) & (across[:, 0] == across[:, 1]) & (across[:, 1] == across[:, 2])
     return np.flatnonzero(candidate)

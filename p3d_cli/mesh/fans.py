@@ -142,7 +142,7 @@ def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray) -> n
         same = twins[(faces[twins, i] == faces[twins, j]) & selected[faces[twins, i]]]
         a.append(3 * same + i)
         b.append(3 * same + j)
-    a, b = np.concatenate(a), np.concatenate(b)
+    a, b = np.concatenate(a), np.concatenate(b)  # type: ignore[assignment]  # the list becomes its array
     live = np.isin(a, corners) & np.isin(b, corners)
     parent = roots(corners.size, np.searchsorted(corners, a[live]), np.searchsorted(corners, b[live]))
     fan_roots = corners[parent == np.arange(corners.size)]

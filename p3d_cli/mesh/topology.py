@@ -46,12 +46,11 @@ from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_v
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
-from p3d_cli.mesh.verdicts import CHECKS, CheckResult, check_source, passes
 from p3d_cli.mesh.vertices import corner_coords, group_corners
 
-__all__ = ["CHECKS", "CheckResult", "Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
-           "TopologyReport", "VertexSample", "check_source", "components", "corner_vertex_ids",
-           "passes", "topology", "topology_of_blocks"]
+__all__ = ["Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
+           "TopologyReport", "VertexSample", "components", "corner_vertex_ids",
+           "topology", "topology_of_blocks"]
 
 
 def corner_vertex_ids(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

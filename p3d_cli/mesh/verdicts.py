@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from p3d_cli.mesh.report import TopologyReport
+from p3d_cli.mesh.topology import topology_of_blocks
 
 #: The checks ``p3d check --require`` can ask for, and what each needs.
 CHECKS = {
@@ -86,7 +87,6 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         A volume mesh, no faces, or a NaN or infinite coordinate.
     """
     from p3d_cli.errors import InputError
-    from p3d_cli.mesh.topology import topology_of_blocks
 
     where = "<stdin>" if source == "-" else source
     if mesh.tetrahedra is not None:

@@ -69,7 +69,7 @@ def test_check_source_with_a_wrong_face_count_is_a_format_error():
 
     from p3d_cli.errors import FormatError
     from p3d_cli.io.source import MeshSource
-    from p3d_cli.mesh.topology import check_source
+    from p3d_cli.mesh.verdicts import check_source
 
     t = cube_triangles()
     for count in (11, 13):

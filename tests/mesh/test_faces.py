@@ -10,7 +10,8 @@ from conftest import write_ascii_stl
 from p3d_cli.io import load_mesh
 from p3d_cli.mesh.faces import zero_area_faces
 from p3d_cli.mesh.integrals import columns
-from p3d_cli.mesh.topology import check_source, topology
+from p3d_cli.mesh.topology import topology
+from p3d_cli.mesh.verdicts import check_source
 from test_topology_oracle import exact_zero_area
 
 #: Three nearly collinear float64 points whose float64 cross product rounds to exactly
