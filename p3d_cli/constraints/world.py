@@ -15,7 +15,8 @@ from p3d_cli.constraints.islands import find_islands
 from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by
-from p3d_cli.constraints.solver import DENSE_LIMIT, body_changes, solve_impulses
+from p3d_cli.constraints.rows import RowSet
+from p3d_cli.constraints.solver import DENSE_LIMIT, SystemPlan
 
 
 class World:
@@ -59,6 +60,10 @@ class World:
         self.constrained = np.zeros(n, dtype=bool)
         for a, b in self.pairs:
             self.constrained[a] = self.constrained[b] = True
+        self.rowset = RowSet(scene, self.index, self.com_body)
+        self.plan = SystemPlan(self.islands, self.rowset, self.active, dense_limit)
+        self._scatter = _scatter_matrix(n, self.rowset.row_a, self.rowset.row_b)
+        self._rows_cache = self._factor = None
         self._update_inverse_inertia()
 
     # -- derived quantities -------------------------------------------------------------
@@ -106,18 +111,41 @@ class World:
         return [module.position_error(spec, geo)
                 for module, spec, geo in zip(self.modules, self.scene.constraints, geos)]
 
+    def _rows_now(self):
+        """``(geometry, JA, JB)`` at the current positions, computed once per configuration."""
+        if self._rows_cache is None:
+            geo = self.rowset.geometry(self.com, self.rot)
+            self._rows_cache = (geo, *self.rowset.jacobian(geo))
+        return self._rows_cache
+
+    def _moved(self) -> None:
+        self._update_inverse_inertia()
+        self._rows_cache = None
+        self._factor = None
+
+    def _changes(self, ja, jb, lam, inv_inertia) -> tuple[np.ndarray, np.ndarray]:
+        """``W Jᵀ λ`` split into linear and angular parts per body, (n, 3) each."""
+        force = self._scatter @ np.concatenate([ja * lam[:, None], jb * lam[:, None]])
+        dv = self.inv_mass[:, None] * force[:, :3]
+        dw = np.einsum("nij,nj->ni", inv_inertia, force[:, 3:])
+        return dv, dw
+
     def solve_velocities(self):
-        """One velocity solve (eq. 20): apply the impulses that make every constraint's velocity
-        equations hold. Returns ``(solution, geometries)``."""
-        geos = self.geometries()
-        blocks = self._blocks(geos)
-        rhs = [-r for r in self.velocity_residuals(geos, blocks)]
-        solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, self.inv_inertia, rhs,
-                                  self.dense_limit)
-        dv, dw = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, self.inv_inertia)
+        """One velocity solve: apply the impulses that make every constraint's velocity
+        equations hold. Returns the ``ImpulseSolution``.
+
+        The factorised system is kept: it is the frozen system of the next step's position
+        correction (``frozen_rows``), whose rows are these.
+        """
+        _, ja, jb = self._rows_now()
+        if self._factor is None:
+            self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+        u = np.hstack([self.vel, self.omega])
+        solution = self._factor.solve(-self.rowset.apply(ja, jb, u))
+        dv, dw = self._changes(ja, jb, solution.lam, self.inv_inertia)
         self.vel += dv
         self.omega += dw
-        return solution, geos
+        return solution
 
     def correct_positions(self, tolerance: float, frozen=None, iterations: int = 8):
         """Position projection onto ``C(x) = 0`` along mass-weighted constraint directions.
@@ -126,13 +154,14 @@ class World:
         ----------
         tolerance : float
             Stop once every position error is at most this.
-        frozen : (blocks, inv_inertia), optional
-            Constraint rows and world inverse inertia taken at the start of a time step. The
-            displacement is then ``W₀ J₀ᵀ λ`` with ``λ`` found by iterating
-            ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient projection, which RATTLE needs
-            to be symplectic; it converges at a rate of order ``ω dt`` per iteration).
-            Without it, each iteration re-linearises at the current positions (Newton), which
-            is what assembling a scene needs.
+        frozen : (JA, JB, inv_inertia, factorisation), optional
+            Constraint rows, world inverse inertia and the factorised system taken at the
+            start of a time step (``frozen_rows``). The displacement is then ``W₀ J₀ᵀ λ`` with
+            ``λ`` found by iterating ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient
+            projection, which RATTLE needs to be symplectic; it converges at a rate of order
+            ``ω dt`` per iteration), so one factorisation serves every iteration. Without it,
+            each iteration re-linearises at the current positions (Newton), which is what
+            assembling a scene needs.
         iterations : int
 
         Returns
@@ -145,26 +174,34 @@ class World:
         n = len(self.mass)
         total_dx, total_dtheta = np.zeros((n, 3)), np.zeros((n, 3))
         for _ in range(iterations):
-            geos = self.geometries()
-            errors = self.position_residuals(geos)
-            worst = max((float(np.abs(e).max()) for e in errors), default=0.0)
+            geo = self._rows_now()[0]
+            errors = self.rowset.errors(geo)
+            worst = float(np.abs(errors).max()) if errors.size else 0.0
             if worst <= tolerance:
                 return worst, total_dx, total_dtheta
-            blocks, inv_inertia = frozen if frozen is not None else (self._blocks(geos), self.inv_inertia)
-            solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, inv_inertia,
-                                      [-e for e in errors], self.dense_limit)
-            dx, dtheta = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, inv_inertia)
+            if frozen is not None:
+                ja, jb, inv_inertia, factor = frozen
+            else:
+                _, ja, jb = self._rows_now()
+                inv_inertia = self.inv_inertia
+                factor = self.plan.factorise(ja, jb, self.inv_mass, inv_inertia)
+            solution = factor.solve(-errors)
+            dx, dtheta = self._changes(ja, jb, solution.lam, inv_inertia)
             self.com += dx
             self.quat = rotate_by(self.quat, dtheta)
-            self._update_inverse_inertia()
+            self._moved()
             total_dx += dx
             total_dtheta += dtheta
-        worst = max((float(np.abs(e).max()) for e in self.position_residuals(self.geometries())), default=0.0)
-        return worst, total_dx, total_dtheta
+        errors = self.rowset.errors(self._rows_now()[0])
+        return (float(np.abs(errors).max()) if errors.size else 0.0), total_dx, total_dtheta
 
     def frozen_rows(self):
-        """Constraint rows and world inverse inertia now, for ``correct_positions(frozen=...)``."""
-        return self._blocks(self.geometries()), self.inv_inertia.copy()
+        """Constraint rows, world inverse inertia and factorised system now, for
+        ``correct_positions(frozen=...)``."""
+        _, ja, jb = self._rows_now()
+        if self._factor is None:
+            self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+        return ja, jb, self.inv_inertia, self._factor
 
     def drift(self, dt: float) -> None:
         """Advance positions and orientations by ``dt`` at the current velocities.
@@ -177,5 +214,22 @@ class World:
         spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
         self.com[moving] += self.vel[moving] * dt
         self.quat[moving] = rotate_by(self.quat[moving], self.omega[moving] * dt)
-        self._update_inverse_inertia()
+        self._moved()
         self.omega[moving] = np.einsum("nij,nj->ni", self.inv_inertia, spin)[moving]
+
+
+#: Above this many entries the row-to-body summation matrix is sparse.
+_DENSE_SCATTER = 20000
+
+
+def _scatter_matrix(n: int, row_a: np.ndarray, row_b: np.ndarray):
+    """``S`` (n, 2m) with ``S @ [X_a; X_b]`` the per-body sums of rows ``X_a`` on their side-a
+    bodies plus rows ``X_b`` on their side-b bodies (one matrix product per ``W Jᵀ λ``)."""
+    bodies = np.concatenate([row_a, row_b])
+    if n * bodies.size <= _DENSE_SCATTER:
+        out = np.zeros((n, bodies.size))
+        out[bodies, np.arange(bodies.size)] = 1.0
+        return out
+    import scipy.sparse as sp
+
+    return sp.csr_matrix((np.ones(bodies.size), (bodies, np.arange(bodies.size))), shape=(n, bodies.size))
