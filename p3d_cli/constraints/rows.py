@@ -14,18 +14,14 @@ the order of its module (ball: the gap x, y, z; hinge: the gap, then the axis ro
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from p3d_cli.constraints.rotation import cross, skew
 from p3d_cli.errors import SceneError
 
 #: Rows per constraint type (the modules' ``EQUATIONS``).
 SIZES = {"ball": 3, "hinge": 5, "bar": 1}
 
 
-@dataclass(frozen=True)
 class Geometry:
     """World geometry of every constraint at one instant (arrays over constraints).
 
@@ -39,11 +35,17 @@ class Geometry:
         World hinge axes of the hinges (in the order of ``RowSet.hinges``).
     """
 
-    r_a: np.ndarray
-    r_b: np.ndarray
-    gap: np.ndarray
-    z_a: np.ndarray
-    z_b: np.ndarray
+    __slots__ = ("r_a", "r_b", "gap", "z_a", "z_b", "_frames")
+
+    def __init__(self, r_a, r_b, gap, z_a, z_b) -> None:
+        self.r_a, self.r_b, self.gap, self.z_a, self.z_b = r_a, r_b, gap, z_a, z_b
+        self._frames = None
+
+    def frames(self):
+        """``hinge_frames`` of the hinges, computed once (errors and rows both need them)."""
+        if self._frames is None:
+            self._frames = hinge_frames(self.z_a, self.z_b)
+        return self._frames
 
 
 class RowSet:
@@ -94,24 +96,30 @@ class RowSet:
         self.axis_a = np.array([specs[k].axis_a for k in self.hinges]).reshape(-1, 3)
         self.axis_b = np.array([specs[k].axis_b for k in self.hinges]).reshape(-1, 3)
         self.length = np.array([specs[k].length for k in self.bars], dtype=np.float64)
+        self.rot_index = np.concatenate([self.a, self.b, self.a[self.hinges], self.b[self.hinges]])
+        self.com_index = np.concatenate([self.a, self.b])
+        self.body_vectors = np.concatenate([self.off_a, self.off_b, self.axis_a, self.axis_b])[:, :, None]
+        # The constant entries of the rows (±E of the ball rows) and where [r]ₓ goes.
+        self.template_a, self.template_b = np.zeros((self.m, 6)), np.zeros((self.m, 6))
+        self.template_a[self.gap_rows, np.arange(3)] = -1.0
+        self.template_b[self.gap_rows, np.arange(3)] = 1.0
+        self.gap_rows_flat = self.gap_rows.ravel()
 
     def geometry(self, com: np.ndarray, rot: np.ndarray) -> Geometry:
         """World geometry at centres of mass ``com`` (n, 3) and rotations ``rot`` (n, 3, 3)."""
-        r_a = np.einsum("cij,cj->ci", rot[self.a], self.off_a)
-        r_b = np.einsum("cij,cj->ci", rot[self.b], self.off_b)
-        gap = (com[self.b] + r_b) - (com[self.a] + r_a)
-        h = self.hinges
-        z_a = np.einsum("cij,cj->ci", rot[self.a[h]], self.axis_a)
-        z_b = np.einsum("cij,cj->ci", rot[self.b[h]], self.axis_b)
-        return Geometry(r_a, r_b, gap, z_a, z_b)
+        c, h = len(self.a), len(self.hinges)
+        # Every body-frame vector (attachment offsets, then hinge axes) turned in one product.
+        v = (rot[self.rot_index] @ self.body_vectors)[:, :, 0]
+        p = com[self.com_index] + v[:2 * c]
+        return Geometry(v[:c], v[c:2 * c], p[c:] - p[:c], v[2 * c:2 * c + h], v[2 * c + h:])
 
     def errors(self, geo: Geometry) -> np.ndarray:
         """(m,) position equations ``C``, scene row order (the modules' ``position_error``)."""
         out = np.empty(self.m)
         out[self.gap_rows] = geo.gap[self.gap_of]
         if len(self.hinges):
-            x, y, _, s = hinge_frames(geo.z_a, geo.z_b)
-            tilt = cross(geo.z_a, s[:, None] * geo.z_b)
+            x, y, _, s = geo.frames()
+            tilt = cross_rows(geo.z_a, s[:, None] * geo.z_b)
             out[self.axis_rows[:, 0]] = np.einsum("ci,ci->c", tilt, x)
             out[self.axis_rows[:, 1]] = np.einsum("ci,ci->c", tilt, y)
         if len(self.bars):
@@ -120,28 +128,31 @@ class RowSet:
 
     def jacobian(self, geo: Geometry) -> tuple[np.ndarray, np.ndarray]:
         """``(JA, JB)``, each (m, 6): row ``i`` is ``JA[i] · u[row_a[i]] + JB[i] · u[row_b[i]]``."""
-        ja, jb = np.zeros((self.m, 6)), np.zeros((self.m, 6))
-        g, rows = self.gap_of, self.gap_rows
+        ja, jb = self.template_a.copy(), self.template_b.copy()
+        g, rows = self.gap_of, self.gap_rows_flat
         # Ball rows (also a hinge's first three): [-E, [r_a]ₓ] and [E, -[r_b]ₓ].
-        ja[rows, np.arange(3)] = -1.0
-        jb[rows, np.arange(3)] = 1.0
-        ja[rows, 3:] = skew(geo.r_a[g])
-        jb[rows, 3:] = -skew(geo.r_b[g])
+        ja[rows, 3:] = (geo.r_a[g][:, _SKEW_PICK] * _SKEW_SIGN).reshape(-1, 3)
+        jb[rows, 3:] = (geo.r_b[g][:, _SKEW_PICK] * -_SKEW_SIGN).reshape(-1, 3)
         if len(self.hinges):
-            x, y, _, _ = hinge_frames(geo.z_a, geo.z_b)
+            x, y, _, _ = geo.frames()
             ja[self.axis_rows[:, 0], 3:], jb[self.axis_rows[:, 0], 3:] = -x, x
             ja[self.axis_rows[:, 1], 3:], jb[self.axis_rows[:, 1], 3:] = -y, y
         if len(self.bars):
             d = bar_directions(geo.gap[self.bars], [self.where[k] for k in self.bars])
             rows = self.bar_rows
             ja[rows, :3], jb[rows, :3] = -d, d
-            ja[rows, 3:] = -cross(geo.r_a[self.bars], d)
-            jb[rows, 3:] = cross(geo.r_b[self.bars], d)
+            ja[rows, 3:] = -cross_rows(geo.r_a[self.bars], d)
+            jb[rows, 3:] = cross_rows(geo.r_b[self.bars], d)
         return ja, jb
 
     def apply(self, ja: np.ndarray, jb: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(m,) ``J u`` for body motions ``u`` (n, 6)."""
         return np.einsum("mi,mi->m", ja, u[self.row_a]) + np.einsum("mi,mi->m", jb, u[self.row_b])
+
+
+#: ``[r]ₓ`` row-major as ``r[_SKEW_PICK] * _SKEW_SIGN`` (``rotation.skew``).
+_SKEW_PICK = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
+_SKEW_SIGN = np.array([0.0, -1, 1, 1, 0, -1, -1, 1, 0])
 
 
 def hinge_frames(z_a: np.ndarray, z_b: np.ndarray):
@@ -150,13 +161,22 @@ def hinge_frames(z_a: np.ndarray, z_b: np.ndarray):
     ``z`` made perpendicular, ``y = z × x``."""
     s = np.where(np.einsum("ci,ci->c", z_a, z_b) >= 0, 1.0, -1.0)
     z = z_a + s[:, None] * z_b
-    norm = np.sqrt(np.einsum("ci,ci->c", z, z))
-    z = np.where(norm[:, None] > 0, z / np.where(norm > 0, norm, 1.0)[:, None], z_a)
+    # Unit axes with z_a · s z_b >= 0 give |z|² = 2 + 2|z_a · z_b| >= 2: never zero.
+    z /= np.sqrt(np.einsum("ci,ci->c", z, z))[:, None]
     pick = np.argmin(np.abs(z), axis=1)
-    x = -z[np.arange(len(z)), pick][:, None] * z
-    x[np.arange(len(z)), pick] += 1.0
+    # x = e_pick - z_pick z, the seed axis made perpendicular (as hinge.frame computes it).
+    x = _EYE[pick] - np.take_along_axis(z, pick[:, None], axis=1) * z
     x /= np.sqrt(np.einsum("ci,ci->c", x, x))[:, None]
-    return x, cross(z, x), z, s
+    return x, cross_rows(z, x), z, s
+
+
+_EYE = np.eye(3)
+_NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` row by row for (c, 3) arrays, in few numpy calls."""
+    return a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]
 
 
 def bar_directions(gap: np.ndarray, where) -> np.ndarray:

@@ -14,7 +14,7 @@ import numpy as np
 from p3d_cli.constraints.islands import find_islands
 from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
-from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by
+from p3d_cli.constraints.rotation import quat_to_matrix, quat_to_matrix_many, rotate_by_many
 from p3d_cli.constraints.rows import RowSet
 from p3d_cli.constraints.solver import DENSE_LIMIT, SystemPlan
 
@@ -63,13 +63,11 @@ class World:
         self.rowset = RowSet(scene, self.index, self.com_body)
         self.plan = SystemPlan(self.islands, self.rowset, self.active, dense_limit)
         self._scatter = _scatter_matrix(n, self.rowset.row_a, self.rowset.row_b)
-        self._rows_cache = self._factor = None
         self._update_inverse_inertia()
 
     # -- derived quantities -------------------------------------------------------------
     def _update_inverse_inertia(self) -> None:
-        self.rot = quat_to_matrix(self.quat)
-        self.inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
+        self._moved()
 
     def inertia_world(self) -> np.ndarray:
         return self.rot @ self.inertia_body @ np.transpose(self.rot, (0, 2, 1))
@@ -111,17 +109,30 @@ class World:
         return [module.position_error(spec, geo)
                 for module, spec, geo in zip(self.modules, self.scene.constraints, geos)]
 
+    def _geometry_now(self):
+        """The rows' geometry at the current positions, computed once per configuration."""
+        if self._geo is None:
+            self._geo = self.rowset.geometry(self.com, self.rot)
+        return self._geo
+
     def _rows_now(self):
-        """``(geometry, JA, JB)`` at the current positions, computed once per configuration."""
+        """``(JA, JB)`` at the current positions, computed once per configuration (a step
+        needs them once, for its closing velocity solve; correction iterations do not)."""
         if self._rows_cache is None:
-            geo = self.rowset.geometry(self.com, self.rot)
-            self._rows_cache = (geo, *self.rowset.jacobian(geo))
+            self._rows_cache = self.rowset.jacobian(self._geometry_now())
         return self._rows_cache
 
     def _moved(self) -> None:
-        self._update_inverse_inertia()
-        self._rows_cache = None
-        self._factor = None
+        self.rot = quat_to_matrix_many(self.quat)
+        self._inv_inertia = None
+        self._geo = self._rows_cache = self._factor = None
+
+    @property
+    def inv_inertia(self) -> np.ndarray:
+        """World inverse inertia ``R I⁻¹ Rᵀ``, (n, 3, 3); computed when first needed after a move."""
+        if self._inv_inertia is None:
+            self._inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
+        return self._inv_inertia
 
     def _changes(self, ja, jb, lam, inv_inertia) -> tuple[np.ndarray, np.ndarray]:
         """``W Jᵀ λ`` split into linear and angular parts per body, (n, 3) each."""
@@ -137,7 +148,7 @@ class World:
         The factorised system is kept: it is the frozen system of the next step's position
         correction (``frozen_rows``), whose rows are these.
         """
-        _, ja, jb = self._rows_now()
+        ja, jb = self._rows_now()
         if self._factor is None:
             self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
         u = np.hstack([self.vel, self.omega])
@@ -174,7 +185,7 @@ class World:
         n = len(self.mass)
         total_dx, total_dtheta = np.zeros((n, 3)), np.zeros((n, 3))
         for _ in range(iterations):
-            geo = self._rows_now()[0]
+            geo = self._geometry_now()
             errors = self.rowset.errors(geo)
             worst = float(np.abs(errors).max()) if errors.size else 0.0
             if worst <= tolerance:
@@ -182,23 +193,23 @@ class World:
             if frozen is not None:
                 ja, jb, inv_inertia, factor = frozen
             else:
-                _, ja, jb = self._rows_now()
+                ja, jb = self._rows_now()
                 inv_inertia = self.inv_inertia
                 factor = self.plan.factorise(ja, jb, self.inv_mass, inv_inertia)
             solution = factor.solve(-errors)
             dx, dtheta = self._changes(ja, jb, solution.lam, inv_inertia)
             self.com += dx
-            self.quat = rotate_by(self.quat, dtheta)
+            self.quat = rotate_by_many(self.quat, dtheta)
             self._moved()
             total_dx += dx
             total_dtheta += dtheta
-        errors = self.rowset.errors(self._rows_now()[0])
+        errors = self.rowset.errors(self._geometry_now())
         return (float(np.abs(errors).max()) if errors.size else 0.0), total_dx, total_dtheta
 
     def frozen_rows(self):
         """Constraint rows, world inverse inertia and factorised system now, for
         ``correct_positions(frozen=...)``."""
-        _, ja, jb = self._rows_now()
+        ja, jb = self._rows_now()
         if self._factor is None:
             self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
         return ja, jb, self.inv_inertia, self._factor
@@ -213,7 +224,7 @@ class World:
         moving = self.active
         spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
         self.com[moving] += self.vel[moving] * dt
-        self.quat[moving] = rotate_by(self.quat[moving], self.omega[moving] * dt)
+        self.quat[moving] = rotate_by_many(self.quat[moving], self.omega[moving] * dt)
         self._moved()
         self.omega[moving] = np.einsum("nij,nj->ni", self.inv_inertia, spin)[moving]
 
