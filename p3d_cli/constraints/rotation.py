@@ -122,12 +122,21 @@ def quat_to_matrix_many(q: np.ndarray) -> np.ndarray:
 
 def rotate_by_many(q: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
     """``rotate_by`` for (n, 4) quaternions and (n, 3) rotation vectors, in few numpy calls."""
-    angle = np.sqrt(np.einsum("ni,ni->n", rotvec, rotvec))
+    angle = np.sqrt((rotvec * rotvec).sum(axis=1))
     half = 0.5 * angle
-    small = angle < 1e-8
-    factor = np.where(small, 0.5 - angle * angle / 48.0, np.sin(half) / np.where(small, 1.0, angle))
+    # sin(|θ|/2)/|θ|, through its series below 1e-8 as ``quat_exp`` does.
+    factor = 0.5 - angle * angle / 48.0
+    np.divide(np.sin(half), angle, out=factor, where=angle >= 1e-8)
     p = np.empty((len(q), 4))
-    p[:, 0] = np.cos(half)
-    p[:, 1:] = factor[:, None] * rotvec
-    out = ((p @ _P_TO_L).reshape(-1, 4, 4) @ q[:, :, None])[:, :, 0]
-    return out / np.sqrt(np.einsum("ni,ni->n", out, out))[:, None]
+    np.cos(half, out=p[:, 0])
+    np.multiply(factor[:, None], rotvec, out=p[:, 1:])
+    out = (p[:, :, None] * q[:, None, :]).reshape(-1, 16) @ _PQ_TO_PRODUCT
+    return out / np.sqrt((out * out).sum(axis=1))[:, None]
+
+
+# p ⊗ q as a constant linear map of the outer product p qᵀ (entry p_k q_c at 4 k + c).
+_PQ_TO_PRODUCT = np.zeros((16, 4))
+for _k in range(4):
+    for _r in range(4):
+        for _c in range(4):
+            _PQ_TO_PRODUCT[4 * _k + _c, _r] = _P_TO_L[_k, 4 * _r + _c]

@@ -104,6 +104,7 @@ class RowSet:
         self.template_a[self.gap_rows, np.arange(3)] = -1.0
         self.template_b[self.gap_rows, np.arange(3)] = 1.0
         self.gap_rows_flat = self.gap_rows.ravel()
+        self.bar_where = [self.where[k] for k in self.bars]
 
     def geometry(self, com: np.ndarray, rot: np.ndarray) -> Geometry:
         """World geometry at centres of mass ``com`` (n, 3) and rotations ``rot`` (n, 3, 3)."""
@@ -116,29 +117,32 @@ class RowSet:
     def errors(self, geo: Geometry) -> np.ndarray:
         """(m,) position equations ``C``, scene row order (the modules' ``position_error``)."""
         out = np.empty(self.m)
-        out[self.gap_rows] = geo.gap[self.gap_of]
+        if len(self.gap_of):
+            out[self.gap_rows] = geo.gap[self.gap_of]
         if len(self.hinges):
             x, y, _, s = geo.frames()
             tilt = cross_rows(geo.z_a, s[:, None] * geo.z_b)
-            out[self.axis_rows[:, 0]] = np.einsum("ci,ci->c", tilt, x)
-            out[self.axis_rows[:, 1]] = np.einsum("ci,ci->c", tilt, y)
+            out[self.axis_rows[:, 0]] = (tilt * x).sum(axis=1)
+            out[self.axis_rows[:, 1]] = (tilt * y).sum(axis=1)
         if len(self.bars):
-            out[self.bar_rows] = np.sqrt(np.einsum("ci,ci->c", geo.gap[self.bars], geo.gap[self.bars])) - self.length
+            gap = geo.gap[self.bars]
+            out[self.bar_rows] = np.sqrt((gap * gap).sum(axis=1)) - self.length
         return out
 
     def jacobian(self, geo: Geometry) -> tuple[np.ndarray, np.ndarray]:
         """``(JA, JB)``, each (m, 6): row ``i`` is ``JA[i] · u[row_a[i]] + JB[i] · u[row_b[i]]``."""
         ja, jb = self.template_a.copy(), self.template_b.copy()
         g, rows = self.gap_of, self.gap_rows_flat
-        # Ball rows (also a hinge's first three): [-E, [r_a]ₓ] and [E, -[r_b]ₓ].
-        ja[rows, 3:] = (geo.r_a[g][:, _SKEW_PICK] * _SKEW_SIGN).reshape(-1, 3)
-        jb[rows, 3:] = (geo.r_b[g][:, _SKEW_PICK] * -_SKEW_SIGN).reshape(-1, 3)
+        if len(g):
+            # Ball rows (also a hinge's first three): [-E, [r_a]ₓ] and [E, -[r_b]ₓ].
+            ja[rows, 3:] = (geo.r_a[g][:, _SKEW_PICK] * _SKEW_SIGN).reshape(-1, 3)
+            jb[rows, 3:] = (geo.r_b[g][:, _SKEW_PICK] * -_SKEW_SIGN).reshape(-1, 3)
         if len(self.hinges):
             x, y, _, _ = geo.frames()
             ja[self.axis_rows[:, 0], 3:], jb[self.axis_rows[:, 0], 3:] = -x, x
             ja[self.axis_rows[:, 1], 3:], jb[self.axis_rows[:, 1], 3:] = -y, y
         if len(self.bars):
-            d = bar_directions(geo.gap[self.bars], [self.where[k] for k in self.bars])
+            d = bar_directions(geo.gap[self.bars], self.bar_where)
             rows = self.bar_rows
             ja[rows, :3], jb[rows, :3] = -d, d
             ja[rows, 3:] = -cross_rows(geo.r_a[self.bars], d)
@@ -147,7 +151,7 @@ class RowSet:
 
     def apply(self, ja: np.ndarray, jb: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(m,) ``J u`` for body motions ``u`` (n, 6)."""
-        return np.einsum("mi,mi->m", ja, u[self.row_a]) + np.einsum("mi,mi->m", jb, u[self.row_b])
+        return (ja * u[self.row_a] + jb * u[self.row_b]).sum(axis=1)
 
 
 #: ``[r]ₓ`` row-major as ``r[_SKEW_PICK] * _SKEW_SIGN`` (``rotation.skew``).
@@ -159,14 +163,14 @@ def hinge_frames(z_a: np.ndarray, z_b: np.ndarray):
     """``(x, y, z, s)`` of ``hinge.frame`` for (h, 3) axis pairs: ``z`` the bisector of the axes
     (``z_b`` flipped by ``s`` when it points away), ``x`` the world axis least aligned with
     ``z`` made perpendicular, ``y = z × x``."""
-    s = np.where(np.einsum("ci,ci->c", z_a, z_b) >= 0, 1.0, -1.0)
+    s = np.where((z_a * z_b).sum(axis=1) >= 0, 1.0, -1.0)
     z = z_a + s[:, None] * z_b
     # Unit axes with z_a · s z_b >= 0 give |z|² = 2 + 2|z_a · z_b| >= 2: never zero.
-    z /= np.sqrt(np.einsum("ci,ci->c", z, z))[:, None]
+    z /= np.sqrt((z * z).sum(axis=1))[:, None]
     pick = np.argmin(np.abs(z), axis=1)
     # x = e_pick - z_pick z, the seed axis made perpendicular (as hinge.frame computes it).
-    x = _EYE[pick] - np.take_along_axis(z, pick[:, None], axis=1) * z
-    x /= np.sqrt(np.einsum("ci,ci->c", x, x))[:, None]
+    x = _EYE[pick] - z.ravel()[3 * np.arange(len(z)) + pick][:, None] * z
+    x /= np.sqrt((x * x).sum(axis=1))[:, None]
     return x, cross_rows(z, x), z, s
 
 
@@ -181,8 +185,8 @@ def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def bar_directions(gap: np.ndarray, where) -> np.ndarray:
     """Unit vectors along (b, 3) bar gaps; a bar whose points met is one ``SceneError``."""
-    norm = np.sqrt(np.einsum("ci,ci->c", gap, gap))
-    if np.any(norm == 0.0):
+    norm = np.sqrt((gap * gap).sum(axis=1))
+    if not norm.all():
         k = int(np.flatnonzero(norm == 0.0)[0])
         raise SceneError(where[k] or "bar", "the attachment points have come together, so the bar has "
                          "no direction", "use a ball joint to join two points, or a smaller --dt")

@@ -33,6 +33,7 @@ velocity solve that ended the previous step: same rows, same matrix). Three path
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -71,9 +72,9 @@ class ImpulseSolution:
     equations: int
     island_ranks: tuple[tuple[int, int], ...]
 
-    @property
+    @cached_property
     def multipliers(self) -> tuple[np.ndarray, ...]:
-        """One array per constraint, scene order."""
+        """One array per constraint, scene order (built once: reporting reads it per constraint)."""
         o = self.offsets
         return tuple(self.lam[o[k]:o[k + 1]] for k in range(len(o) - 1))
 
@@ -90,11 +91,13 @@ class _Island:
         self.m, self.nb = self.rows.shape[1], self.bodies.shape[1]
         self.loop = [np.concatenate([np.full(rows.offsets[k + 1] - rows.offsets[k], loop)
                                      for k, loop in zip(isl.constraints, isl.loop)]) for isl in islands]
-        local = np.full((self.count, len(active)), -1, dtype=np.intp)
-        np.put_along_axis(local, self.bodies, np.arange(self.nb)[None, :], axis=1)
+        # Islands share no free body, so one array over all bodies holds each body's column in
+        # its own island (-1: fixed, or in no island here).
+        local = np.full(len(active), -1, dtype=np.intp)
+        local[self.bodies] = np.arange(self.nb)[None, :]
         self.sides = []
         for body_of_row in (rows.row_a, rows.row_b):
-            where = local[np.arange(self.count)[:, None], body_of_row[self.rows]]      # (k, m)
+            where = local[body_of_row[self.rows]]                                   # (k, m)
             slot, lrow = np.nonzero(where >= 0)
             self.sides.append((slot, lrow, where[slot, lrow], self.rows[slot, lrow]))
 
@@ -138,9 +141,12 @@ class SystemPlan:
                 self.single.append((path, isl))
         self.dense_maps = {key: _Island(group, rows, active) for key, group in self.dense.items()}
         self.single_maps = [(path, _Island([isl], rows, active)) for path, isl in self.single]
+        self.scatter = _scatter_matrix(len(active), rows.row_a, rows.row_b)
+        self.n = len(active)
 
     def factorise(self, ja, jb, inv_mass, inv_inertia) -> "Factorisation":
-        """Build and factorise every island's ``J W Jᵀ`` for rows ``(ja, jb)`` (m, 6)."""
+        """Build and factorise every island's ``J W Jᵀ`` for rows ``(ja, jb)`` (m, 6), with the
+        world inverse masses ``inv_mass`` (n,) and inertias ``inv_inertia`` (n, 3, 3)."""
         parts = [_DenseStack(maps, ja, jb, inv_mass, inv_inertia) for maps in self.dense_maps.values()]
         keys = list(self.dense_maps)
         for path, maps in self.single_maps:
@@ -150,24 +156,82 @@ class SystemPlan:
         for path, group, slot in self.order:
             part = parts[keys.index(group)] if path == "dense" else parts[len(keys) + group]
             ranks.append((int(part.ranks[slot]), part.maps.m))
-        return Factorisation(parts, self.m, self.offsets, tuple(ranks))
+        return Factorisation(parts, self, tuple(ranks), (ja, jb, inv_mass, inv_inertia))
 
 
 class Factorisation:
-    """The factorised system of every island; ``solve`` any right-hand side."""
+    """The factorised system of every island: ``solve`` for ``λ``, or ``motion`` for ``W Jᵀ λ``."""
 
-    def __init__(self, parts, m, offsets, island_ranks) -> None:
-        self.parts, self.m, self.offsets, self.island_ranks = parts, m, offsets, island_ranks
+    def __init__(self, parts, plan, island_ranks, arrays) -> None:
+        self.parts, self.plan, self.island_ranks = parts, plan, island_ranks
+        self.arrays = arrays
         self.rank = sum(r for r, _ in island_ranks)
         self.equations = sum(e for _, e in island_ranks)
 
     def solve(self, b: np.ndarray) -> ImpulseSolution:
         """Minimum-norm least-squares ``λ`` of ``(J W Jᵀ) λ = b`` (rows of islands only)."""
-        lam = np.zeros(self.m)
+        lam = np.zeros(self.plan.m)
         for part in self.parts:
             rows = part.maps.rows
             lam[rows] = part.solve(b[rows])
-        return ImpulseSolution(lam, self.offsets, self.rank, self.equations, self.island_ranks)
+        return ImpulseSolution(lam, self.plan.offsets, self.rank, self.equations, self.island_ranks)
+
+    def motion(self, b: np.ndarray) -> np.ndarray:
+        """``W Jᵀ λ`` for that ``λ``: (n, 6) linear and angular change of every body.
+
+        Dense islands apply their precomputed operator (one product); the others solve for
+        ``λ`` and sum its rows onto the bodies.
+        """
+        out = np.zeros((self.plan.n, 6))
+        lam = None
+        for part in self.parts:
+            rows = part.maps.rows
+            if isinstance(part, _DenseStack):
+                out[part.maps.bodies.ravel()] = part.motion(b[rows]).reshape(-1, 6)
+            else:
+                lam = np.zeros(self.plan.m) if lam is None else lam
+                lam[rows] = part.solve(b[rows])
+        if lam is not None:
+            ja, jb, inv_mass, inv_inertia = self.arrays
+            force = self.plan.scatter @ np.concatenate([ja * lam[:, None], jb * lam[:, None]])
+            out[:, :3] += inv_mass[:, None] * force[:, :3]
+            out[:, 3:] += np.einsum("nij,nj->ni", inv_inertia, force[:, 3:])
+        return out
+
+
+class PendingSolution:
+    """The rank of a solve now, its multipliers when asked for (stepping reports only the last)."""
+
+    def __init__(self, factor: Factorisation, b: np.ndarray) -> None:
+        self.factor, self.b, self._solution = factor, b, None
+        self.rank, self.equations, self.island_ranks = factor.rank, factor.equations, factor.island_ranks
+
+    @property
+    def solution(self) -> ImpulseSolution:
+        if self._solution is None:
+            self._solution = self.factor.solve(self.b)
+        return self._solution
+
+    @property
+    def multipliers(self) -> tuple[np.ndarray, ...]:
+        return self.solution.multipliers
+
+
+#: Above this many entries the row-to-body summation matrix is sparse.
+_DENSE_SCATTER = 20000
+
+
+def _scatter_matrix(n: int, row_a: np.ndarray, row_b: np.ndarray):
+    """``S`` (n, 2m) with ``S @ [X_a; X_b]`` the per-body sums of rows ``X_a`` on their side-a
+    bodies plus rows ``X_b`` on their side-b bodies (one matrix product per ``W Jᵀ λ``)."""
+    bodies = np.concatenate([row_a, row_b])
+    if n * bodies.size <= _DENSE_SCATTER:
+        out = np.zeros((n, bodies.size))
+        out[bodies, np.arange(bodies.size)] = 1.0
+        return out
+    import scipy.sparse as sp
+
+    return sp.csr_matrix((np.ones(bodies.size), (bodies, np.arange(bodies.size))), shape=(n, bodies.size))
 
 
 def _weighted(jac, inv_mass_b, inv_inertia_b):
@@ -191,6 +255,18 @@ class _DenseStack:
         keep = values > RANK_RTOL * np.maximum(diag, 0.0)[:, None]
         self.inv = np.divide(1.0, values, out=np.zeros_like(values), where=keep)
         self.system, self.ranks = system, keep.sum(axis=1)
+        self.weighted = weighted.reshape(k, m, -1)
+        self._operator = None
+
+    def motion(self, b):
+        """(k, 6 nb) ``W Jᵀ λ`` of each stacked island for right-hand sides ``b`` (k, m)."""
+        if self._operator is None:
+            # λ = (2P - P A P) b is the pseudo-inverse solve with its step of refinement
+            # (``solve``) as one linear map; with W Jᵀ in front it takes b to the motion.
+            p = (self.vectors * self.inv[:, None, :]) @ self.vectors.transpose(0, 2, 1)
+            refined = 2.0 * p - p @ self.system @ p
+            self._operator = self.weighted.transpose(0, 2, 1) @ refined
+        return (self._operator @ b[..., None])[..., 0]
 
     def _apply(self, b):
         v = self.vectors

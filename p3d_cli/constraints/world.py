@@ -16,7 +16,7 @@ from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.constraints.rotation import quat_to_matrix, quat_to_matrix_many, rotate_by_many
 from p3d_cli.constraints.rows import RowSet
-from p3d_cli.constraints.solver import DENSE_LIMIT, SystemPlan
+from p3d_cli.constraints.solver import DENSE_LIMIT, PendingSolution, SystemPlan
 
 
 class World:
@@ -62,7 +62,7 @@ class World:
             self.constrained[a] = self.constrained[b] = True
         self.rowset = RowSet(scene, self.index, self.com_body)
         self.plan = SystemPlan(self.islands, self.rowset, self.active, dense_limit)
-        self._scatter = _scatter_matrix(n, self.rowset.row_a, self.rowset.row_b)
+        self.moving = np.flatnonzero(self.active)
         self._update_inverse_inertia()
 
     # -- derived quantities -------------------------------------------------------------
@@ -134,16 +134,11 @@ class World:
             self._inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
         return self._inv_inertia
 
-    def _changes(self, ja, jb, lam, inv_inertia) -> tuple[np.ndarray, np.ndarray]:
-        """``W Jᵀ λ`` split into linear and angular parts per body, (n, 3) each."""
-        force = self._scatter @ np.concatenate([ja * lam[:, None], jb * lam[:, None]])
-        dv = self.inv_mass[:, None] * force[:, :3]
-        dw = np.einsum("nij,nj->ni", inv_inertia, force[:, 3:])
-        return dv, dw
 
     def solve_velocities(self):
         """One velocity solve: apply the impulses that make every constraint's velocity
-        equations hold. Returns the ``ImpulseSolution``.
+        equations hold. Returns a ``PendingSolution``
+        (its multipliers are solved for when asked).
 
         The factorised system is kept: it is the frozen system of the next step's position
         correction (``frozen_rows``), whose rows are these.
@@ -151,12 +146,11 @@ class World:
         ja, jb = self._rows_now()
         if self._factor is None:
             self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
-        u = np.hstack([self.vel, self.omega])
-        solution = self._factor.solve(-self.rowset.apply(ja, jb, u))
-        dv, dw = self._changes(ja, jb, solution.lam, self.inv_inertia)
-        self.vel += dv
-        self.omega += dw
-        return solution
+        b = -self.rowset.apply(ja, jb, np.hstack([self.vel, self.omega]))
+        change = self._factor.motion(b)
+        self.vel += change[:, :3]
+        self.omega += change[:, 3:]
+        return PendingSolution(self._factor, b)
 
     def correct_positions(self, tolerance: float, frozen=None, iterations: int = 8):
         """Position projection onto ``C(x) = 0`` along mass-weighted constraint directions.
@@ -191,13 +185,12 @@ class World:
             if worst <= tolerance:
                 return worst, total_dx, total_dtheta
             if frozen is not None:
-                ja, jb, inv_inertia, factor = frozen
+                factor = frozen[3]
             else:
                 ja, jb = self._rows_now()
-                inv_inertia = self.inv_inertia
-                factor = self.plan.factorise(ja, jb, self.inv_mass, inv_inertia)
-            solution = factor.solve(-errors)
-            dx, dtheta = self._changes(ja, jb, solution.lam, inv_inertia)
+                factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+            change = factor.motion(-errors)
+            dx, dtheta = change[:, :3], change[:, 3:]
             self.com += dx
             self.quat = rotate_by_many(self.quat, dtheta)
             self._moved()
@@ -221,26 +214,10 @@ class World:
         body's angular momentum ``I_world ω`` is kept through the turn, so ``ω`` follows the
         rotated inertia (torque-free motion of an asymmetric body is not lost).
         """
-        moving = self.active
-        spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
+        moving = self.moving
+        spin = (self.inertia_world()[moving] @ self.omega[moving, :, None])
         self.com[moving] += self.vel[moving] * dt
         self.quat[moving] = rotate_by_many(self.quat[moving], self.omega[moving] * dt)
         self._moved()
-        self.omega[moving] = np.einsum("nij,nj->ni", self.inv_inertia, spin)[moving]
+        self.omega[moving] = (self.inv_inertia[moving] @ spin)[:, :, 0]
 
-
-#: Above this many entries the row-to-body summation matrix is sparse.
-_DENSE_SCATTER = 20000
-
-
-def _scatter_matrix(n: int, row_a: np.ndarray, row_b: np.ndarray):
-    """``S`` (n, 2m) with ``S @ [X_a; X_b]`` the per-body sums of rows ``X_a`` on their side-a
-    bodies plus rows ``X_b`` on their side-b bodies (one matrix product per ``W Jᵀ λ``)."""
-    bodies = np.concatenate([row_a, row_b])
-    if n * bodies.size <= _DENSE_SCATTER:
-        out = np.zeros((n, bodies.size))
-        out[bodies, np.arange(bodies.size)] = 1.0
-        return out
-    import scipy.sparse as sp
-
-    return sp.csr_matrix((np.ones(bodies.size), (bodies, np.arange(bodies.size))), shape=(n, bodies.size))
