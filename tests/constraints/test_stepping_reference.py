@@ -94,7 +94,9 @@ def test_examples_follow_the_recorded_trajectories(name):
     np.testing.assert_allclose(result.angular_momentum, ref["angular_momentum"], rtol=0, atol=vel_tol)
     assert result.max_position_error <= 1e-12 and ref["max_position_error"] <= 1e-12
     for c, impulse, error in zip(result.constraints, ref["impulses"], ref["position_errors"]):
-        np.testing.assert_allclose(np.atleast_1d(c.impulse), impulse, rtol=0, atol=vel_tol)
+        # The minimum-norm split between redundant rows (the door's two hinges) amplifies
+        # rounding by the system's condition: held relative, to 1e-9.
+        np.testing.assert_allclose(np.atleast_1d(c.impulse), impulse, rtol=1e-9, atol=vel_tol)
         assert c.position_error <= 1e-12 and error <= 1e-12
 
 
