@@ -1,7 +1,7 @@
 """The mutable world state of one solve: arrays over all bodies, and the operations on them.
 
 Only this module and ``simulation`` mutate arrays; everything they return is frozen.
-Conventions (FACTS.md, "Constraints"): world frame throughout; ``I⁻¹_world = R I⁻¹_body Rᵀ``;
+Conventions (docs/solve.md): world frame throughout; ``I⁻¹_world = R I⁻¹_body Rᵀ``;
 ``r = attachment - centre of mass``; velocities are those of the centres of mass; fixed bodies
 (and bodies at rest that nothing links, whose mass properties are never computed) have zero
 inverse mass and inverse inertia.
@@ -192,8 +192,13 @@ class World:
             change = factor.motion(-errors)
             dx, dtheta = change[:, :3], change[:, 3:]
             self.com += dx
-            self.quat = rotate_by_many(self.quat, dtheta)
-            self._moved()
+            if dtheta.any():
+                self.quat = rotate_by_many(self.quat, dtheta)
+                self._moved()
+            else:
+                # Rows acting through the centres of mass only (a bob on a bar) turn nothing:
+                # the orientations, and what depends on them, stay as they are.
+                self._geo = self._rows_cache = self._factor = None
             total_dx += dx
             total_dtheta += dtheta
         errors = self.rowset.errors(self._geometry_now())
