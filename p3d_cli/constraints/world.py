@@ -159,9 +159,9 @@ class World:
         ----------
         tolerance : float
             Stop once every position error is at most this.
-        frozen : (JA, JB, inv_inertia, factorisation), optional
-            Constraint rows, world inverse inertia and the factorised system taken at the
-            start of a time step (``frozen_rows``). The displacement is then ``W₀ J₀ᵀ λ`` with
+        frozen : Factorisation, optional
+            The factorised system of the constraint rows and world inverse inertia taken at
+            the start of a time step (``frozen_rows``; it keeps those rows). The displacement is then ``W₀ J₀ᵀ λ`` with
             ``λ`` found by iterating ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient
             projection, which RATTLE needs to be symplectic; it converges at a rate of order
             ``ω dt`` per iteration), so one factorisation serves every iteration. Without it,
@@ -185,7 +185,7 @@ class World:
             if worst <= tolerance:
                 return worst, total_dx, total_dtheta
             if frozen is not None:
-                factor = frozen[3]
+                factor = frozen
             else:
                 ja, jb = self._rows_now()
                 factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
@@ -205,12 +205,12 @@ class World:
         return (float(np.abs(errors).max()) if errors.size else 0.0), total_dx, total_dtheta
 
     def frozen_rows(self):
-        """Constraint rows, world inverse inertia and factorised system now, for
-        ``correct_positions(frozen=...)``."""
-        ja, jb = self._rows_now()
+        """The factorised system of the rows and world inverse inertia now, for
+        ``correct_positions(frozen=...)`` (the last velocity solve's, when nothing moved since)."""
         if self._factor is None:
+            ja, jb = self._rows_now()
             self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
-        return ja, jb, self.inv_inertia, self._factor
+        return self._factor
 
     def drift(self, dt: float) -> None:
         """Advance positions and orientations by ``dt`` at the current velocities.
