@@ -24,8 +24,18 @@ def inertia_from_second_moments(second: np.ndarray) -> np.ndarray:
     -------
     (3, 3) float64
         ``Ixx = ∫ (y² + z²) dm``, ``Ixy = -∫ x y dm`` (docs/method.md, "Inertia sign").
+
+    Notes
+    -----
+    The diagonal is summed as ``Syy + Szz`` (and so on), not as ``tr(S) - Sxx``: for a needle
+    (``Sxx`` 1e24 times the others) the subtraction cancels to 0, a singular inertia.
     """
-    return np.trace(second) * np.eye(3) - second
+    second = np.asarray(second, dtype=np.float64)
+    out = -second
+    out[0, 0] = second[1, 1] + second[2, 2]
+    out[1, 1] = second[0, 0] + second[2, 2]
+    out[2, 2] = second[0, 0] + second[1, 1]
+    return out
 
 
 def shifted_inertia(inertia_com: np.ndarray, mass: float, center: np.ndarray, point) -> np.ndarray:

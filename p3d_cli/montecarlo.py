@@ -35,7 +35,7 @@ import numpy as np
 
 from p3d_cli.errors import UsageError
 from p3d_cli.exact import mesh_facts, mesh_warnings
-from p3d_cli.inertia import density_for, mass_properties
+from p3d_cli.inertia import density_for, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.placement import IDENTITY, Placement
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
@@ -148,7 +148,7 @@ def _reported(m, box_volume, half, density, mass) -> np.ndarray:
     volume = box_volume * m[0]
     rho = density_for(volume, density, mass)
     central = _central(m, box_volume) * np.outer(half, half)
-    inertia = rho * (np.trace(central) * np.eye(3) - central)
+    inertia = rho * inertia_from_second_moments(central)
     return np.concatenate([[volume, rho * volume], half * m[1:4] / m[0], inertia.reshape(-1)])
 
 
@@ -201,7 +201,7 @@ def conservative_errors(est: Estimate, density: float | None = None, mass: float
     cap = np.where(eye, np.maximum(var, 1.0 - var)[:, None], np.abs(cov) + 1.0)
     hh = np.outer(half, half)
     d, dd = hh * cov, hh * np.minimum(dcov, cap)
-    f = np.trace(d) * np.eye(3) - d
+    f = inertia_from_second_moments(d)
     df = np.where(eye, np.trace(dd) - dd, dd)       # I_xx = M (D_yy + D_zz); I_xy = -M D_xy
     total = rho * volume
     dm = 0.0 if mass is not None else rho * volume_halfwidth(ALPHA / 10)

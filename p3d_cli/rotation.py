@@ -85,38 +85,39 @@ def _unit_axis(axis, degrees: float) -> np.ndarray:
     return u / norm
 
 
+# Each entry of R(q), times |q|², is a sum of two products q_i q_j (times ±1 or ±2): a constant
+# linear map of the outer product q qᵀ (entry q_i q_j at 4 i + j), so (n, 3, 3) matrices are one
+# outer product and one matrix product, the form stepping's inner loop needs.
+_QQ_TO_R = np.zeros((16, 9))
+for _entry, _terms in enumerate((((0, 1), (5, 1), (10, -1), (15, -1)), ((6, 2), (3, -2)), ((7, 2), (2, 2)),
+                                 ((6, 2), (3, 2)), ((0, 1), (5, -1), (10, 1), (15, -1)), ((11, 2), (1, -2)),
+                                 ((7, 2), (2, -2)), ((11, 2), (1, 2)), ((0, 1), (5, -1), (10, -1), (15, 1)))):
+    for _k, _weight in _terms:
+        _QQ_TO_R[_k, _entry] = _weight
+
+
 def quaternion_matrix(q) -> np.ndarray:
     """Rotation matrix of quaternions ``[w, x, y, z]``: the one copy of this formula.
 
-    The homogeneous form ``R = (1/|q|²) [[w²+x²-y²-z², 2(xy-wz), ...], ...]`` is used rather
+    The homogeneous form ``R = (1/|q|²) [[w²+x²-y²-z², 2(xy-wz), 2(xz+wy)], ...]`` is used rather
     than ``1 - 2(y² + z²)``: it is exact at quarter turns whose quaternion has equal components
     (90° about z is ``(√½, 0, 0, √½)``: ``w² - z²`` is exactly 0 and ``2wz / |q|²`` exactly 1,
     where ``1 - 2z²`` gives 2e-16), and it needs no unit length.
 
     Parameters
     ----------
-    q : (4,) or (n, 4) array_like of float
+    q : (4,) or (..., 4) array_like of float
         Not zero (callers that take user input refuse the zero quaternion first).
 
     Returns
     -------
-    (3, 3) or (n, 3, 3) float64
+    (3, 3) or (..., 3, 3) float64
     """
     q = np.asarray(q, dtype=np.float64)
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    n = ww + xx + yy + zz
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = (ww + xx - yy - zz) / n
-    out[..., 0, 1] = 2 * (x * y - w * z) / n
-    out[..., 0, 2] = 2 * (x * z + w * y) / n
-    out[..., 1, 0] = 2 * (x * y + w * z) / n
-    out[..., 1, 1] = (ww - xx + yy - zz) / n
-    out[..., 1, 2] = 2 * (y * z - w * x) / n
-    out[..., 2, 0] = 2 * (x * z - w * y) / n
-    out[..., 2, 1] = 2 * (y * z + w * x) / n
-    out[..., 2, 2] = (ww - xx - yy + zz) / n
-    return out
+    flat = q.reshape(-1, 4)
+    qq = (flat[:, :, None] * flat[:, None, :]).reshape(-1, 16)
+    norm = qq[:, 0] + qq[:, 5] + qq[:, 10] + qq[:, 15]
+    return ((qq @ _QQ_TO_R) / norm[:, None]).reshape(q.shape[:-1] + (3, 3))
 
 
 def quaternion_from_axis_degrees(axis, degrees: float) -> np.ndarray:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.rotation import quaternion_matrix as quat_to_matrix  # noqa: F401 - the one copy
+from p3d_cli.rotation import quaternion_matrix as quat_to_matrix_many  # noqa: F401 - (n, 4) at once
 
 
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -72,3 +73,34 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
+
+# -- the same operations over many bodies in a few numpy calls (stepping's inner loop) ----------
+# ``p ⊗ q = L(p) q`` with ``L(p)`` linear in ``p``: a constant linear map of the outer product.
+# (Rotation matrices of many quaternions: ``quat_to_matrix``, vectorised in p3d_cli.rotation.)
+_P_TO_L = np.zeros((4, 16))
+for _row, _signs in enumerate((((0, 1), (1, -1), (2, -1), (3, -1)), ((1, 1), (0, 1), (3, -1), (2, 1)),
+                               ((2, 1), (3, 1), (0, 1), (1, -1)), ((3, 1), (2, -1), (1, 1), (0, 1)))):
+    for _col, (_k, _sign) in enumerate(_signs):
+        _P_TO_L[_k, 4 * _row + _col] = _sign
+
+
+def rotate_by_many(q: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
+    """``rotate_by`` for (n, 4) quaternions and (n, 3) rotation vectors, in few numpy calls."""
+    angle = np.sqrt((rotvec * rotvec).sum(axis=1))
+    half = 0.5 * angle
+    # sin(|θ|/2)/|θ|, through its series below 1e-8 as ``quat_exp`` does.
+    factor = 0.5 - angle * angle / 48.0
+    np.divide(np.sin(half), angle, out=factor, where=angle >= 1e-8)
+    p = np.empty((len(q), 4))
+    np.cos(half, out=p[:, 0])
+    np.multiply(factor[:, None], rotvec, out=p[:, 1:])
+    out = (p[:, :, None] * q[:, None, :]).reshape(-1, 16) @ _PQ_TO_PRODUCT
+    return out / np.sqrt((out * out).sum(axis=1))[:, None]
+
+
+# p ⊗ q as a constant linear map of the outer product p qᵀ (entry p_k q_c at 4 k + c).
+_PQ_TO_PRODUCT = np.zeros((16, 4))
+for _k in range(4):
+    for _r in range(4):
+        for _c in range(4):
+            _PQ_TO_PRODUCT[4 * _k + _c, _r] = _P_TO_L[_k, 4 * _r + _c]

@@ -90,8 +90,8 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     before = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
     tolerance = POSITION_RTOL * _length_scale(scene)
     if steps == 0:
-        solution, geos = world.solve_velocities()
-        worst = max((float(np.abs(e).max()) for e in world.position_residuals(geos)), default=0.0)
+        solution = world.solve_velocities()
+        worst = max((float(np.abs(e).max()) for e in world.position_residuals(world.geometries())), default=0.0)
         return _result(world, solution, before, 0, 0.0, worst)
     # RATTLE (Andersen 1983; Leimkuhler & Skeel 1994) with the velocity solve of eq. 20 as its
     # velocity projection: half kick; drift; project positions back onto the constraints along
@@ -103,7 +103,7 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     # projection, velocities untouched): a gap credited to the velocity would become a kick.
     half_kick = 0.5 * dt * scene.gravity
     worst, _, _ = world.correct_positions(tolerance)
-    solution, _ = world.solve_velocities()
+    solution = world.solve_velocities()
     for step in range(1, steps + 1):
         frozen = world.frozen_rows()
         world.vel[world.active] += half_kick
@@ -113,7 +113,7 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
         world.omega += dtheta / dt
         worst = max(worst, error)
         world.vel[world.active] += half_kick
-        solution, _ = world.solve_velocities()
+        solution = world.solve_velocities()
         if on_step is not None:
             on_step(step * dt, _bodies(world))
     return _result(world, solution, before, steps, steps * dt, worst)

@@ -1,7 +1,7 @@
 """The mutable world state of one solve: arrays over all bodies, and the operations on them.
 
 Only this module and ``simulation`` mutate arrays; everything they return is frozen.
-Conventions (FACTS.md, "Constraints"): world frame throughout; ``I⁻¹_world = R I⁻¹_body Rᵀ``;
+Conventions (docs/solve.md): world frame throughout; ``I⁻¹_world = R I⁻¹_body Rᵀ``;
 ``r = attachment - centre of mass``; velocities are those of the centres of mass; fixed bodies
 (and bodies at rest that nothing links, whose mass properties are never computed) have zero
 inverse mass and inverse inertia.
@@ -9,17 +9,25 @@ inverse mass and inverse inertia.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from p3d_cli.constraints.islands import find_islands
 from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
-from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by
-from p3d_cli.constraints.solver import DENSE_LIMIT, body_changes, solve_impulses
+from p3d_cli.constraints.rotation import quat_to_matrix, quat_to_matrix_many, rotate_by_many
+from p3d_cli.constraints.rows import RowSet
+from p3d_cli.constraints.solver import DENSE_LIMIT, PendingSolution, SystemPlan
 
 
 class World:
     """Arrays over the scene's bodies (scene order) and its constraints."""
+
+    # What depends on the pose, built when first asked for and dropped when the bodies move.
+    _geo: Any = None
+    _rows_cache: Any = None
+    _factor: Any = None
 
     def __init__(self, scene, inertials: dict, dense_limit: int = DENSE_LIMIT) -> None:
         n = len(scene.bodies)
@@ -59,12 +67,14 @@ class World:
         self.constrained = np.zeros(n, dtype=bool)
         for a, b in self.pairs:
             self.constrained[a] = self.constrained[b] = True
+        self.rowset = RowSet(scene, self.index, self.com_body)
+        self.plan = SystemPlan(self.islands, self.rowset, self.active, dense_limit)
+        self.moving = np.flatnonzero(self.active)
         self._update_inverse_inertia()
 
     # -- derived quantities -------------------------------------------------------------
     def _update_inverse_inertia(self) -> None:
-        self.rot = quat_to_matrix(self.quat)
-        self.inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
+        self._moved()
 
     def inertia_world(self) -> np.ndarray:
         return self.rot @ self.inertia_body @ np.transpose(self.rot, (0, 2, 1))
@@ -106,18 +116,48 @@ class World:
         return [module.position_error(spec, geo)
                 for module, spec, geo in zip(self.modules, self.scene.constraints, geos)]
 
+    def _geometry_now(self):
+        """The rows' geometry at the current positions, computed once per configuration."""
+        if self._geo is None:
+            self._geo = self.rowset.geometry(self.com, self.rot)
+        return self._geo
+
+    def _rows_now(self):
+        """``(JA, JB)`` at the current positions, computed once per configuration (a step
+        needs them once, for its closing velocity solve; correction iterations do not)."""
+        if self._rows_cache is None:
+            self._rows_cache = self.rowset.jacobian(self._geometry_now())
+        return self._rows_cache
+
+    def _moved(self) -> None:
+        self.rot = quat_to_matrix_many(self.quat)
+        self._inv_inertia = None
+        self._geo = self._rows_cache = self._factor = None
+
+    @property
+    def inv_inertia(self) -> np.ndarray:
+        """World inverse inertia ``R I⁻¹ Rᵀ``, (n, 3, 3); computed when first needed after a move."""
+        if self._inv_inertia is None:
+            self._inv_inertia = self.rot @ self.inv_inertia_body @ np.transpose(self.rot, (0, 2, 1))
+        return self._inv_inertia
+
+
     def solve_velocities(self):
-        """One velocity solve (eq. 20): apply the impulses that make every constraint's velocity
-        equations hold. Returns ``(solution, geometries)``."""
-        geos = self.geometries()
-        blocks = self._blocks(geos)
-        rhs = [-r for r in self.velocity_residuals(geos, blocks)]
-        solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, self.inv_inertia, rhs,
-                                  self.dense_limit)
-        dv, dw = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, self.inv_inertia)
-        self.vel += dv
-        self.omega += dw
-        return solution, geos
+        """One velocity solve: apply the impulses that make every constraint's velocity
+        equations hold. Returns a ``PendingSolution``
+        (its multipliers are solved for when asked).
+
+        The factorised system is kept: it is the frozen system of the next step's position
+        correction (``frozen_rows``), whose rows are these.
+        """
+        ja, jb = self._rows_now()
+        if self._factor is None:
+            self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+        b = -self.rowset.apply(ja, jb, np.hstack([self.vel, self.omega]))
+        change = self._factor.motion(b)
+        self.vel += change[:, :3]
+        self.omega += change[:, 3:]
+        return PendingSolution(self._factor, b)
 
     def correct_positions(self, tolerance: float, frozen=None, iterations: int = 8):
         """Position projection onto ``C(x) = 0`` along mass-weighted constraint directions.
@@ -126,13 +166,14 @@ class World:
         ----------
         tolerance : float
             Stop once every position error is at most this.
-        frozen : (blocks, inv_inertia), optional
-            Constraint rows and world inverse inertia taken at the start of a time step. The
-            displacement is then ``W₀ J₀ᵀ λ`` with ``λ`` found by iterating
-            ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient projection, which RATTLE needs
-            to be symplectic; it converges at a rate of order ``ω dt`` per iteration).
-            Without it, each iteration re-linearises at the current positions (Newton), which
-            is what assembling a scene needs.
+        frozen : Factorisation, optional
+            The factorised system of the constraint rows and world inverse inertia taken at
+            the start of a time step (``frozen_rows``; it keeps those rows). The displacement is then ``W₀ J₀ᵀ λ`` with
+            ``λ`` found by iterating ``(J₀ W₀ J₀ᵀ) Δλ = -C(x)`` (SHAKE's frozen-gradient
+            projection, which RATTLE needs to be symplectic; it converges at a rate of order
+            ``ω dt`` per iteration), so one factorisation serves every iteration. Without it,
+            each iteration re-linearises at the current positions (Newton), which is what
+            assembling a scene needs.
         iterations : int
 
         Returns
@@ -145,26 +186,38 @@ class World:
         n = len(self.mass)
         total_dx, total_dtheta = np.zeros((n, 3)), np.zeros((n, 3))
         for _ in range(iterations):
-            geos = self.geometries()
-            errors = self.position_residuals(geos)
-            worst = max((float(np.abs(e).max()) for e in errors), default=0.0)
+            geo = self._geometry_now()
+            errors = self.rowset.errors(geo)
+            worst = float(np.abs(errors).max()) if errors.size else 0.0
             if worst <= tolerance:
                 return worst, total_dx, total_dtheta
-            blocks, inv_inertia = frozen if frozen is not None else (self._blocks(geos), self.inv_inertia)
-            solution = solve_impulses(self.islands, self.pairs, blocks, self.inv_mass, inv_inertia,
-                                      [-e for e in errors], self.dense_limit)
-            dx, dtheta = body_changes(self.pairs, blocks, solution.multipliers, self.inv_mass, inv_inertia)
+            if frozen is not None:
+                factor = frozen
+            else:
+                ja, jb = self._rows_now()
+                factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+            change = factor.motion(-errors)
+            dx, dtheta = change[:, :3], change[:, 3:]
             self.com += dx
-            self.quat = rotate_by(self.quat, dtheta)
-            self._update_inverse_inertia()
+            if dtheta.any():
+                self.quat = rotate_by_many(self.quat, dtheta)
+                self._moved()
+            else:
+                # Rows acting through the centres of mass only (a bob on a bar) turn nothing:
+                # the orientations, and what depends on them, stay as they are.
+                self._geo = self._rows_cache = self._factor = None
             total_dx += dx
             total_dtheta += dtheta
-        worst = max((float(np.abs(e).max()) for e in self.position_residuals(self.geometries())), default=0.0)
-        return worst, total_dx, total_dtheta
+        errors = self.rowset.errors(self._geometry_now())
+        return (float(np.abs(errors).max()) if errors.size else 0.0), total_dx, total_dtheta
 
     def frozen_rows(self):
-        """Constraint rows and world inverse inertia now, for ``correct_positions(frozen=...)``."""
-        return self._blocks(self.geometries()), self.inv_inertia.copy()
+        """The factorised system of the rows and world inverse inertia now, for
+        ``correct_positions(frozen=...)`` (the last velocity solve's, when nothing moved since)."""
+        if self._factor is None:
+            ja, jb = self._rows_now()
+            self._factor = self.plan.factorise(ja, jb, self.inv_mass, self.inv_inertia)
+        return self._factor
 
     def drift(self, dt: float) -> None:
         """Advance positions and orientations by ``dt`` at the current velocities.
@@ -173,9 +226,10 @@ class World:
         body's angular momentum ``I_world ω`` is kept through the turn, so ``ω`` follows the
         rotated inertia (torque-free motion of an asymmetric body is not lost).
         """
-        moving = self.active
-        spin = np.einsum("nij,nj->ni", self.inertia_world(), self.omega)
+        moving = self.moving
+        spin = (self.inertia_world()[moving] @ self.omega[moving, :, None])
         self.com[moving] += self.vel[moving] * dt
-        self.quat[moving] = rotate_by(self.quat[moving], self.omega[moving] * dt)
-        self._update_inverse_inertia()
-        self.omega[moving] = np.einsum("nij,nj->ni", self.inv_inertia, spin)[moving]
+        self.quat[moving] = rotate_by_many(self.quat[moving], self.omega[moving] * dt)
+        self._moved()
+        self.omega[moving] = (self.inv_inertia[moving] @ spin)[:, :, 0]
+

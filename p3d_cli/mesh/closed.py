@@ -9,7 +9,8 @@ whose low bit gives its direction; the mesh is closed when, after one sort, the 
 look open (never the reverse, barring a second, matching collision), so a "not closed" verdict
 is confirmed: a key used once, twice the same way, an odd number of times or unevenly in the
 two directions proves an exact edge that is not used once each way (equal edges have equal
-keys); only balanced groups of four or more sides, which two colliding closed edges would make, have their end points compared exactly
+keys); only balanced groups of four or more sides, which two colliding closed edges would make,
+have their end points compared exactly
 (``doubtful_edges``, ``sides_pair_up_exactly``). An open mesh costs one more pass over its
 sorted keys, not a vertex merge.
 """

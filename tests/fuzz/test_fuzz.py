@@ -58,7 +58,7 @@ def mutated(draw, target: str) -> bytes:
 
 
 def _fuzz(target: str):
-    @settings(max_examples=EXAMPLES, deadline=None, database=None, derandomize=False,
+    @settings(max_examples=EXAMPLES, deadline=None,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
     @given(data=mutated(target))
     def run(data):
