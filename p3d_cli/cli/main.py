@@ -217,5 +217,6 @@ cli.commands = _Commands({
     "bounds": "p3d_cli.cli.bounds",
     "check": "p3d_cli.cli.check",
     "props": "p3d_cli.cli.props",
+    "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })
