@@ -23,7 +23,7 @@ import os
 
 import numpy as np
 
-from p3d_cli.errors import InputError
+from p3d_cli.errors import InputError, UsageError
 from p3d_cli.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
@@ -93,11 +93,24 @@ class _Context:
         return math.radians(value) if self.degrees else value
 
     def rotation(self, a: dict[str, str], where: str) -> np.ndarray | None:
-        """The rotation an element's orientation attributes give (None: none given)."""
-        from p3d_cli.rotation import quaternion_matrix, rotation_from_axis_degrees
+        """The rotation an element's orientation attributes give (None: none given).
+
+        Raises
+        ------
+        InputError
+            A malformed or degenerate orientation (a zero quaternion or axis).
+        """
+        try:
+            return self._rotation(a, where)
+        except UsageError as exc:
+            raise InputError(f"{where}: {exc.where}", exc.what, "give a valid orientation") from None
+
+    def _rotation(self, a: dict[str, str], where: str) -> np.ndarray | None:
+        from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_quaternion
 
         if "quat" in a:
-            return quaternion_matrix(numbers(a["quat"], 4, f"{where}: quat"))
+            # MuJoCo normalises quaternions; so does rotation_from_quaternion.
+            return rotation_from_quaternion(*numbers(a["quat"], 4, f"{where}: quat"))
         if "axisangle" in a:
             x, y, z, t = numbers(a["axisangle"], 4, f"{where}: axisangle")
             return rotation_from_axis_degrees((x, y, z), math.degrees(self.angle(t)))
@@ -114,6 +127,8 @@ class _Context:
             v = np.array(numbers(a["xyaxes"], 6, f"{where}: xyaxes"))
             x = v[:3] / np.linalg.norm(v[:3])
             y = v[3:] - np.dot(v[3:], x) * x
+            if not np.all(np.isfinite(x)) or not np.linalg.norm(y) > 0:
+                raise UsageError("xyaxes", f"{a['xyaxes']!r} are not two independent axes", "")
             y /= np.linalg.norm(y)
             return np.column_stack([x, y, np.cross(x, y)])
         if "zaxis" in a:
@@ -125,7 +140,10 @@ def z_to(direction: np.ndarray) -> np.ndarray:
     """The shortest turn taking +z to ``direction`` (MuJoCo's ``mju_quatZ2Vec``)."""
     from p3d_cli.rotation import rotation_from_axis_degrees
 
-    d = direction / np.linalg.norm(direction)
+    length = float(np.linalg.norm(direction))
+    if not length > 0:
+        raise UsageError("zaxis", "is the zero vector", "")
+    d = direction / length
     axis = np.cross([0.0, 0.0, 1.0], d)
     s = np.linalg.norm(axis)
     if s < 1e-15:

@@ -18,7 +18,7 @@ import os
 
 import numpy as np
 
-from p3d_cli.errors import InputError
+from p3d_cli.errors import InputError, UsageError
 from p3d_cli.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, inertia_matrix, resolve_uri, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
@@ -36,7 +36,10 @@ def pose(node: Node | None, where: str, link: str) -> tuple[np.ndarray, np.ndarr
                          "give the pose in the link's frame")
     if node.attrib.get("rotation_format") == "quat_xyzw":
         x, y, z, qx, qy, qz, qw = numbers(node.text, 7, f"{where}: pose")
-        return np.array([x, y, z]), rotation_from_quaternion(qw, qx, qy, qz)
+        try:
+            return np.array([x, y, z]), rotation_from_quaternion(qw, qx, qy, qz)
+        except UsageError as exc:
+            raise InputError(f"{where}: pose", exc.what, "give a non-zero quaternion x y z w") from None
     values = numbers(node.text, 6, f"{where}: pose")
     if node.attrib.get("degrees", "false").lower() == "true":
         values[3:] = [math.radians(v) for v in values[3:]]

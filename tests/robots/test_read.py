@@ -1,0 +1,126 @@
+"""Reading URDF, MJCF and SDF: each link's geometry, measured as an assembly of its geoms, equals
+closed forms placed by hand and p3d's own assembly of the same parts; declared inertials are
+turned into the link frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import p3d_cli as p3d
+from p3d_cli.errors import InputError
+from p3d_cli.robots import load_robot
+from p3d_cli.robots.geometry import measure_link
+from tests.robots import oracle
+from tests.robots.conftest import DENSITY, RPY_WEDGE, YAW_BOX
+
+
+def _props(robot, name):
+    link = next(link for link in robot.links if link.name == name)
+    geometry = measure_link(link, "collision", robot.path, density=DENSITY)
+    assert geometry.solid, geometry.problems
+    return geometry.result.properties
+
+
+def _same(props, expected, rtol=1e-9):
+    m, c, i = expected
+    assert props.mass == pytest.approx(m, rel=rtol)
+    np.testing.assert_allclose(props.center_of_mass, c, rtol=0, atol=rtol * 1.0)
+    np.testing.assert_allclose(props.inertia, i, rtol=0, atol=rtol * np.abs(i).max())
+
+
+@pytest.mark.parametrize("kind", ["urdf", "sdf", "mjcf"])
+def test_links_equal_hand_placed_closed_forms(arm, kind, monkeypatch):
+    if kind == "sdf":
+        monkeypatch.setenv("GZ_SIM_RESOURCE_PATH", str(arm.root))  # model://arm_description/...
+    path = getattr(arm, kind)()
+    robot = load_robot(path, package_paths=arm.packages if kind == "urdf" else None)
+    assert [link.name for link in robot.links] == ["base", "upper"] + (["tool"] if kind != "mjcf" else [])
+    _same(_props(robot, "base"), oracle.base_link())
+    _same(_props(robot, "upper"), oracle.upper_link(knob="capsule" if kind == "mjcf" else "sphere"))
+
+
+def test_link_equals_the_assembly_of_the_same_parts(arm, tmp_path):
+    """The same parts written as an assembly file (docs/assemblies.md) give the same link."""
+    robot = load_robot(arm.urdf(), package_paths=arm.packages)
+    wedge = arm.package / "meshes" / "wedge.obj"
+    (tmp_path / "upper.yaml").write_text(f"""parts:
+  - name: box
+    mesh: {arm.root / 'upper.stl'}
+    scale: 0.001
+    rpy: [0, 0, {YAW_BOX}]
+    translate: [0, 0, 0.1]
+  - name: wedge
+    mesh: {wedge}
+    scale: [0.001, -0.001, 0.001]
+    rpy: [{RPY_WEDGE[0]}, {RPY_WEDGE[1]}, {RPY_WEDGE[2]}]
+    translate: [0.02, 0, 0]
+  - name: knob
+    shape: sphere:0.03
+    translate: [0, 0, 0.4]
+""")
+    whole = p3d.props(str(tmp_path / "upper.yaml"), density=DENSITY).properties
+    mine = _props(robot, "upper")
+    _same(mine, (whole.mass, whole.center_of_mass, whole.inertia), rtol=1e-12)
+
+
+def test_declared_inertial_is_turned_into_the_link_frame(arm, tmp_path):
+    text = arm.urdf().read_text().replace('<origin xyz="0.005 0 0.2" rpy="0 0 0"/>',
+                                          '<origin xyz="0.005 0 0.2" rpy="0 0 1.5707963267948966"/>')
+    path = tmp_path / "turned.urdf"
+    path.write_text(text)
+    upper = next(link for link in load_robot(path, arm.packages).links if link.name == "upper")
+    # ixx and iyy of the inertial frame swap places in the link frame after a quarter turn about z.
+    np.testing.assert_allclose(np.diag(upper.inertial.inertia), [0.0095, 0.0095, 0.0011], atol=1e-15)
+    text = text.replace('ixx="0.0095"', 'ixx="0.0090"')
+    path.write_text(text)
+    upper = next(link for link in load_robot(path, arm.packages).links if link.name == "upper")
+    np.testing.assert_allclose(np.diag(upper.inertial.inertia), [0.0095, 0.0090, 0.0011], atol=1e-15)
+    np.testing.assert_allclose(upper.inertial.center, [0.005, 0, 0.2])
+
+
+def test_mjcf_inertial_quat_and_default_classes(arm):
+    path = arm.mjcf(upper_inertial='<inertial pos="0 0 0.2" quat="0.7071067811865476 0 0 0.7071067811865476" '
+                                   'mass="2" diaginertia="0.01 0.02 0.003"/>')
+    robot = load_robot(path)
+    upper = robot.links[1]
+    np.testing.assert_allclose(np.diag(upper.inertial.inertia), [0.02, 0.01, 0.003], atol=1e-15)
+    # The visual class's sphere neither collides nor is collision geometry.
+    assert len(upper.collision) == 3 and len(upper.visual) == 1
+
+
+def test_errors_name_file_link_and_element(arm):
+    with pytest.raises(InputError) as info:
+        load_robot(arm.urdf())
+    message = info.value.message
+    assert "arm.urdf: link 'upper': collision[1]" in message
+    assert "mesh package://arm_description/meshes/wedge.obj: no such file" in message
+    assert "arm_description=DIR" in message
+
+
+def test_xacro_is_refused_with_how_to_expand(tmp_path):
+    path = tmp_path / "arm.urdf.xacro"
+    path.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="a"><xacro:property name="x" '
+                    'value="1"/></robot>')
+    with pytest.raises(InputError, match="xacro"):
+        load_robot(path)
+    plain = tmp_path / "arm.urdf"
+    plain.write_text(path.read_text())
+    with pytest.raises(InputError, match="xacro"):
+        load_robot(plain)
+
+
+@pytest.mark.parametrize("text, what", [
+    ("<robot><link", "not well-formed"),
+    ("<scene/>", "none of <robot>"),
+    ('<robot><link name="a"><collision><geometry><box size="1 2"/></geometry></collision></link></robot>',
+     "box size"),
+    ('<mujoco><worldbody><body><geom type="mesh" mesh="nope"/></body></worldbody></mujoco>', "not an asset"),
+    ('<mujoco><worldbody><body><geom quat="0 0 0 0" size="1"/></body></worldbody></mujoco>', "quat"),
+    ('<mujoco><include file="x.xml"/></mujoco>', "include"),
+])
+def test_bad_descriptions_are_one_error(tmp_path, text, what):
+    path = tmp_path / "bad.xml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=what):
+        load_robot(path)
