@@ -112,7 +112,7 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
     if not (np.isfinite(mass) and mass > 0):
         out.problems.append(Problem("mass > 0", mass, f"mass {mass:g} is not positive"))
     principal = _tensor_rules(out, tensor)
-    positive = np.isfinite(mass) and mass > 0
+    positive = bool(np.isfinite(mass) and mass > 0)
     geometry = measure_link(link, role, source, mass=mass if positive else None)
     if geometry is None:
         out.notes.append(f"has no {role} geometry: checked the inertial alone")
@@ -123,7 +123,7 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
 
 
 def _tensor_rules(out: LinkCheck, tensor: np.ndarray) -> np.ndarray | None:
-    """The tensor's own rules; its principal moments (None when not finite)."""
+    """The tensor's own rules; its principal moments (None when not finite or not positive)."""
     if not np.all(np.isfinite(tensor)):
         out.problems.append(Problem("positive definite", tensor.tolist(), "the inertia is not finite"))
         return None
@@ -135,7 +135,8 @@ def _tensor_rules(out: LinkCheck, tensor: np.ndarray) -> np.ndarray | None:
     if principal[0] <= 0:
         out.problems.append(Problem("positive definite", principal.tolist(),
                                     f"principal moments {_vec(principal)}: not all positive"))
-    elif principal[0] + principal[1] < principal[2] * (1 - RTOL):
+        return None
+    if principal[0] + principal[1] < principal[2] * (1 - RTOL):
         out.problems.append(Problem("triangle inequality", principal.tolist(),
                                     f"principal moments {_vec(principal)}: I1 + I2 = "
                                     f"{principal[0] + principal[1]:.6g} < I3 = {principal[2]:.6g}"))
