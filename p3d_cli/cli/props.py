@@ -52,9 +52,12 @@ from p3d_cli.results import PropsResult
 @click.option("--combine", is_flag=True,
               help="Measure the inputs as one assembly (one placement and density for all; "
                    "--mass is the whole's): each part and the whole, as for an assembly file.")
+@click.option("--emit", type=click.Choice(["urdf", "mjcf", "sdf"]), default=None,
+              help="Print a ready <inertial> block for a robot description (SI with --units; "
+                   "the frame convention in a comment; docs/robots.md).")
 @batch_options
 def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, samples, seed, tolerance, batch,
-          placement, tessellate, units, output_units, combine):
+          placement, tessellate, units, output_units, combine, emit=None):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -90,6 +93,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, strict, method, sa
     if batch.csv and (as_json or fields):
         raise UsageError("--csv", "given with --json or --field", "choose one output format")
     style = "csv" if batch.csv else "fields" if fields else "json" if as_json else "table"
+    style = f"emit:{emit}" if emit else style
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
                    units=units, output_units=output_units)
@@ -138,6 +142,10 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, **op
     notes = tuple(f"p3d: warning: {result.facts.source}: {text}" for text in result.warnings)
     if style == "table":
         text = props_table(result)
+    elif style.startswith("emit:"):
+        from p3d_cli.robots.emit import emit_result
+
+        text = emit_result(style[5:], result)
     else:
         record = props_record(result)
         if style == "csv":

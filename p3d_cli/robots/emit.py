@@ -14,8 +14,9 @@ import numpy as np
 EMIT_FORMATS = ("urdf", "mjcf", "sdf")
 
 #: The frame convention every block states.
-CONVENTION = ("origin at the centre of mass, axes of the link frame (no rotation); inertia about the "
-              "centre of mass, positive tensor (Ixx = integral of (y^2+z^2) dm, Ixy = -integral of xy dm)")
+CONVENTION = ("origin at the centre of mass, axes of the link frame (the mesh's frame after any placement "
+              "given; no rotation); inertia about the centre of mass, positive tensor "
+              "(Ixx = integral of (y^2+z^2) dm, Ixy = -integral of xy dm)")
 
 
 def fmt(*values: float) -> str:
