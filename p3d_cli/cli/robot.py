@@ -130,15 +130,17 @@ def _record(path: str, c) -> dict:
               help="A YAML mapping of link names to masses (kg bare, or with a unit: 500 g); wins "
                    "over --mass-from and --density.")
 @click.option("--force", is_flag=True, help="Also fill links whose geometry is open, flat or inward-wound.")
+@click.option("--principal", is_flag=True,
+              help="MJCF: write quat + diaginertia (the principal frame) instead of fullinertia.")
 @click.option("-o", "--output", "out", default=None, metavar="OUT", help="Write here (default: stdout).")
 @_flagged
-def fill(description, package_paths, role, density, mass_from, masses, force, out):
+def fill(description, package_paths, role, density, mass_from, masses, force, principal, out):
     """Write the description with each link's <inertial> computed from its geometry.
 
     URDF gets origin xyz (rpy 0) and the full ixx..izz in the link frame; MJCF pos, mass and
-    fullinertia in the body frame; SDF pose and inertia. Every other byte of the file is left
-    as it was. A link whose geometry is open, flat, inward-wound or missing keeps its declared
-    inertial (reported on stderr) unless --force.
+    fullinertia in the body frame (--principal: quat and diaginertia); SDF pose and inertia.
+    Every other byte of the file is left as it was. A link whose geometry is open, flat,
+    inward-wound or missing keeps its declared inertial (reported on stderr) unless --force.
 
     \b
     Examples:
@@ -150,7 +152,8 @@ def fill(description, package_paths, role, density, mass_from, masses, force, ou
 
     robot_ = load_robot(description, package_paths)
     table = load_masses(masses) if masses else None
-    result = fill_robot(robot_, role=role, density=density, mass_from=mass_from, masses=table, force=force)
+    result = fill_robot(robot_, role=role, density=density, mass_from=mass_from, masses=table, force=force,
+                        principal=principal)
     for link in result.links:
         if link.status == "kept":
             click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: left as it was: "

@@ -24,7 +24,7 @@ def fmt(*values: float) -> str:
     return " ".join(repr(float(v) + 0.0) for v in values)
 
 
-def inertial_lines(format: str, mass: float, center, inertia) -> list[str]:
+def inertial_lines(format: str, mass: float, center, inertia, principal: bool = False) -> list[str]:
     """The lines of one ``<inertial>`` element (without indentation of the whole).
 
     Parameters
@@ -35,6 +35,9 @@ def inertial_lines(format: str, mass: float, center, inertia) -> list[str]:
         Centre of mass in the link frame.
     inertia : (3, 3) array_like
         About the centre of mass, link-frame axes.
+    principal : bool
+        MJCF only: write ``quat`` and ``diaginertia`` (the principal frame, as MuJoCo stores it)
+        instead of ``fullinertia``.
     """
     c = np.asarray(center, dtype=np.float64)
     i = np.asarray(inertia, dtype=np.float64)
@@ -43,6 +46,15 @@ def inertial_lines(format: str, mass: float, center, inertia) -> list[str]:
     if format == "urdf":
         return ["<inertial>", f'  <origin xyz="{fmt(*c)}" rpy="0 0 0"/>', f'  <mass value="{fmt(mass)}"/>',
                 "  <inertia " + " ".join(f'{k}="{fmt(v)}"' for k, v in six.items()) + "/>", "</inertial>"]
+    if format == "mjcf" and principal:
+        from p3d_cli.inertia import principal_frame
+        from p3d_cli.rotation import matrix_quaternion
+
+        moments, axes = principal_frame(i)
+        # Rows of ``axes`` are the principal axes in the link frame, so R = axesᵀ takes the
+        # principal frame to the link frame: I = R diag(moments) Rᵀ.
+        quat = matrix_quaternion(axes.T)
+        return [f'<inertial pos="{fmt(*c)}" quat="{fmt(*quat)}" mass="{fmt(mass)}" diaginertia="{fmt(*moments)}"/>']
     if format == "mjcf":
         full = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
         return [f'<inertial pos="{fmt(*c)}" mass="{fmt(mass)}" fullinertia="{fmt(*full)}"/>']

@@ -85,7 +85,7 @@ def load_masses(path: str) -> dict[str, float]:
 
 
 def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from: str | None = None,
-               masses: dict | None = None, force: bool = False) -> FillResult:
+               masses: dict | None = None, force: bool = False, principal: bool = False) -> FillResult:
     """The description with each link's inertial computed from its ``role`` geometry.
 
     Parameters
@@ -100,6 +100,8 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         Link name -> mass (kg, or text with a unit); wins over the others.
     force : bool
         Also fill links whose geometry is open, flat or inward-wound.
+    principal : bool
+        MJCF: write ``quat`` + ``diaginertia`` rather than ``fullinertia``.
 
     Raises
     ------
@@ -121,7 +123,8 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         filled = _fill_link(robot, link, role, rho, mass_from, given, force)
         report.append(filled)
         if filled.status == "filled":
-            edits.append(_edit(robot, link, inertial_lines(robot.format, filled.mass, filled.center, filled.inertia)))
+            lines = inertial_lines(robot.format, filled.mass, filled.center, filled.inertia, principal)
+            edits.append(_edit(robot, link, lines))
     data = robot.data
     for start, end, text in sorted(edits, reverse=True):
         data = data[:start] + text + data[end:]

@@ -93,6 +93,16 @@ def test_filled_mjcf_compiles_in_mujoco_with_p3ds_inertias(arm):
         _close(*_mujoco_body(model, name), expected)
 
 
+def test_principal_mjcf_form_compiles_to_the_same_bodies(arm):
+    mujoco = pytest.importorskip("mujoco")
+    _, full, _ = _filled(arm, "mjcf")
+    _, out, _ = _filled(arm, "mjcf", principal=True)
+    assert b"diaginertia" in out.read_bytes() and b"fullinertia" not in out.read_bytes()
+    a, b = (mujoco.MjModel.from_xml_path(str(p)) for p in (full, out))
+    for name in ("base", "upper"):
+        _close(*_mujoco_body(b, name), _mujoco_body(a, name), rtol=1e-12)
+
+
 def test_mujoco_exact_mesh_inertia_equals_p3ds(arm):
     """MuJoCo's own inertia="exact" of the closed meshes (float32 vertices, integer millimetres
     here, so exact) gives the bodies p3d fills."""
