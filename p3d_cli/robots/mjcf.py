@@ -274,11 +274,3 @@ def _inertial(context: _Context, a: dict[str, str], where: str):
         raise InputError(where, "has neither diaginertia nor fullinertia", "give the inertia")
     return rotated_inertial(mass[0], pos, context.rotation(a, where), tensor)
 
-
-def mjcf_inertial_text(mass: float, center, inertia) -> str:
-    """The ``<inertial>`` element MuJoCo reads: ``pos`` and ``fullinertia`` in the body frame."""
-    from p3d_cli.robots.emit import fmt
-
-    i = inertia
-    full = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
-    return (f'<inertial pos="{fmt(*center)}" mass="{fmt(mass)}" fullinertia="{fmt(*full)}"/>')
