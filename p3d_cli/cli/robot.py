@@ -51,6 +51,12 @@ def robot() -> None:
     primitive (box, cylinder, sphere, capsule, ellipsoid) in the link frame. Descriptions are
     in SI (m, kg). xacro files must be expanded first (xacro robot.urdf.xacro > robot.urdf).
     See docs/robots.md.
+
+    \b
+    Examples:
+      p3d robot check robot.urdf --package-path my_robot=./my_robot
+      p3d robot fill robot.urdf --density 2.7g/cm^3 -o filled.urdf
+      p3d props link.stl --units mm --density 2.7g/cm^3 --emit urdf
     """
 
 

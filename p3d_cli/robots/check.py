@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from p3d_cli.errors import RangeError
 from p3d_cli.robots.geometry import LinkGeometry, measure_link
 from p3d_cli.robots.model import Link, Robot
 
@@ -113,7 +114,11 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
         out.problems.append(Problem("mass > 0", mass, f"mass {mass:g} is not positive"))
     principal = _tensor_rules(out, tensor)
     positive = bool(np.isfinite(mass) and mass > 0)
-    geometry = measure_link(link, role, source, mass=mass if positive else None)
+    try:
+        geometry = measure_link(link, role, source, mass=mass if positive else None)
+    except RangeError as exc:
+        out.problems.append(Problem("density", mass, f"{exc.what}: no link is that heavy"))
+        return out
     if geometry is None:
         out.notes.append(f"has no {role} geometry: checked the inertial alone")
         return out
@@ -127,19 +132,26 @@ def _tensor_rules(out: LinkCheck, tensor: np.ndarray) -> np.ndarray | None:
     if not np.all(np.isfinite(tensor)):
         out.problems.append(Problem("positive definite", tensor.tolist(), "the inertia is not finite"))
         return None
+    # Work on the tensor divided by its largest entry, so that no sum overflows (a file may hold
+    # 1e308); the eigenvalues scale back by the same factor.
     scale = max(float(np.abs(tensor).max()), 1e-300)
-    asymmetry = float(np.abs(tensor - tensor.T).max())
-    if asymmetry > 1e-9 * scale:
-        out.problems.append(Problem("symmetric", asymmetry, f"the inertia is not symmetric (off by {asymmetry:g})"))
-    principal = np.linalg.eigvalsh(0.5 * (tensor + tensor.T))
+    unit = tensor / scale
+    asymmetry = float(np.abs(unit - unit.T).max())
+    if asymmetry > 1e-9:
+        out.problems.append(Problem("symmetric", asymmetry * scale,
+                                    f"the inertia is not symmetric (off by {asymmetry * scale:g})"))
+    principal = np.linalg.eigvalsh(0.5 * (unit + unit.T))
+    with np.errstate(over="ignore"):  # 1e308-sized moments may come back as inf: still reported
+        principal = principal * scale
+        sums = principal[0] + principal[1]
     if principal[0] <= 0:
         out.problems.append(Problem("positive definite", principal.tolist(),
                                     f"principal moments {_vec(principal)}: not all positive"))
         return None
-    if principal[0] + principal[1] < principal[2] * (1 - RTOL):
+    if sums < principal[2] * (1 - RTOL):
         out.problems.append(Problem("triangle inequality", principal.tolist(),
                                     f"principal moments {_vec(principal)}: I1 + I2 = "
-                                    f"{principal[0] + principal[1]:.6g} < I3 = {principal[2]:.6g}"))
+                                    f"{sums:.6g} < I3 = {principal[2]:.6g}"))
     return principal
 
 
@@ -164,17 +176,18 @@ def _geometry_rules(out: LinkCheck, inertial, principal, geometry: LinkGeometry,
     if principal is None:
         return
     volume = result.properties.volume
-    density = inertial.mass / volume
+    with np.errstate(all="ignore"):  # extreme declared numbers: inf or nan ratios fail below
+        density = inertial.mass / volume
+        expected = result.properties.principal_moments
+        ratios = principal / expected
     out.implied_density = density
     lo, hi = density_range
-    if not lo <= density <= hi:
+    if not lo <= density <= hi:  # nan fails too
         out.problems.append(Problem("density", density, f"mass {inertial.mass:g} kg over the geometry's volume "
                                     f"{volume:.6g} m^3 is {density:.6g} kg/m^3, outside {lo:g}..{hi:g} "
                                     "(a unit slip: grams for kg, or a mesh in mm without its scale?)"))
-    expected = result.properties.principal_moments
-    ratios = principal / expected
     out.moment_ratios = ratios
-    if np.any(ratios > tolerance) or np.any(ratios < 1 / tolerance):
+    if not np.all((ratios <= tolerance) & (ratios >= 1 / tolerance)):
         out.problems.append(Problem("principal moments", ratios.tolist(),
                                     f"principal moments {_vec(principal)} are {_vec(ratios, 3)} times the "
                                     f"geometry's at this mass {_vec(expected)}, beyond a factor {tolerance:g}"))

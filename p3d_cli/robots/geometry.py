@@ -12,7 +12,9 @@ import dataclasses
 from dataclasses import dataclass
 
 from p3d_cli.assembly import Assembly, Part
-from p3d_cli.errors import UsageError
+import numpy as np
+
+from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.placement import IDENTITY
 from p3d_cli.results import MassProperties, PropsResult
 from p3d_cli.robots.model import Link
@@ -59,6 +61,8 @@ def measure_link(link: Link, role: str, source: str, *, density: float | None = 
     ------
     InputError
         A mesh that cannot be read.
+    RangeError
+        ``mass`` so large that the inertia overflows.
     """
     from p3d_cli.assemble import assembly_props
 
@@ -66,17 +70,28 @@ def measure_link(link: Link, role: str, source: str, *, density: float | None = 
         return None
     assembly = link_assembly(link, role, source)
     try:
-        result = assembly_props(assembly, IDENTITY, density=1.0 if density is None else density)
+        # Sizes near float64's limit overflow inside the closed forms: p3d reports them as one
+        # RangeError, so numpy's warnings would only be noise.
+        with np.errstate(all="ignore"):
+            result = assembly_props(assembly, IDENTITY, density=1.0 if density is None else density)
     except UsageError as exc:
         if exc.where != "parts":
             raise
         return LinkGeometry(None, False, ("the geometry encloses no volume (flat or empty)",))
+    except OverflowError:
+        raise RangeError(assembly.source, "a geometry's size overflows float64 in its moments",
+                         "check the sizes and their unit (metres)") from None
     problems = list(result.warnings)
     if result.facts.closed is False and not problems:
         problems.append("a mesh is not closed")
     if mass is not None and result.properties.mass > 0:
         # Every moment of mass is linear in the density: scale them all to the mass asked for.
-        result = dataclasses.replace(result, properties=scaled(result.properties, mass / result.properties.mass))
+        with np.errstate(all="ignore"):  # overflow is refused just below
+            props = scaled(result.properties, mass / result.properties.mass)
+        if not (np.isfinite(props.mass) and np.all(np.isfinite(props.inertia))):
+            raise RangeError(f"{source}: link {link.name!r}", f"mass {mass!r} makes the inertia overflow float64",
+                             "check the mass and its unit")
+        result = dataclasses.replace(result, properties=props)
     return LinkGeometry(result, not problems, tuple(problems))
 
 

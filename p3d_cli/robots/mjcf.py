@@ -101,9 +101,14 @@ class _Context:
             A malformed or degenerate orientation (a zero quaternion or axis).
         """
         try:
-            return self._rotation(a, where)
+            with np.errstate(all="ignore"):  # huge axes overflow to inf or nan: refused below
+                r = self._rotation(a, where)
         except UsageError as exc:
             raise InputError(f"{where}: {exc.where}", exc.what, "give a valid orientation") from None
+        if r is not None and not np.all(np.isfinite(r)):
+            raise InputError(where, "the orientation is not finite (an axis too long or zero)",
+                             "give a valid orientation")
+        return r
 
     def _rotation(self, a: dict[str, str], where: str) -> np.ndarray | None:
         from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_quaternion
@@ -140,9 +145,9 @@ def z_to(direction: np.ndarray) -> np.ndarray:
     """The shortest turn taking +z to ``direction`` (MuJoCo's ``mju_quatZ2Vec``)."""
     from p3d_cli.rotation import rotation_from_axis_degrees
 
-    length = float(np.linalg.norm(direction))
-    if not length > 0:
-        raise UsageError("zaxis", "is the zero vector", "")
+    length = math.hypot(*direction)
+    if not 0 < length < math.inf:
+        raise UsageError("zaxis", "is zero or not finite", "")
     d = direction / length
     axis = np.cross([0.0, 0.0, 1.0], d)
     s = np.linalg.norm(axis)
@@ -227,11 +232,12 @@ def _geom(context: _Context, a: dict[str, str], where: str, role: str, frame: Pl
     scale = None
     if "fromto" in a and kind in ("capsule", "cylinder", "box", "ellipsoid"):
         ends = np.array(numbers(a["fromto"], 6, f"{where}: fromto"))
-        axis = ends[3:] - ends[:3]
-        half = 0.5 * float(np.linalg.norm(axis))
-        if half == 0:
-            raise InputError(where, "fromto has equal ends", "give two different points")
-        pos, rotation = list(0.5 * (ends[:3] + ends[3:])), z_to(axis)
+        with np.errstate(over="ignore"):  # ends near float64's limit: refused just below
+            axis = ends[3:] - ends[:3]
+        half = 0.5 * math.hypot(*axis)  # hypot: no overflow in the squares
+        if not 0 < half < math.inf:
+            raise InputError(where, "fromto's ends are equal or too far apart", "give two different points")
+        pos, rotation = list(0.5 * ends[:3] + 0.5 * ends[3:]), z_to(axis)
         size = [size[0], half] if kind in ("capsule", "cylinder") else [size[0], size[1] if len(size) > 1
                                                                          else size[0], half]
     if kind == "mesh":

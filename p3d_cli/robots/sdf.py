@@ -69,6 +69,9 @@ def _model(path: str, model: Node, prefix: str, packages: dict[str, str], links:
     for node in model.children:
         if node.tag == "model":
             _model(path, node, f"{prefix}{node.attrib.get('name', '')}::", packages, links)
+        if node.tag == "include":
+            raise InputError(f"{path}: line {node.line}", "<include> is not read",
+                             "give the model with its includes expanded (gz sdf -p model.sdf)")
         if node.tag != "link":
             continue
         name = node.attrib.get("name")

@@ -114,9 +114,27 @@ def test_xacro_is_refused_with_how_to_expand(tmp_path):
     ('<mujoco><worldbody><body><geom type="mesh" mesh="nope"/></body></worldbody></mujoco>', "not an asset"),
     ('<mujoco><worldbody><body><geom quat="0 0 0 0" size="1"/></body></worldbody></mujoco>', "quat"),
     ('<mujoco><include file="x.xml"/></mujoco>', "include"),
+    ('<sdf version="1.9"><model name="m"><include><uri>model://x</uri></include></model></sdf>', "include"),
 ])
 def test_bad_descriptions_are_one_error(tmp_path, text, what):
     path = tmp_path / "bad.xml"
     path.write_text(text)
     with pytest.raises(InputError, match=what):
         load_robot(path)
+
+
+def test_entities_are_refused(tmp_path):
+    path = tmp_path / "laughs.urdf"
+    path.write_text('<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;">]>'
+                    '<robot name="&b;"/>')
+    with pytest.raises(InputError, match="entities"):
+        load_robot(path)
+
+
+@pytest.mark.parametrize("value", ["nan 0 0", "inf 0 0", "1 2", "a b c", "1e400 0 0"])
+def test_numbers_must_be_finite_and_counted(arm, tmp_path, value):
+    text = arm.urdf().read_text().replace('<origin xyz="0 0 0.4"/>', f'<origin xyz="{value}"/>')
+    path = tmp_path / "bad.urdf"
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"link 'upper': collision\[2\]: origin xyz"):
+        load_robot(path, arm.packages)
