@@ -96,6 +96,8 @@ def check(description, package_paths, role, tolerance, density_range, com_slack,
 
     low_high = _range(density_range)
     robot_ = load_robot(description, package_paths)
+    for note in robot_.notes:
+        click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high)
     for c in checks:
         if as_json:
@@ -157,6 +159,8 @@ def fill(description, package_paths, role, density, mass_from, masses, force, pr
     from p3d_cli.robots import fill_robot, load_masses, load_robot
 
     robot_ = load_robot(description, package_paths)
+    for note in robot_.notes:
+        click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     table = load_masses(masses) if masses else None
     result = fill_robot(robot_, role=role, density=density, mass_from=mass_from, masses=table, force=force,
                         principal=principal)

@@ -166,16 +166,17 @@ def _indent_of(data: bytes, offset: int) -> bytes:
 def _edit(robot: Robot, link: Link, lines: list[str]) -> tuple[int, int, bytes]:
     """The byte edit that puts ``lines`` in place of the link's inertial, or as its first child."""
     data = robot.data
+    newline = b"\r\n" if b"\r\n" in data else b"\n"  # keep a Windows file's line endings
     node = link.inertial_node
     if node is not None:
         indent = _indent_of(data, node.start)
-        return node.start, node.end, (b"\n" + indent).join(s.encode() for s in lines)
+        return node.start, node.end, (newline + indent).join(s.encode() for s in lines)
     own = _indent_of(data, link.node.start)
     first = link.node.children[0] if link.node.children else None
     indent = _indent_of(data, first.start) if first is not None else own + b"  "
-    body = b"".join(b"\n" + indent + s.encode() for s in lines)
+    body = b"".join(newline + indent + s.encode() for s in lines)
     tag_end = _tag_end(data, link.node.start)
     if data[tag_end - 2:tag_end] == b"/>":  # <link name="x"/>: open it
         tag = link.node.tag.encode()
-        return tag_end - 2, tag_end, b">" + body + b"\n" + own + b"</" + tag + b">"
+        return tag_end - 2, tag_end, b">" + body + newline + own + b"</" + tag + b">"
     return tag_end, tag_end, body

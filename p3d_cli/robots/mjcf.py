@@ -41,6 +41,10 @@ class _Context:
             compiler.update(node.attrib)
         self.degrees = compiler.get("angle", "degree") != "radian"
         self.eulerseq = compiler.get("eulerseq", "xyz")
+        if len(self.eulerseq) != 3 or any(c not in "xyzXYZ" for c in self.eulerseq):
+            raise InputError(f"{path}: compiler eulerseq", f"{self.eulerseq!r} is not three of x, y, z, X, Y, Z",
+                             "write e.g. xyz (rotating axes) or XYZ (fixed axes)")
+        self.from_geoms = compiler.get("inertiafromgeom", "auto") == "true"
         folder = os.path.dirname(path)
         meshdir = compiler.get("meshdir", compiler.get("assetdir", ""))
         self.meshdir = os.path.join(folder, meshdir)
@@ -174,7 +178,9 @@ def read_mjcf(path: str, data: bytes, root: Node, packages: dict[str, str]) -> R
         for node, childclass, _frame in _children(context, world, "main", None):
             if node.tag == "body":
                 _body(context, node, childclass, links)
-    return Robot(path, "mjcf", data, links)
+    notes = ['<compiler inertiafromgeom="true">: MuJoCo ignores every declared <inertial> and computes '
+             'the bodies from their geoms'] if context.from_geoms else []
+    return Robot(path, "mjcf", data, links, notes)
 
 
 def _children(context: _Context, node: Node, childclass: str, frame: Placement | None):

@@ -102,12 +102,16 @@ class Robot:
     data : bytes
         The file's bytes (``fill`` edits them).
     links : list of Link
+    notes : list of str
+        What the whole file says that changes how its inertials are used (MJCF's
+        ``inertiafromgeom="true"``: MuJoCo ignores every declared inertial).
     """
 
     path: str
     format: str
     data: bytes
     links: list[Link]
+    notes: list[str] = field(default_factory=list)
 
 
 def spec(name: str, *values: float) -> str:

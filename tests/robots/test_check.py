@@ -101,3 +101,29 @@ def test_open_geometry_is_not_compared(arm, tmp_path):
     checks = check_robot(load_robot(arm.urdf(upper_mass="1900"), arm.packages))
     upper = checks[1]
     assert upper.ok and any("not a closed solid" in note for note in upper.notes)
+
+
+def test_mesh_in_millimetres_without_its_scale_is_caught(arm, tmp_path):
+    text = arm.urdf().read_text().replace('<mesh filename="upper.stl" scale="0.001 0.001 0.001"/>',
+                                          '<mesh filename="upper.stl"/>')
+    path = tmp_path / "mm.urdf"
+    path.write_text(text)
+    failures = _failures(path, arm.packages)
+    assert list(failures) == ["upper"] and "density" in failures["upper"]
+
+
+def test_visual_geometry_on_request(arm):
+    # The visual sphere of radius 0.5 m is 0.52 m^3: 1.9 kg over it is 3.6 kg/m^3, not plausible.
+    assert _failures(arm.urdf(), arm.packages, role="visual") == {"upper": ["density", "principal moments"]}
+    result = run("robot", "check", arm.urdf(), "--package-path", f"arm_description={arm.package}",
+                 "--from", "visual", "--json")
+    assert result.exit_code == 1
+    assert [r["ok"] for r in map(json.loads, result.stdout.splitlines())] == [True, False, True]
+
+
+def test_mjcf_inertia_from_geoms_is_said(arm, tmp_path):
+    text = arm.mjcf().read_text().replace('<compiler ', '<compiler inertiafromgeom="true" ')
+    path = tmp_path / "fromgeom.xml"
+    path.write_text(text)
+    result = run("robot", "check", path)
+    assert result.exit_code == 0 and "MuJoCo ignores every declared <inertial>" in result.stderr

@@ -168,3 +168,21 @@ def test_cli_writes_stdout_and_reports_links(arm):
     assert result.exit_code == 0, result.output
     assert result.stdout.count("<inertial ") == 2 and 'fullinertia="' in result.stdout
     assert "2 of 2 links filled" in result.stderr
+
+
+def test_windows_line_endings_and_links_without_inertial(arm, tmp_path):
+    text = arm.urdf().read_text()
+    text = re.sub(r"\s*<inertial>.*?</inertial>", "", text, count=1, flags=re.S)  # base declares none now
+    path = tmp_path / "crlf.urdf"
+    path.write_bytes(text.replace("\n", "\r\n").encode())
+    data = fill_robot(load_robot(path, arm.packages), density=DENSITY).data
+    assert b"\n" not in data.replace(b"\r\n", b"")
+    base = load_robot_bytes(tmp_path, data, arm.packages).links[0]
+    _close(base.inertial.mass, base.inertial.center, base.inertial.inertia, oracle.base_link())
+    assert data.index(b"<inertial>") < data.index(b"<collision>")  # the link's first child
+
+
+def load_robot_bytes(folder, data, packages):
+    path = folder / "filled-bytes.urdf"
+    path.write_bytes(data)
+    return load_robot(path, packages)
