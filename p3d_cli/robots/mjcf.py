@@ -86,10 +86,8 @@ class _Context:
         if not file:
             self.meshes[name] = ("", None)  # inline or generated: reported when a geom uses it
             return
+        # A missing file is reported by the geom that uses it (naming its body), not here.
         path = file if os.path.isabs(file) else os.path.join(self.meshdir, file)
-        if not os.path.isfile(path):
-            raise InputError(f"{self.path}: mesh {name!r}", f"file {file}: no such file ({path})",
-                             "mesh files are found under the compiler's meshdir, relative to the model")
         scale = numbers(a.get("scale"), 3, f"{where}: scale")
         self.meshes[name] = (path, None if scale is None or all(s == 1 for s in scale) else np.array(scale))
 
@@ -253,6 +251,9 @@ def _geom(context: _Context, a: dict[str, str], where: str, role: str, frame: Pl
         thing, scale = context.meshes[mesh]
         if not thing:
             raise _Skipped(f"mesh {mesh!r} has no file (inline or generated meshes are not read)")
+        if not os.path.isfile(thing):
+            raise InputError(where, f"mesh {mesh!r}: {thing}: no such file",
+                             "mesh files are found under the compiler's meshdir, relative to the model")
     elif kind in ("plane", "hfield", "sdf"):
         raise _Skipped(f"a {kind} geom has no volume p3d can measure")
     else:

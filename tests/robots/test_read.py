@@ -94,6 +94,14 @@ def test_errors_name_file_link_and_element(arm):
     assert "arm_description=DIR" in message
 
 
+def test_mjcf_missing_mesh_names_the_body_and_geom(arm):
+    (arm.root / "meshes" / "wedge.obj").unlink()
+    with pytest.raises(InputError) as info:
+        load_robot(arm.mjcf())
+    assert "arm.xml: body 'upper': collision geom[1]: mesh 'wedge': " in info.value.message
+    assert "meshes/wedge.obj: no such file" in info.value.message
+
+
 def test_xacro_is_refused_with_how_to_expand(tmp_path):
     path = tmp_path / "arm.urdf.xacro"
     path.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="a"><xacro:property name="x" '
