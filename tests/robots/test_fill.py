@@ -186,3 +186,12 @@ def load_robot_bytes(folder, data, packages):
     path = folder / "filled-bytes.urdf"
     path.write_bytes(data)
     return load_robot(path, packages)
+
+
+def test_inward_wound_mesh_is_kept(arm):
+    from tests.robots.conftest import BOX_MM, box_mesh, write_stl
+
+    v, f = box_mesh(BOX_MM, (-20.0, -30.0, 0.0))
+    write_stl(arm.root / "upper.stl", v, f[:, ::-1])
+    result = fill_robot(load_robot(arm.urdf(), arm.packages), density=DENSITY)
+    assert result.links[1].status == "kept" and "inward" in result.links[1].reason

@@ -146,3 +146,56 @@ def test_numbers_must_be_finite_and_counted(arm, tmp_path, value):
     path.write_text(text)
     with pytest.raises(InputError, match=r"link 'upper': collision\[2\]: origin xyz"):
         load_robot(path, arm.packages)
+
+
+def _geom_rotations(tmp_path, geoms: str, compiler: str = ""):
+    path = tmp_path / "turns.xml"
+    path.write_text(f"<mujoco>{compiler}<worldbody><body name='b'>{geoms}</body></worldbody></mujoco>")
+    return [g.placement.rotation for g in load_robot(path).links[0].collision]
+
+
+def test_mjcf_orientations_agree(tmp_path):
+    quarter = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    box = 'type="box" size="0.1 0.2 0.3"'
+    turns = _geom_rotations(tmp_path, "".join(f"<geom {box} {o}/>" for o in (
+        'quat="1 0 0 1"', 'axisangle="0 0 2 90"', 'euler="0 0 90"', 'xyaxes="0 1 0 -3 0 0"')))
+    for r in turns:
+        np.testing.assert_allclose(r, quarter, atol=1e-15)
+    (radian,) = _geom_rotations(tmp_path, f'<geom {box} euler="0 0 1.5707963267948966"/>',
+                                '<compiler angle="radian"/>')
+    np.testing.assert_allclose(radian, quarter, atol=1e-15)
+    # Rotating axes (xyz): Rx then Ry about the new y; fixed axes (XYZ): Rz Ry Rx.
+    from tests.robots.oracle import rx, ry, rz
+    (moving,) = _geom_rotations(tmp_path, f'<geom {box} euler="10 20 30"/>')
+    (fixed,) = _geom_rotations(tmp_path, f'<geom {box} euler="10 20 30"/>', '<compiler eulerseq="XYZ"/>')
+    a, b, c = np.radians([10, 20, 30])
+    np.testing.assert_allclose(moving, rx(a) @ ry(b) @ rz(c), atol=1e-15)
+    np.testing.assert_allclose(fixed, rz(c) @ ry(b) @ rx(a), atol=1e-15)
+    (zaxis,) = _geom_rotations(tmp_path, f'<geom {box} zaxis="1 0 0"/>')
+    np.testing.assert_allclose(zaxis @ [0, 0, 1], [1, 0, 0], atol=1e-15)
+
+
+def test_mjcf_frames_and_childclass(tmp_path):
+    path = tmp_path / "frames.xml"
+    path.write_text("""<mujoco><default><default class="big"><geom size="0.5"/></default></default>
+      <worldbody><body name="b" childclass="big">
+        <frame pos="1 0 0" euler="0 0 90"><geom pos="1 0 0"/></frame>
+      </body></worldbody></mujoco>""")
+    (geom,) = load_robot(path).links[0].collision
+    assert geom.thing == "sphere:0.5"
+    np.testing.assert_allclose(geom.placement.translation, [1, 1, 0], atol=1e-15)
+
+
+def test_sdf_pose_forms_agree(tmp_path):
+    def inertia(pose: str):
+        path = tmp_path / "pose.sdf"
+        path.write_text(f"""<sdf version="1.9"><model name="m"><link name="l"><inertial>{pose}<mass>2</mass>
+          <inertia><ixx>1</ixx><iyy>2</iyy><izz>3</izz></inertia></inertial></link></model></sdf>""")
+        return load_robot(path).links[0].inertial.inertia
+
+    rpy = inertia("<pose>0 0 0 0 0 1.5707963267948966</pose>")
+    np.testing.assert_allclose(np.diag(rpy), [2, 1, 3], atol=1e-15)
+    np.testing.assert_allclose(inertia('<pose degrees="true">0 0 0 0 0 90</pose>'), rpy, atol=1e-15)
+    half = np.sqrt(0.5)
+    np.testing.assert_allclose(inertia(f'<pose rotation_format="quat_xyzw">0 0 0 0 0 {half} {half}</pose>'), rpy,
+                               atol=1e-15)
