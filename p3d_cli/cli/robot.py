@@ -116,7 +116,10 @@ def _range(text: str) -> tuple[float, float]:
     try:
         low, high = (float(x) for x in text.split(","))
     except ValueError:
-        raise UsageError("--density-range", f"{text!r} is not LOW,HIGH", "give e.g. 50,25000") from None
+        low = high = float("nan")
+    if not 0 < low < high < float("inf"):
+        raise UsageError("--density-range", f"{text!r} is not LOW,HIGH with 0 < LOW < HIGH",
+                         "give e.g. 50,25000 (kg/m^3)")
     return low, high
 
 

@@ -111,7 +111,7 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         A mesh that cannot be read.
     """
     if mass_from not in (None, "declared"):
-        raise UsageError("mass_from", f"{mass_from!r} is not a mass source", "give mass_from='declared'")
+        raise UsageError("mass_from", f"{mass_from!r} is not a mass source", "give mass_from=declared")
     rho = None if density is None else _quantity(density, "density", "density")
     given = {name: _quantity(v, "mass", "masses") for name, v in (masses or {}).items()}
     unknown = sorted(set(given) - {link.name for link in robot.links})
@@ -142,8 +142,8 @@ def _fill_link(robot: Robot, link: Link, role: str, rho, mass_from, given, force
         elif rho is None:
             return FilledLink(link.name, "kept", "declares no positive mass to keep")
     if mass is None and rho is None:
-        raise UsageError("density", f"{robot.path}: link {link.name!r} has no mass: no density, no declared mass "
-                         "kept and no entry in masses", "give density=, mass_from='declared' or masses=")
+        raise UsageError(f"{robot.path}: link {link.name!r}", "has no mass: no density, no declared mass kept "
+                         "and no entry in masses", "give density=D, mass_from=declared or masses=TABLE")
     geometry = measure_link(link, role, robot.path, density=rho if mass is None else None, mass=mass)
     if geometry.result is None or (not geometry.solid and not force):
         what = "; ".join(geometry.problems)

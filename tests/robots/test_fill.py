@@ -144,7 +144,7 @@ def test_masses_table_with_units(arm, tmp_path):
 
 
 def test_no_mass_source_is_a_usage_error(arm):
-    with pytest.raises(UsageError, match="link 'base' has no mass"):
+    with pytest.raises(UsageError, match="link 'base': has no mass"):
         fill_robot(load_robot(arm.urdf(), arm.packages))
     with pytest.raises(UsageError, match="names no link 'elbow'"):
         fill_robot(load_robot(arm.urdf(), arm.packages), masses={"elbow": 1.0})
