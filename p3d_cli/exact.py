@@ -69,8 +69,7 @@ def _exact_props(solid: Solid, placement: Placement, tessellate, density, mass, 
         facts = MeshFacts(solid.source, "tessellated", len(triangles), True, placement.triangles_bounds(triangles))
         result = PropsResult(facts, props, "exact", solid.warnings, exact_uncertainty(moments, props))
     else:
-        unplaced = solid.shape.moments()
-        check_range(solid.source, None, unplaced)
+        unplaced = shape_moments(solid)
         moments = placement.moments(unplaced)
         check_range(solid.source, unplaced, moments)
         props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
@@ -104,10 +103,24 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
 def solid_moments(solid: Solid) -> Moments:
     """The unplaced volume moments of a shape (closed forms) or a mesh (one analysis pass)."""
     if solid.shape is not None:
-        moments = solid.shape.moments()
-        check_range(solid.source, None, moments)
-        return moments
+        return shape_moments(solid)
     return analyze(solid.mesh, solid.mesh.where).moments
+
+
+def shape_moments(solid: Solid) -> Moments:
+    """A shape's closed-form moments, range-checked (math's ``**`` raises where numpy gives inf).
+
+    Raises
+    ------
+    RangeError
+    """
+    try:
+        moments = solid.shape.moments()
+    except OverflowError:
+        raise RangeError(solid.source, "the volume or its moments overflow float64",
+                         "measure in a larger unit (e.g. km instead of mm)") from None
+    check_range(solid.source, None, moments)
+    return moments
 
 
 def check_range(where: str, before: Moments | None, after: Moments) -> None:

@@ -220,5 +220,6 @@ cli.commands = _Commands({
     "check": "p3d_cli.cli.check",
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
+    "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })

@@ -58,8 +58,11 @@ from p3d_cli.results import PropsResult
 @click.option("--combine", is_flag=True,
               help="Measure the inputs as one assembly (one placement and density for all; "
                    "--mass is the whole's): each part and the whole, as for an assembly file.")
+@click.option("--emit", type=click.Choice(["urdf", "mjcf", "sdf"]), default=None,
+              help="Print a ready <inertial> block for a robot description (SI with --units; "
+                   "the frame convention in a comment; docs/robots.md).")
 def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict, settings, method, samples, seed,
-          tolerance, batch, placement, tessellate, units, output_units, combine):
+          tolerance, batch, placement, tessellate, units, output_units, combine, emit=None):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -93,6 +96,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
     parts:, docs/assemblies.md) is measured part by part and as a whole.
     """
     style = output_style(as_json, batch.csv, fields, "table")
+    style = f"emit:{emit}" if emit else style
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
                    units=units, output_units=output_units)
@@ -155,6 +159,10 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
     kept = settings.keep(result.facts.source, result.warnings)
     if style == "table":
         text = props_table(result, precision or 10)
+    elif style.startswith("emit:"):
+        from p3d_cli.robots.emit import emit_result
+
+        text = emit_result(style[5:], result)
     else:
         record = props_record(result)
         if style == "csv":

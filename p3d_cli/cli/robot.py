@@ -1,0 +1,188 @@
+"""``p3d robot``: check and fill the inertials of URDF, MJCF and SDF robot descriptions."""
+
+from __future__ import annotations
+
+import functools
+import sys
+
+import click
+
+from p3d_cli.cli import output
+from p3d_cli.cli.options import Quantity
+from p3d_cli.errors import P3DError, UsageError
+
+#: The robot library's parameter names as this command's flags (the rest: main.FLAGS).
+_FLAGS = {"package_paths": "--package-path", "density_range": "--density-range", "mass_from": "--mass-from",
+          "masses": "--masses"}
+
+
+def _flagged(command):
+    """Report the robot library's parameter names (``where``, and ``name=`` in the text) as this
+    command's flags."""
+    @functools.wraps(command)
+    def run(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except P3DError as exc:
+            what, hint = exc.what, exc.hint
+            for name, flag in _FLAGS.items():
+                what, hint = (t.replace(f"{name}=", f"{flag} ") for t in (what, hint))
+            raise type(exc)(_FLAGS.get(exc.where, exc.where), what, hint) from None
+    return run
+
+
+def _package_option(f):
+    return click.option("--package-path", "package_paths", multiple=True, metavar="NAME=DIR",
+                        help="Folder of the package that package://NAME/... (SDF: model://NAME/...) URIs "
+                             "name (repeatable); then ROS_PACKAGE_PATH (GZ_SIM_RESOURCE_PATH) is searched.")(f)
+
+
+def _from_option(f):
+    return click.option("--from", "role", type=click.Choice(["collision", "visual"]), default="collision",
+                        show_default=True, help="Which geometry of each link to measure.")(f)
+
+
+@click.group()
+def robot() -> None:
+    """Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.
+
+    A link is measured as an assembly of its collision geometry (or --from visual): each
+    mesh (STL, OBJ, PLY, ... at its origin, with its scale, mirrored if negative) and each
+    primitive (box, cylinder, sphere, capsule, ellipsoid) in the link frame. Descriptions are
+    in SI (m, kg). xacro files must be expanded first (xacro robot.urdf.xacro > robot.urdf).
+    See docs/robots.md.
+
+    \b
+    Examples:
+      p3d robot check robot.urdf --package-path my_robot=./my_robot
+      p3d robot fill robot.urdf --density 2.7g/cm^3 -o filled.urdf
+      p3d props link.stl --units mm --density 2.7g/cm^3 --emit urdf
+    """
+
+
+@robot.command()
+@click.argument("description", metavar="FILE")
+@_package_option
+@_from_option
+@click.option("--tolerance", type=click.FloatRange(min=1, min_open=True), default=2.0, show_default=True,
+              metavar="FACTOR", help="Allowed factor between each declared principal moment and the "
+                                     "geometry's at the declared mass (real links are not uniform).")
+@click.option("--density-range", default="50,25000", show_default=True, metavar="LOW,HIGH",
+              help="Plausible implied densities (declared mass / geometry volume), kg/m^3.")
+@click.option("--com-slack", type=click.FloatRange(min=0), default=0.05, show_default=True, metavar="FRACTION",
+              help="How far outside the geometry's bounds a centre of mass may lie, as a fraction "
+                   "of their diagonal.")
+@click.option("--json", "as_json", is_flag=True, help="One JSON record per link.")
+@_flagged
+def check(description, package_paths, role, tolerance, density_range, com_slack, as_json):
+    """Check every link's declared inertial: possible, and consistent with its geometry.
+
+    Rules: mass > 0; the inertia symmetric and positive definite; principal moments obeying
+    the triangle inequality (I1 + I2 >= I3); the centre of mass inside the geometry's bounds;
+    and, where the geometry is a closed solid, each principal moment within --tolerance of the
+    geometry's at the declared mass and the implied density within --density-range (this
+    catches mm/m and g/kg slips). One line per problem on stdout.
+
+    \b
+    Exit statuses: 0 every link passes; 1 some link fails; 2 the description (or a mesh it
+    names) cannot be read.
+
+    \b
+    Examples:
+      p3d robot check robot.urdf --package-path my_robot=./my_robot
+      p3d robot check scene.xml --json
+    """
+    from p3d_cli.robots import check_robot, load_robot
+
+    low_high = _range(density_range)
+    robot_ = load_robot(description, package_paths)
+    for note in robot_.notes:
+        click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
+    checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high)
+    for c in checks:
+        if as_json:
+            click.echo(output.dumps(_record(robot_.path, c)))
+            continue
+        for p in c.problems:
+            click.echo(f"{robot_.path}: link {c.link!r}: {p.message} (rule: {p.rule})")
+    failed = [c.link for c in checks if not c.ok]
+    if not as_json:
+        tally = f"{len(checks)} links, {len(failed)} failed" + (f": {', '.join(failed)}" if failed else "")
+        click.echo(f"p3d robot check: {robot_.path}: {tally}", err=True)
+    return 1 if failed else 0
+
+
+def _range(text: str) -> tuple[float, float]:
+    try:
+        low, high = (float(x) for x in text.split(","))
+    except ValueError:
+        low = high = float("nan")
+    if not 0 < low < high < float("inf"):
+        raise UsageError("--density-range", f"{text!r} is not LOW,HIGH with 0 < LOW < HIGH",
+                         "give e.g. 50,25000 (kg/m^3)")
+    return low, high
+
+
+def _record(path: str, c) -> dict:
+    return {"source": path, "link": c.link, "ok": c.ok,
+            "problems": [{"rule": p.rule, "value": p.value, "message": p.message} for p in c.problems],
+            "notes": c.notes, "implied_density": c.implied_density, "moment_ratios": c.moment_ratios}
+
+
+@robot.command()
+@click.argument("description", metavar="FILE")
+@_package_option
+@_from_option
+@click.option("--density", type=Quantity(), default=None,
+              help="Density of every link's geometry: kg/m^3 bare, or with a unit (2.7g/cm^3).")
+@click.option("--mass-from", "mass_from", type=click.Choice(["declared"]), default=None,
+              help="Keep each link's declared mass; recompute only its centre of mass and inertia.")
+@click.option("--masses", "masses", default=None, metavar="YAML",
+              help="A YAML mapping of link names to masses (kg bare, or with a unit: 500 g); wins "
+                   "over --mass-from and --density.")
+@click.option("--force", is_flag=True, help="Also fill links whose geometry is open, flat or inward-wound.")
+@click.option("--principal", is_flag=True,
+              help="MJCF: write quat + diaginertia (the principal frame) instead of fullinertia.")
+@click.option("-o", "--output", "out", default=None, metavar="OUT", help="Write here (default: stdout).")
+@_flagged
+def fill(description, package_paths, role, density, mass_from, masses, force, principal, out):
+    """Write the description with each link's <inertial> computed from its geometry.
+
+    URDF gets origin xyz (rpy 0) and the full ixx..izz in the link frame; MJCF pos, mass and
+    fullinertia in the body frame (--principal: quat and diaginertia); SDF pose and inertia.
+    Every other byte of the file is left as it was. A link whose geometry is open, flat,
+    inward-wound or missing keeps its declared inertial (reported on stderr) unless --force.
+
+    \b
+    Examples:
+      p3d robot fill robot.urdf --density 2700 -o filled.urdf
+      p3d robot fill robot.urdf --mass-from declared -o filled.urdf
+      p3d robot fill scene.xml --masses masses.yaml --density 1.2g/cm^3 > filled.xml
+    """
+    from p3d_cli.robots import fill_robot, load_masses, load_robot
+
+    robot_ = load_robot(description, package_paths)
+    for note in robot_.notes:
+        click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
+    table = load_masses(masses) if masses else None
+    result = fill_robot(robot_, role=role, density=density, mass_from=mass_from, masses=table, force=force,
+                        principal=principal)
+    for link in result.links:
+        if link.status == "kept":
+            click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: left as it was: "
+                       f"{link.reason}", err=True)
+        elif link.reason:
+            click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: {link.reason}", err=True)
+    if out is None or out == "-":
+        sys.stdout.flush()
+        sys.stdout.buffer.write(result.data)
+        sys.stdout.buffer.flush()
+    else:
+        try:
+            with open(out, "wb") as f:
+                f.write(result.data)
+        except OSError as exc:
+            raise UsageError("-o", f"cannot write {out} ({exc.strerror or exc})", "check the path") from None
+    filled = sum(1 for link in result.links if link.status == "filled")
+    click.echo(f"p3d robot fill: {robot_.path}: {filled} of {len(result.links)} links filled", err=True)
+    return 0
