@@ -1,4 +1,5 @@
-"""Ball joint: two body points stay together (the design note's eqs. 21-29, signs per FACTS.md).
+"""Ball joint: two body points stay together (the Physics3D note's eqs. 21-29, signs per
+docs/method.md, "Point velocity sign").
 
 Velocity equation (3 rows): ``(v_b + ω_b × r_b) - (v_a + ω_a × r_a) = 0``. Since
 ``ω × r = -[r]ₓ ω``, the motion-to-equation matrix of a side is ``ME = [E, -[r]ₓ]`` (the note's

@@ -1,4 +1,4 @@
-"""Bar: two body points keep their distance (the design note's eqs. 39-45).
+"""Bar: two body points keep their distance (the Physics3D note's eqs. 39-45; docs/method.md, "Bar").
 
 With ``d`` the unit vector from ``a``'s attachment point to ``b``'s, the velocity equation (1 row)
 is ``(v_b + ω_b × r_b - v_a - ω_a × r_a)·d = 0``, i.e. ``ME = [dᵀ, (r × d)ᵀ]`` (eq. 44-45, right as

@@ -1,5 +1,5 @@
 """Hinge: a ball joint whose bodies may only turn relative to each other about one axis
-(the design note's eqs. 30-38, signs per FACTS.md).
+(the Physics3D note's eqs. 30-38, signs per docs/method.md, "Point velocity sign").
 
 Velocity equations (5 rows): the ball joint's three, and ``(ω_b - ω_a)·x = 0``,
 ``(ω_b - ω_a)·y = 0`` with ``x``, ``y`` perpendicular to the world hinge axis ``z``.
@@ -8,7 +8,7 @@ The axes are lines: ``axis_a`` and ``axis_b`` may point either way along them. `
 bisector of the two world axes (``z_b`` flipped when it points away from ``z_a``), so neither side
 is privileged; when the joint is assembled both axes agree and ``z`` is simply that axis.
 The position error of the axes is ``(z_a × s z_b)·x`` and ``·y`` (``s = ±1`` the same flip):
-first order in the misalignment, and zero for parallel and anti-parallel axes alike (FACTS.md).
+first order in the misalignment, and zero for parallel and anti-parallel axes alike (docs/method.md, "Hinge").
 
 The multipliers are a linear impulse on ``b`` (3) and an angular impulse on ``b`` perpendicular
 to the axis (reported as the world vector ``λ_x x + λ_y y``, which does not depend on the choice

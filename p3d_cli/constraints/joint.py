@@ -1,7 +1,7 @@
 """A constraint's geometry in the world frame at one instant.
 
 Every constraint type works from the same few world-frame quantities: the offsets ``r`` of its
-attachment points from each body's centre of mass (FACTS.md: ``r = attachment - centre of
+attachment points from each body's centre of mass (docs/method.md, "Frames": ``r = attachment - centre of
 mass``, rotated into the world), the attachment points themselves, and for a hinge its axes.
 """
 

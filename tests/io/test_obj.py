@@ -82,7 +82,7 @@ def test_mixed_corner_forms_and_sizes_use_careful_path_correctly(tmp_path):
 
 def test_ngon_fan_order_matches_trimesh(tmp_path):
     trimesh = pytest.importorskip("trimesh")
-    n = 22  # FACTS.md: 22-sided faces are seen in the wild
+    n = 22  # docs/method.md, "Formats in the wild": 22-sided faces occur
     angles = np.linspace(0, 2 * np.pi, n, endpoint=False)
     ring = [f"v {float(np.cos(a))!r} {float(np.sin(a))!r} 0" for a in angles]
     text = "\n".join(ring + ["v 0 0 1", "f " + " ".join(str(i) for i in range(n, 0, -1))]
