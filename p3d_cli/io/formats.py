@@ -129,6 +129,13 @@ def refuse_non_mesh(raw: RawInput) -> None:
                 raise UnknownFormatError(raw.where, what, hint)
 
 
+def _is_polydata(head: bytes) -> bool:
+    """VTK PolyData, XML or legacy (meshio reads neither; its legacy reader takes other datasets)."""
+    if b"PolyData" not in head and b"POLYDATA" not in head.upper():
+        return False
+    return importlib.import_module("p3d_cli.io.vtp").is_polydata(head)
+
+
 def _meshio() -> ModuleType:
     return importlib.import_module("p3d_cli.io.meshio_backend")
 
@@ -161,8 +168,8 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            header=lambda head: b"<collada" in head[:HEAD].lower()),
     Format("amf", (".amf",), "p3d_cli.io.amf", "AMF (plain or zipped), in its declared unit",
            header=lambda head: _root_is(b"amf")(re.sub(rb"<[?!][^>]*>", b"", head).lower())),
-    Format("vtp", (".vtp",), "p3d_cli.io.vtp", "VTK PolyData (XML .vtp)",
-           header=lambda head: re.search(rb"<VTKFile[^>]*type=\"PolyData\"", head) is not None),
+    Format("vtp", (".vtp",), "p3d_cli.io.vtp", "VTK PolyData (XML .vtp, legacy .vtk POLYDATA)",
+           aliases=("vtk-polydata",), header=_is_polydata),
     Format("meshio", (), "p3d_cli.io.meshio_backend", "any other format meshio reads (VTU, Gmsh, ...)",
            sniff=_sniff_meshio),
     Format("obj", (".obj",), "p3d_cli.io.obj", "Wavefront OBJ", sniff=_sniff_obj),
