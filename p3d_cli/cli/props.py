@@ -220,8 +220,9 @@ def props_table(result: PropsResult) -> str:
     closed = {True: "yes", False: "NO", None: "n/a"}[f.closed]
     name = f"part {result.details['name']}: " if "name" in result.details else ""
     whole = "whole " if result.parts else ""
+    objects = f"{result.details['objects']}, " if "objects" in result.details else ""
     lines = [
-        f"{whole}{name}{f.source}  ({f.format}, {f.faces} faces, closed: {closed}, method: {result.method})",
+        f"{whole}{name}{f.source}  ({f.format}, {objects}{f.faces} faces, closed: {closed}, method: {result.method})",
         units_line(result.units),
         f"  volume            {output.number(p.volume)}",
         f"  density           {output.number(p.density)}",

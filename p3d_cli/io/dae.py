@@ -47,12 +47,20 @@ def load(raw: RawInput) -> MeshSource:
     MissingExtraError
         trimesh or pycollada is not installed.
     FormatError
-        Not COLLADA, or a unit that is not a positive number of metres.
+        Not COLLADA, a unit that is not a positive number of metres, or triangle strips or
+        fans (which the loader would leave out).
     InputError
         No triangles.
     """
     from p3d_cli.io.trimesh_scene import load_scene, scene_objects, skipped_note
 
+    data = raw.read_all()
+    for tag in (b"<tristrips", b"<trifans"):
+        if tag in data:
+            # trimesh's loader reads <triangles>, <polylist> and <polygons> only: strips and
+            # fans would be left out silently, and with them part of the volume.
+            raise FormatError(raw.where, f"it holds {tag.decode()}>, which the COLLADA reader leaves out",
+                              "export the model with triangles or polylists")
     scene, log = load_scene(raw, "dae", "COLLADA", ("collada",))
     try:
         metres = metres_of(scene.units)

@@ -294,3 +294,23 @@ def test_scene_file_in_an_assembly_is_scaled_from_its_unit(tmp_path):
     (tmp_path / "b.yaml").write_text("parts:\n  - mesh: box.3mf\n")
     with pytest.raises(p3d.InputError if hasattr(p3d, "InputError") else Exception, match="declares its unit"):
         p3d.props(tmp_path / "b.yaml")
+
+
+def test_dae_strips_are_refused_not_left_out(tmp_path):
+    from p3d_cli.errors import FormatError
+
+    path = tmp_path / "strips.dae"
+    path.write_text(dae("1", '<node id="a"><instance_geometry url="#tet"/></node>').replace(
+        "</mesh>", '<tristrips count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 3</p></tristrips></mesh>'))
+    with pytest.raises(FormatError, match="tristrips"):
+        p3d.props(path)
+
+
+def test_dae_library_nodes_are_instanced(tmp_path):
+    nodes = '<node id="n"><translate>0 0 7</translate><instance_node url="#lib"/></node>'
+    text = dae("1", nodes).replace("<library_visual_scenes>", '<library_nodes><node id="lib"><scale>2 1 1</scale>'
+                                   '<instance_geometry url="#tet"/></node></library_nodes><library_visual_scenes>')
+    path = tmp_path / "inst.dae"
+    path.write_text(text)
+    result = p3d.props(path)
+    assert_exact(result, tet_triangles(matrix(1.0, np.diag([2.0, 1, 1]), (0.0, 0.0, 7.0))))
