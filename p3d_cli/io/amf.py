@@ -151,4 +151,4 @@ def load(raw: RawInput) -> MeshSource:
     placed = _placements(root, objects, raw.where)
     names = unique_names([_name(objects[oid], oid) for oid, _ in placed])
     scene = [SceneObject(name, *meshes[oid], matrix) for name, (oid, matrix) in zip(names, placed)]
-    return scene_source("amf", raw.where, scene, UNITS[unit], "objects")
+    return scene_source("amf", raw.where, scene, UNITS[unit], "instances")

@@ -68,4 +68,4 @@ def load(raw: RawInput) -> MeshSource:
         raise FormatError(raw.where, f"declares unit {scene.units!r}, not a positive number of metres",
                           'write <unit meter="0.001"/> (millimetres) or export it again') from None
     objects, skipped = scene_objects(scene, float32=True)
-    return scene_source("dae", raw.where, objects, metres, "nodes", skipped_note(skipped, "nodes") + log)
+    return scene_source("dae", raw.where, objects, metres, "geometry instances", skipped_note(skipped, "nodes") + log)

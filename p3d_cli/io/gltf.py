@@ -55,8 +55,9 @@ def _json(raw: RawInput) -> dict:
 
 def _refusals(raw: RawInput, document: dict) -> list[str]:
     """Refuse what trimesh would read wrongly; return warnings for what holds no volume."""
+    # Only required ones: an optional compression extension comes with uncompressed data too.
     required = document.get("extensionsRequired") or []
-    used = [name for name in REFUSED_EXTENSIONS if name in required or name in (document.get("extensionsUsed") or [])]
+    used = [name for name in REFUSED_EXTENSIONS if name in required]
     if used:
         raise FormatError(raw.where, f"its meshes are stored with {used[0]}, which p3d does not decode",
                           "export the glTF without mesh compression or quantization")

@@ -40,4 +40,5 @@ def load(raw: RawInput) -> MeshSource:
         raise FormatError(raw.where, f"declares unit {unit!r}, which 3MF does not define",
                           "use one of " + ", ".join(UNITS))
     objects, skipped = scene_objects(scene)
-    return scene_source("3mf", raw.where, objects, UNITS[unit], "build items", skipped_note(skipped, "items") + log)
+    return scene_source("3mf", raw.where, objects, UNITS[unit], "objects (build items and their components)",
+                        skipped_note(skipped, "items") + log)

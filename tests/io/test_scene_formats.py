@@ -118,7 +118,7 @@ def test_3mf_in_millimetres_with_build_items(tmp_path):
     path = tmp_path / "plate.3mf"
     path.write_bytes(scene(("blob", BLOB, NODE_A), ("box", BOX, NODE_B)).export(file_type="3mf"))
     result = p3d.props(path)
-    assert result.facts.format == "3mf" and result.details["objects"] == "2 build items"
+    assert result.facts.format == "3mf" and result.details["objects"] == "2 objects (build items and their components)"
     assert result.units["mesh_length"] == "mm"
     # trimesh writes the vertices as decimal text of the float64 values; the unit makes 1e-3.
     parts = {part.details["name"]: part for part in result.parts}
@@ -215,7 +215,7 @@ def test_amf_constellation_in_inches(tmp_path, zipped):
     else:
         path.write_text(amf_text())
     result = p3d.props(path)
-    assert result.details["objects"] == "2 objects" and [p.details["name"] for p in result.parts] == ["tet", "tet-2"]
+    assert result.details["objects"] == "2 instances" and [p.details["name"] for p in result.parts] == ["tet", "tet-2"]
     turned = matrix(1.0, np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), (10.0, 0.0, 0.0))
     assert_exact(result.parts[0], tet_triangles(turned), 0.0254)
     assert_exact(result.parts[1], tet_triangles(matrix(1.0, None, (0.0, -4.0, 0.0))), 0.0254)
@@ -314,3 +314,43 @@ def test_dae_library_nodes_are_instanced(tmp_path):
     path.write_text(text)
     result = p3d.props(path)
     assert_exact(result, tet_triangles(matrix(1.0, np.diag([2.0, 1, 1]), (0.0, 0.0, 7.0))))
+
+
+def test_3mf_components_and_a_mirrored_build_item(tmp_path):
+    """3MF transforms act on row vectors (p' = p M, core specification §4.1.1): a build item
+    of an object made of two components (one turned and moved), and a mirrored build item."""
+    import zipfile
+
+    model = ('<?xml version="1.0" encoding="UTF-8"?><model unit="inch" '
+             'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02"><resources>'
+             '<object id="1" type="model" name="tet"><mesh><vertices>'
+             + "".join(f'<vertex x="{x}" y="{y}" z="{z}"/>' for x, y, z in np.array(TET.split()).reshape(-1, 3))
+             + "</vertices><triangles>"
+             + "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in np.array(TET_FACES.split()).reshape(-1, 3))
+             + '</triangles></mesh></object><object id="2" type="model" name="pair"><components>'
+             '<component objectid="1"/><component objectid="1" transform="0 1 0 -1 0 0 0 0 1 10 0 0"/>'
+             '</components></object></resources><build><item objectid="2" transform="1 0 0 0 1 0 0 0 1 0 0 100"/>'
+             '<item objectid="1" transform="-1 0 0 0 1 0 0 0 1 0 0 0"/></build></model>')
+    path = tmp_path / "pair.3mf"
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("3D/3dmodel.model", model)
+    result = p3d.props(path)
+    assert result.units["mesh_length"] == "in" and len(result.parts) == 3
+    up = matrix(1.0, None, (0.0, 0.0, 100.0))
+    turned = up @ matrix(1.0, np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), (10.0, 0.0, 0.0))
+    mirrored = np.diag([-1.0, 1, 1, 1])
+    assert_exact(result.parts[0], tet_triangles(up), 0.0254)
+    assert_exact(result.parts[1], tet_triangles(turned), 0.0254)
+    assert_exact(result.parts[2], tet_triangles(mirrored)[:, ::-1], 0.0254)
+    assert all(p.properties.volume > 0 for p in result.parts)
+
+
+def test_directory_of_a_robot_package(tmp_path):
+    """A description package: the directory search reads the DAE and GLB meshes, skips the URDF."""
+    (tmp_path / "arm.urdf").write_text('<robot name="arm"><link name="base"/></robot>')
+    (tmp_path / "base.dae").write_text(dae("1", '<node id="a"><instance_geometry url="#tet"/></node>'))
+    (tmp_path / "wheel.glb").write_bytes(scene(("box", BOX, NODE_B)).export(file_type="glb"))
+    run = CliRunner().invoke(cli, ["props", str(tmp_path), "--json"])
+    assert run.exit_code == 0, run.output
+    sources = sorted(json.loads(line)["source"].rsplit("/", 1)[-1] for line in run.output.splitlines() if line.startswith("{"))
+    assert sources == ["base.dae", "wheel.glb"]
