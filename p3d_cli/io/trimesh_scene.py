@@ -10,7 +10,6 @@ own triangles. Only arrays leave this module; no trimesh object crosses the pack
 from __future__ import annotations
 
 import contextlib
-import io
 import logging
 from typing import Iterator
 
@@ -64,11 +63,7 @@ def load_scene(raw: RawInput, file_type: str, what: str, modules: tuple[str, ...
         require(module, raw.where, what)
     with _captured_log() as log:
         try:
-            if raw.path is not None:
-                # By path, so that a .gltf finds its buffers (and a .dae its references) beside it.
-                scene = trimesh.load_scene(raw.path, file_type=file_type, process=False)
-            else:
-                scene = trimesh.load_scene(io.BytesIO(raw.data), file_type=file_type, process=False)
+            scene = _unprocessed(trimesh, raw, file_type)
         except P3DError:
             raise
         except Exception as exc:  # noqa: BLE001 - a third-party parser on bad bytes raises anything
@@ -76,6 +71,27 @@ def load_scene(raw: RawInput, file_type: str, what: str, modules: tuple[str, ...
             raise FormatError(raw.where, f"cannot be read as {what} ({detail})",
                               "the file is corrupt or not in this format; export it again") from None
     return scene, tuple(f"{file_type}: {line}" for line in log.lines)
+
+
+def _unprocessed(trimesh, raw: RawInput, file_type: str):
+    """The scene as the file has it. ``trimesh.load_scene(..., process=False)`` does not pass
+    ``process`` on to the meshes of a COLLADA or 3MF scene, which then merge vertices closer
+    than 1e-8 (``Trimesh.process``); so the format's loader is called here, every mesh is
+    marked unprocessed, and the scene is built from that."""
+    from trimesh.exchange.load import mesh_loaders
+    from trimesh.resolvers import FilePathResolver
+
+    # A resolver by path, so that a .gltf finds its buffers (and a .dae its references) beside it.
+    resolver = FilePathResolver(raw.path) if raw.path is not None else None
+    with raw.open() as stream:
+        loaded = mesh_loaders[file_type](file_obj=stream, file_type=file_type, resolver=resolver,
+                                         metadata=None, process=False)
+    if not isinstance(loaded, dict) or not isinstance(loaded.get("geometry"), dict):
+        raise ValueError("the loader returned no scene")
+    for mesh in loaded["geometry"].values():
+        if isinstance(mesh, dict):
+            mesh["process"] = False
+    return trimesh.load_scene(loaded)
 
 
 def scene_objects(scene, *, float32: bool = False, order: list[str] | None = None) -> tuple[list[SceneObject], int]:

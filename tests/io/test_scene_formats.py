@@ -354,3 +354,23 @@ def test_directory_of_a_robot_package(tmp_path):
     assert run.exit_code == 0, run.output
     sources = sorted(json.loads(line)["source"].rsplit("/", 1)[-1] for line in run.output.splitlines() if line.startswith("{"))
     assert sources == ["base.dae", "wheel.glb"]
+
+
+@pytest.mark.parametrize("kind", ["dae", "3mf"])
+def test_nothing_is_merged(tmp_path, kind):
+    """A vertex 1e-9 from another stays apart (trimesh's processing would merge within 1e-8):
+    the mesh is open by exact coordinates, and the integrals are of the triangles as written."""
+    vertices = np.array([[0, 0, 0], [3, 0, 0], [0, 2, 0], [0, 0, 5], [1e-9, 0, 0]], dtype=np.float64)
+    faces = np.array([[0, 2, 1], [0, 1, 3], [4, 3, 2], [1, 2, 3]])
+    path = tmp_path / f"near.{kind}"
+    if kind == "dae":   # written without normals, which would keep trimesh from merging
+        text = dae("1", '<node id="a"><instance_geometry url="#tet"/></node>')
+        text = text.replace(TET, " ".join(map(repr, vertices.reshape(-1).tolist()))).replace(
+            'count="12"', 'count="15"').replace('count="4" stride', 'count="5" stride')
+        path.write_text(text.replace(TET_FACES, " ".join(map(str, faces.reshape(-1)))))
+    else:
+        path.write_bytes(trimesh.Trimesh(vertices, faces, process=False).export(file_type=kind))
+    result = p3d.props(path, output_units="m" if kind == "dae" else "mm")
+    assert result.facts.closed is False
+    stored = vertices.astype(np.float32) if kind == "dae" else vertices   # pycollada reads float32
+    assert_exact(result, stored.astype(np.float64)[faces])
