@@ -83,9 +83,11 @@ def _unprocessed(trimesh, raw: RawInput, file_type: str):
 
     # A resolver by path, so that a .gltf finds its buffers (and a .dae its references) beside it.
     resolver = FilePathResolver(raw.path) if raw.path is not None else None
+    # glTF's materials (textures: images to decode) play no part in the geometry.
+    extra = {"skip_materials": True} if file_type in ("gltf", "glb") else {}
     with raw.open() as stream:
         loaded = mesh_loaders[file_type](file_obj=stream, file_type=file_type, resolver=resolver,
-                                         metadata=None, process=False)
+                                         metadata=None, process=False, **extra)
     if not isinstance(loaded, dict) or not isinstance(loaded.get("geometry"), dict):
         raise ValueError("the loader returned no scene")
     for mesh in loaded["geometry"].values():
