@@ -64,14 +64,25 @@ def _cells(connectivity: np.ndarray, offsets: np.ndarray, strips: bool, where: s
     if len(ends) and (np.any(ends < starts) or ends[-1] > len(connectivity)):
         raise _corrupt(where, "cell offsets are not increasing within the connectivity")
     connectivity = connectivity.astype(np.int64)
+    if not strips:
+        return _fans(connectivity, starts, ends - starts)
     pieces = []
     for start, end in zip(starts.tolist(), ends.tolist()):
         cell = connectivity[start:end]
-        if strips:
-            pieces.append(strip_triangles(cell))
-        elif len(cell) >= 3:
-            pieces.append(np.stack([np.full(len(cell) - 2, cell[0]), cell[1:-1], cell[2:]], axis=1))
+        pieces.append(strip_triangles(cell))
     return np.concatenate(pieces) if pieces else np.zeros((0, 3), dtype=np.int64)
+
+
+def _fans(connectivity: np.ndarray, starts: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """Polygons as fans from their first vertex, all at once: polygon ``p`` of ``k`` vertices
+    gives triangles ``(c[s], c[s+j], c[s+j+1])`` for ``j = 1..k-2`` (cells of fewer than 3
+    vertices give none)."""
+    count = np.maximum(sizes - 2, 0)
+    owner = np.repeat(np.arange(len(sizes)), count)
+    # j counts 1..k-2 within each polygon: the running index minus the polygon's first one.
+    j = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count) + 1
+    first = starts[owner]
+    return np.stack([connectivity[first], connectivity[first + j], connectivity[first + j + 1]], axis=1)
 
 
 def _mesh(where: str, fmt: str, points: np.ndarray, triangles: list[np.ndarray], skipped: int) -> MeshSource:

@@ -149,3 +149,11 @@ def test_corrupt_polydata_is_one_error(tmp_path, text, match):
     path.write_bytes(text)
     with pytest.raises(FormatError, match=match):
         p3d.props(path)
+
+
+def test_polygons_of_mixed_sizes_are_fans():
+    """Cells of 3, 4, 5 and 2 vertices: fans from each first vertex, none from the 2-cell."""
+    from p3d_cli.io.vtp import _cells
+
+    triangles = _cells(np.arange(14), np.array([3, 7, 12, 14]), False, "x")
+    assert triangles.tolist() == [[0, 1, 2], [3, 4, 5], [3, 5, 6], [7, 8, 9], [7, 9, 10], [7, 10, 11]]
