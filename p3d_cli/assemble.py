@@ -110,6 +110,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
                              "drop mass=, or the parts' own")
         d, m = _amounts(part, part_units, system, density, None)
         solid = as_solid(part.thing)
+        total = declared_scale(solid, part, part_units, system, total)
         shape_only = tessellate if solid.shape is not None else None
         result = measure_solid(solid, total, method=method, density=d, mass=m, about=about_out,
                                tessellate=shape_only, samples=samples, seed=seed, tolerance=tolerance)
@@ -129,6 +130,26 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     units_record = results[0].units
     details = {} if placement.is_identity else {"placement": placement.describe()}
     return PropsResult(facts, props, method, tuple(warnings), None, details, units_record, tuple(results))
+
+
+def declared_scale(solid, part: Part, units: str | None, system: UnitSystem | None, total: Placement) -> Placement:
+    """``total`` for a part whose file declares its own length unit (glTF, 3MF, DAE, AMF): its
+    coordinates are in that unit, not the assembly's, so they are scaled from one to the other
+    first.
+
+    Raises
+    ------
+    InputError
+        The assembly has no units, so the declared unit cannot be related to the others'.
+    """
+    declared = solid.mesh.length_unit if solid.mesh is not None else None
+    if declared is None or declared == units:
+        return total
+    if system is None or units is None:
+        raise InputError(part.where, f"{solid.where} declares its unit ({declared}), and the assembly has none",
+                         "give the assembly its units (units: in the file, units= for inputs combined)")
+    k = LENGTHS[declared] / LENGTHS[units]
+    return then(Placement(scale=np.full(3, k)), total)
 
 
 def _rescaled(p: MassProperties, k: float) -> MassProperties:
@@ -165,8 +186,10 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
     system = _system(assembly, units, output_units)
     outer = _in_output(placement, 1.0 if system is None else system.factor)
     found = []
-    for part, total, _, name in leaves(assembly, outer, system, None if system is None else system.mesh_length):
+    for part, total, part_units, name in leaves(assembly, outer, system,
+                                                None if system is None else system.mesh_length):
         solid = as_solid(part.thing)
+        total = declared_scale(solid, part, part_units, system, total)
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
         found.append(replace(result, warnings=tuple(f"{name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}

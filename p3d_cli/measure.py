@@ -8,6 +8,7 @@ these: ``p3d props`` is parse → ``props(...)`` → format.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, BinaryIO, Iterable
 
 import numpy as np
@@ -15,7 +16,7 @@ import numpy as np
 from p3d_cli.errors import UsageError
 from p3d_cli.placement import IDENTITY, Placement, then
 from p3d_cli.results import BoundsResult, PropsResult
-from p3d_cli.single import finish, measure_solid, solid_bounds
+from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
 from p3d_cli.solid import as_solid
 
 #: The values of ``props(method=...)``.
@@ -85,13 +86,21 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     from p3d_cli.assembly import find_assembly
 
     found = find_assembly(thing)
+    solid = None
+    if found is None:
+        # A scene file (glTF, 3MF, DAE, AMF) declares its unit, and one of several objects is an
+        # assembly of them (p3d_cli.io.scene).
+        solid = as_solid(thing, format=format, stdin=stdin)
+        units = declared_units(solid, units, density, mass)
+        found = scene_assembly(solid)
     if found is not None:
         from p3d_cli.assemble import assembly_props
 
-        return assembly_props(found, placement, units=units, output_units=output_units,
-                                       density=density, mass=mass, about=about, method=method,
-                                       tessellate=tessellate, samples=samples, seed=seed,
-                                       tolerance=tolerance)
+        result = assembly_props(found, placement, units=units, output_units=output_units,
+                                density=density, mass=mass, about=about, method=method,
+                                tessellate=tessellate, samples=samples, seed=seed,
+                                tolerance=tolerance)
+        return result if solid is None else scene_record(result, solid)
     density_given = density is not None
     system, density, mass = unit_rules.resolve(units, output_units, density, mass)
     user_placement = placement
@@ -99,7 +108,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         placement = then(placement, Placement(scale=np.full(3, system.factor)))
         if about is not None:
             about = np.asarray(about, dtype=np.float64) * system.factor
-    result = measure_solid(as_solid(thing, format=format, stdin=stdin), placement, method=method, density=density,
+    result = measure_solid(solid, placement, method=method, density=density,
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
                            tolerance=tolerance)
     return finish(result, system, user_placement, density_given)
@@ -154,13 +163,15 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
         from p3d_cli.assemble import assembly_bounds
 
         return assembly_bounds(found, placement, units=units, output_units=output_units, tessellate=tessellate)
+    solid = as_solid(thing, format=format, stdin=stdin)
+    units = declared_units(solid, units)
     if units is not None or output_units is not None:
         from p3d_cli.units import resolve
 
         system, _, _ = resolve(units, output_units)
         if system is not None:
             placement = then(placement, Placement(scale=np.full(3, system.factor)))
-    return solid_bounds(as_solid(thing, format=format, stdin=stdin), placement, tessellate)
+    return solid_bounds(solid, placement, tessellate)
 
 
 def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,
@@ -199,4 +210,12 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
                          "check mesh files")
-    return check_source(solid.mesh, solid.source, required, min_volume, max_faces)
+    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces)
+    if not solid.mesh.objects:
+        return whole
+    # A multi-object file: each object is checked on its own, and the whole (where objects
+    # that touch or overlap show as shared edges or duplicate faces).
+    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces))
+                  for name, part in solid.mesh.objects)
+    failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
+    return dataclasses.replace(whole, failed=failed, parts=parts)

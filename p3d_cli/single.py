@@ -11,7 +11,7 @@ from typing import Iterable
 
 import numpy as np
 
-from p3d_cli.errors import InputError
+from p3d_cli.errors import InputError, UsageError
 from p3d_cli.placement import Placement
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.solid import Solid
@@ -82,3 +82,50 @@ def _mesh_bounds(solid: Solid, placement: Placement) -> BoundsResult:
     return BoundsResult(solid.source, mesh.format, "vertices", box, mesh.face_count, tuple(mesh.warnings))
 
 
+
+
+def declared_units(solid: Solid, units: str | None, density=None, mass=None) -> str | None:
+    """The length unit to measure ``solid`` in: the one its file declares (glTF, 3MF, DAE,
+    AMF), else ``units``.
+
+    A declared unit acts as ``units=`` would: results are in SI (or ``output_units``), and a
+    density or mass must carry its unit.
+
+    Raises
+    ------
+    UsageError
+        ``units`` disagrees with the file's unit, or a bare density or mass is given with it.
+    """
+    declared = solid.mesh.length_unit if solid.mesh is not None else None
+    if declared is None:
+        return units
+    if units is not None and units != declared:
+        raise UsageError("units", f"{units} given, but {solid.where} declares its unit: {declared}",
+                         "drop units=, or make them agree")
+    from p3d_cli.units import has_unit
+
+    for name, value, example in (("density", density, "1000kg/m^3 or 1g/cm^3"), ("mass", mass, "2.5kg")):
+        if units is None and value is not None and not has_unit(value):
+            raise UsageError(name, f"{value} has no unit, and {solid.where} declares its length unit ({declared})",
+                             f"write the unit, e.g. {example} (a bare number would be ambiguous)")
+    return declared
+
+
+def scene_assembly(solid: Solid):
+    """A file of several objects (``MeshSource.objects``) as an assembly of them, else None."""
+    mesh = solid.mesh
+    if mesh is None or not mesh.objects:
+        return None
+    from p3d_cli.assembly import Assembly, Part
+
+    parts = tuple(Part(name, source, where=source.where) for name, source in mesh.objects)
+    return Assembly(solid.source, parts, mesh.length_unit)
+
+
+def scene_record(result: PropsResult, solid: Solid) -> PropsResult:
+    """An assembly result of a scene file, saying what the file is and how many objects it has."""
+    mesh = solid.mesh
+    facts = dataclasses.replace(result.facts, format=mesh.format, coordinate_dtype=mesh.coordinate_dtype)
+    details = {**result.details, "objects": f"{len(mesh.objects)} {mesh.object_kind}"}
+    warnings = tuple(mesh.warnings) + tuple(w for w in result.warnings if w not in mesh.warnings)
+    return dataclasses.replace(result, facts=facts, details=details, warnings=warnings)

@@ -139,6 +139,8 @@ def check_record(result: CheckResult) -> dict:
         "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in _COUNTS},
         "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
     })
+    if result.parts:
+        record["parts"] = [{"name": name, **check_record(part)} for name, part in result.parts]
     return record
 
 
@@ -195,6 +197,8 @@ def check_text(result: CheckResult) -> str:
     for name in ("min-volume", "max-faces"):
         if name in result.failed:
             lines.append("  over the max-faces limit" if name == "max-faces" else "  below the min-volume limit")
+    for _, part in result.parts:
+        lines += ["  " + line for line in check_text(part).splitlines()]
     return "\n".join(lines)
 
 

@@ -94,8 +94,9 @@ def inputs_argument(f):
 
 def format_option(f):
     return click.option("--format", "fmt", metavar="NAME",
-                        help="Read every input as this format (stl, obj, ply, off, or a meshio "
-                             "format name) instead of guessing from content and extension.")(f)
+                        help="Read every input as this format (stl, obj, ply, off, gltf/glb, 3mf, "
+                             "dae/collada, amf, vtp, or a meshio format name) instead of guessing "
+                             "from content and extension.")(f)
 
 
 def json_option(f):

@@ -263,10 +263,11 @@ def props_table(result: PropsResult, precision: int = 10) -> str:
     vector = functools.partial(output.vector, precision=precision, width=max(17, precision + 7))
     name = f"part {result.details['name']}: " if "name" in result.details else ""
     whole = "whole " if result.parts else ""
+    objects = f"{result.details['objects']}, " if "objects" in result.details else ""
     lines = [
         whole + name + output.shown_name(f.source),
         f"  {f.format}, " + ("" if f.format == "primitive" else f"{plural(f.faces, 'face')}, ")
-        + f"closed: {closed}, method: {result.method}",
+        + f"{objects}closed: {closed}, method: {result.method}",
         *units_line(result.units),
         f"  volume            {number(p['volume'])}",
         f"  density           {number(p['density'])}",

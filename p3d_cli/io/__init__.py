@@ -27,7 +27,8 @@ def load_mesh(source: str, format: str | None = None, stdin: BinaryIO | None = N
     source : str
         A path, or ``-`` for standard input.
     format : str, optional
-        Format name (``stl``, ``obj``, ``ply``, ``off`` or a meshio format name) instead of
+        Format name (``stl``, ``obj``, ``ply``, ``off``, ``gltf``, ``3mf``, ``dae``, ``amf``,
+        ``vtp``, an alias such as ``collada`` or ``glb``, or a meshio format name) instead of
         guessing from content and extension.
     stdin : binary stream, optional
         What ``-`` reads; default ``sys.stdin.buffer``.

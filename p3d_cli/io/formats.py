@@ -5,8 +5,10 @@ A record names the format, its extensions and aliases, the module that reads it 
 first use, so ``p3d props part.stl`` pays for the STL reader alone) and how its content is
 recognised. Adding a format is one record here and one module under ``p3d_cli/io/``.
 
-Detection, in order: an explicit format name; a header that names its format outright (``ply``,
-``OFF``), trusted over the extension; the extension of a format p3d reads itself; then the
+Detection, in order: an explicit format name; a file that is no mesh but says what it is (a
+URDF, MJCF or SDF robot description, a STEP model: refused with what to do instead); a header
+that names its format outright (``ply``, ``OFF``, ``glTF``, ``<COLLADA``, ``<amf``, VTK
+PolyData), trusted over the extension; the extension of a format p3d reads itself; then the
 content sniffers, in registry order (binary STL by size or ``solid`` text, any extension meshio
 reads, OBJ statements for inputs without an extension).
 """
@@ -25,6 +27,12 @@ from p3d_cli.io.raw import RawInput
 
 #: Bytes read from the start of an input to recognise its format.
 HEAD = 512
+
+#: Bytes read from the start of an XML input to find its root element past long comments.
+XML_HEAD = 1 << 14
+
+#: The first bytes of a STEP file (ISO 10303-21, clause 5: "ISO-10303-21;").
+STEP_MAGIC = b"ISO-10303-21"
 
 #: OFF and its variants (colours, normals, texture coordinates, other dimensions).
 _OFF_KEYWORD = re.compile(rb"(ST)?C?N?4?n?OFF")
@@ -75,6 +83,59 @@ class Format:
         return importlib.import_module(self.module)
 
 
+def _xml_head(raw: RawInput) -> bytes:
+    """The start of an XML document past its declaration and comments (a licence comment can
+    be long), lower-cased; b"" for content that is not XML."""
+    head = raw.head(HEAD)
+    if not head.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
+        return b""
+    text = raw.head(XML_HEAD)
+    text = re.sub(rb"<!--.*?(-->|$)", b"", text, flags=re.DOTALL)
+    text = re.sub(rb"<[?!][^>]*>", b"", text)
+    return text.lower()
+
+
+def _root_is(tag: bytes) -> Callable[[bytes], bool]:
+    """A header test: the XML's first element is ``tag`` (any namespace prefix, any case)."""
+    pattern = re.compile(rb"^\s*<(?:[\w.-]+:)?" + tag + rb"[\s>/]")
+    return lambda text: pattern.match(text) is not None
+
+
+#: Files that are not meshes but say what they are: (test, what it is, what to do).
+NOT_MESHES: tuple[tuple[Callable[[bytes], bool], str, str], ...] = (
+    (_root_is(b"robot"), "is a URDF robot description, not a mesh",
+     "measure its links with the p3d robot commands (p3d robot check / fill), or pass the meshes it names"),
+    (_root_is(b"mujoco"), "is a MuJoCo MJCF model, not a mesh",
+     "measure its bodies with the p3d robot commands (p3d robot check / fill), or pass the meshes it names"),
+    (_root_is(b"sdf"), "is an SDF (Gazebo) model, not a mesh",
+     "measure its links with the p3d robot commands (p3d robot check / fill), or pass the meshes it names"),
+)
+
+
+def refuse_non_mesh(raw: RawInput) -> None:
+    """Raise a clear error for a robot description or a CAD model given as a mesh.
+
+    Raises
+    ------
+    UnknownFormatError
+    """
+    if raw.head(len(STEP_MAGIC)) == STEP_MAGIC:
+        raise UnknownFormatError(raw.where, "is a STEP (ISO 10303-21) CAD model, not a mesh",
+                                 "export a mesh from the CAD program (STL, 3MF or OBJ) and measure that")
+    text = _xml_head(raw)
+    if text:
+        for test, what, hint in NOT_MESHES:
+            if test(text):
+                raise UnknownFormatError(raw.where, what, hint)
+
+
+def _is_polydata(head: bytes) -> bool:
+    """VTK PolyData, XML or legacy (meshio reads neither; its legacy reader takes other datasets)."""
+    if b"PolyData" not in head and b"POLYDATA" not in head.upper():
+        return False
+    return importlib.import_module("p3d_cli.io.vtp").is_polydata(head)
+
+
 def _meshio() -> ModuleType:
     return importlib.import_module("p3d_cli.io.meshio_backend")
 
@@ -100,6 +161,15 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            header=lambda head: head.lstrip().startswith(b"ply")),
     Format("off", (".off",), "p3d_cli.io.off", "OFF and its variants (COFF, NOFF, ...)",
            header=lambda head: _OFF_KEYWORD.fullmatch(_first_word(head)) is not None),
+    Format("gltf", (".glb", ".gltf"), "p3d_cli.io.gltf", "glTF 2.0 (.gltf with its buffers, .glb), in metres",
+           aliases=("glb", "gltf2"), header=lambda head: head[:4] == b"glTF"),
+    Format("3mf", (".3mf",), "p3d_cli.io.threemf", "3MF packages, in their declared unit", aliases=("threemf",)),
+    Format("dae", (".dae",), "p3d_cli.io.dae", "COLLADA, in its declared unit", aliases=("collada",),
+           header=lambda head: b"<collada" in head[:HEAD].lower()),
+    Format("amf", (".amf",), "p3d_cli.io.amf", "AMF (plain or zipped), in its declared unit",
+           header=lambda head: _root_is(b"amf")(re.sub(rb"<[?!][^>]*>", b"", head).lower())),
+    Format("vtp", (".vtp",), "p3d_cli.io.vtp", "VTK PolyData (XML .vtp, legacy .vtk POLYDATA)",
+           aliases=("vtk-polydata",), header=_is_polydata),
     Format("meshio", (), "p3d_cli.io.meshio_backend", "any other format meshio reads (VTU, Gmsh, ...)",
            sniff=_sniff_meshio),
     Format("obj", (".obj",), "p3d_cli.io.obj", "Wavefront OBJ", sniff=_sniff_obj),
@@ -112,13 +182,15 @@ EXTENSIONS = {ext: f.name for f in FORMATS.values() for ext in f.extensions}
 #: skips them without importing meshio to ask (0.1-0.3 s, more than a small batch's work).
 NEVER_MESHES = frozenset({"", ".txt", ".md", ".rst", ".csv", ".tsv", ".json", ".jsonl", ".yaml", ".yml",
                           ".log", ".mtl", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pdf",
-                          ".step", ".stp", ".iges", ".igs", ".3mf", ".zip", ".py", ".html"})
+                          ".step", ".stp", ".iges", ".igs", ".zip", ".py", ".html", ".bin", ".urdf",
+                          ".xacro", ".sdf", ".launch", ".world", ".material", ".dds"})
 
 
 def format_names() -> str:
-    """The ``format=`` values, for hints: p3d's own, then meshio's."""
-    own = sorted(name for name in FORMATS if name != "meshio")
-    return ", ".join(own) + ", or a format name meshio knows (vtu, gmsh, ...)"
+    """The ``format=`` values, for hints: p3d's own (with their aliases), then meshio's."""
+    own = sorted((f for f in FORMATS.values() if f.name != "meshio"), key=lambda f: f.name)
+    listed = [f.name + (f" ({', '.join(f.aliases)})" if f.aliases else "") for f in own]
+    return ", ".join(listed) + ", or a format name meshio knows (vtu, gmsh, ...)"
 
 
 def is_mesh_path(path: str) -> bool:
@@ -154,6 +226,7 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
     """
     if override:
         return _named(override)
+    refuse_non_mesh(raw)
     head = raw.head(HEAD)
     for f in FORMATS.values():
         if f.header is not None and f.header(head):

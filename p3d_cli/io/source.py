@@ -38,6 +38,14 @@ class MeshSource:
     where : str
         The input's name in messages: its path, ``<stdin>``, or ``<array>`` for arrays given
         from Python (set by ``p3d_cli.io.load_mesh``).
+    length_unit : str or None
+        The length unit the file declares for its coordinates (a key of
+        ``p3d_cli.units.LENGTHS``: glTF, 3MF, DAE and AMF say theirs); None when it says none.
+    objects : tuple of (str, MeshSource)
+        For a file of several objects (scene nodes, build items), each one by name, already
+        placed; the source itself yields all of them. Empty for a single object.
+    object_kind : str
+        What the file calls those objects (``nodes``, ``build items``), for the record.
     """
 
     format: str
@@ -47,6 +55,9 @@ class MeshSource:
     tetrahedra: np.ndarray | None = None
     warnings: tuple[str, ...] = field(default_factory=tuple)
     where: str = "<array>"
+    length_unit: str | None = None
+    objects: tuple[tuple[str, "MeshSource"], ...] = field(default_factory=tuple)
+    object_kind: str = ""
 
     def triangles(self) -> np.ndarray:
         """All triangles in one ``(n, 3, 3)`` array (for callers that need them at once)."""

@@ -48,7 +48,9 @@ class CheckResult:
         The checks asked for (keys of ``CHECKS``).
     failed : tuple of str
         The required checks that failed, then ``min-volume`` / ``max-faces`` if a limit was
-        broken.
+        broken, then ``NAME:CHECK`` for each check an object of a multi-object file failed.
+    parts : tuple of (str, CheckResult)
+        For a file of several objects (glTF nodes, 3MF build items), each object's verdict.
     """
 
     source: str
@@ -56,6 +58,7 @@ class CheckResult:
     report: TopologyReport
     required: tuple[str, ...]
     failed: tuple[str, ...]
+    parts: tuple = ()
 
     @property
     def ok(self) -> bool:

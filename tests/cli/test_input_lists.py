@@ -34,21 +34,22 @@ def test_null_without_a_list_is_a_usage_error():
 
 
 def test_skipped_files_are_counted_by_extension(tmp_path):
-    for name in ("a.3mf", "b.3mf", "c.glb", "README"):
+    # Extensions no reader of p3d's (nor meshio's) takes (.3mf and .glb, used here before, are read now).
+    for name in ("a.fbx", "b.fbx", "c.3ds", "README"):
         (tmp_path / name).write_bytes(b"x")
     write_binary_stl(tmp_path / "part.stl", cube_triangles())
     summary = tmp_path / "summary.json"
     result = run("props", tmp_path, "--summary", f"json:{summary}")
     assert result.exit_code == 0
-    assert "skipped files p3d does not read: 2 .3mf, 1 .glb, 1 without extension" in result.stderr
+    assert "skipped files p3d does not read: 2 .fbx, 1 .3ds, 1 without extension" in result.stderr
     counts = json.loads(summary.read_text())
-    assert counts["skipped_by_extension"] == {"": 1, ".3mf": 2, ".glb": 1} and counts["skipped"] == 4
+    assert counts["skipped_by_extension"] == {"": 1, ".fbx": 2, ".3ds": 1} and counts["skipped"] == 4
     assert (counts["inputs"], counts["ok"]) == (1, 1)
 
 
 def test_directory_of_only_unread_files_says_what_it_holds(tmp_path):
-    for name in ("a.3mf", "b.dae", "c.glb"):
+    for name in ("a.fbx", "b.blend", "c.3ds"):
         (tmp_path / name).write_bytes(b"x")
     result = run("check", tmp_path)
     assert result.exit_code == 2
-    assert "directory holds no mesh files, only files p3d does not read (1 .3mf, 1 .dae, 1 .glb)" in result.stderr
+    assert "directory holds no mesh files, only files p3d does not read (1 .3ds, 1 .blend, 1 .fbx)" in result.stderr

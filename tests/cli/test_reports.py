@@ -26,13 +26,13 @@ def run(*args, input=None):
 
 @pytest.fixture
 def folder(tmp_path):
-    """good.stl, open.stl (fails check), corrupt.stl (cannot be read), notes.3mf (skipped)."""
+    """good.stl, open.stl (fails check), corrupt.stl (cannot be read), notes.fbx (skipped)."""
     parts = tmp_path / "parts"
     parts.mkdir()
     write_binary_stl(parts / "good.stl", CUBE)
     write_binary_stl(parts / "open.stl", CUBE[2:])
     (parts / "corrupt.stl").write_bytes(b"\0" * 80 + b"\x05\0\0\0" + b"\0" * 10)
-    (parts / "notes.3mf").write_bytes(b"PK")
+    (parts / "notes.fbx").write_bytes(b"PK")
     return parts
 
 
@@ -52,12 +52,12 @@ def test_junit_from_check_has_one_testcase_per_input_and_the_right_counts(folder
     suite = root.find("testsuite")
     assert (suite.get("tests"), suite.get("failures"), suite.get("errors"), suite.get("skipped")) == ("4", "1", "1", "1")
     cases = {Path(c.get("name")).name: c for c in suite.iter("testcase")}
-    assert set(cases) == {"good.stl", "open.stl", "corrupt.stl", "notes.3mf"}
+    assert set(cases) == {"good.stl", "open.stl", "corrupt.stl", "notes.fbx"}
     assert list(cases["good.stl"]) == []
     failure = cases["open.stl"].find("failure")
     assert failure.get("type") == "closed" and "boundary edge" in failure.get("message")
     assert "binary STL" in cases["corrupt.stl"].find("error").get("message")
-    assert cases["notes.3mf"].find("skipped") is not None
+    assert cases["notes.fbx"].find("skipped") is not None
     assert all(c.get("classname") == "p3d.check" for c in cases.values())
 
 

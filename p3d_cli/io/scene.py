@@ -1,0 +1,187 @@
+"""Files that hold a scene: named objects, each placed by its node transform, in declared units.
+
+glTF, 3MF, COLLADA (DAE) and AMF files describe a scene graph: meshes instanced by nodes whose
+transforms compose down the tree, and a length unit for the whole file. Their readers
+(``p3d_cli.io.trimesh_formats``, ``p3d_cli.io.amf``) hand this module a list of
+``SceneObject`` (vertices, faces and the object's whole transform) and the file's unit in
+metres; ``scene_source`` turns them into one ``MeshSource``:
+
+- every object's vertices are carried through its transform (float64, one matrix product; an
+  identity transform leaves the stored numbers as they are, float32 included), and faces of an
+  object whose transform mirrors (negative determinant) are reversed, as glTF 2.0 (§3.7.4,
+  "the determinant of the node's global transform defines the winding order") and 3MF (§4.1)
+  say, so that a mirrored solid stays outward;
+- nothing is merged, repaired or dropped: the results are the exact integrals of the file's
+  own triangles, placed;
+- the unit becomes ``MeshSource.length_unit`` (a key of ``p3d_cli.units.LENGTHS``): a unit of
+  that table keeps the coordinates as stored, any other (DAE ``meter="0.5"``, 3MF ``micron``)
+  is folded into the transforms so that the coordinates are in metres;
+- a file of several objects lists them in ``MeshSource.objects``, which ``p3d_cli.measure``
+  measures as an assembly of those parts.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Iterator
+
+import numpy as np
+
+from p3d_cli.errors import FormatError, InputError, MissingExtraError
+from p3d_cli.io.source import BLOCK, MeshSource
+
+#: The optional extra that brings the scene readers' libraries.
+EXTRA = "p3d-cli[formats]"
+
+#: Relative tolerance for recognising a declared unit as one of ``LENGTHS`` (``0.0254`` as
+#: written in a file is the inch).
+_UNIT_RTOL = 1e-9
+
+
+def require(module: str, where: str, what: str) -> ModuleType:
+    """Import ``module`` for reading ``what``, or say which extra to install.
+
+    Raises
+    ------
+    MissingExtraError
+    """
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        package = module.split(".")[0]
+        raise MissingExtraError(where, f"reading {what} needs the {package} package, which is not installed",
+                                f"install the formats extra: pip install '{EXTRA}'") from None
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """One mesh instance of a scene.
+
+    Attributes
+    ----------
+    name : str
+        Unique within the file (node or object name).
+    vertices : (m, 3) float32 or float64
+        As stored in the file.
+    faces : (n, 3) integer
+    transform : (4, 4) float64
+        The object's whole transform (the product down the node tree), in the file's unit.
+    """
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    transform: np.ndarray
+
+
+def unit_for(metres: float) -> tuple[str, float]:
+    """The ``LENGTHS`` key for a declared unit of ``metres`` metres, and the factor still to
+    apply to the coordinates (1.0 when the unit is in the table; else the coordinates are
+    converted to metres)."""
+    from p3d_cli.units import LENGTHS
+
+    for key, value in LENGTHS.items():
+        if abs(metres - value) <= _UNIT_RTOL * value:
+            return key, 1.0
+    return "m", float(metres)
+
+
+def placed(obj: SceneObject, factor: float, where: str) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``obj``'s vertices through its transform (and ``factor``), its faces (reversed under a
+    mirroring transform), and whether the stored numbers were kept as they are."""
+    matrix = np.asarray(obj.transform, dtype=np.float64)
+    if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
+        raise FormatError(f"{where}#{obj.name}", "the object's transform is not a finite 4 x 4 matrix",
+                          "the file is corrupt; export it again")
+    if factor != 1.0:
+        matrix = np.diag([factor, factor, factor, 1.0]) @ matrix
+    faces = np.asarray(obj.faces)
+    vertices = np.asarray(obj.vertices)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise FormatError(f"{where}#{obj.name}", f"vertices of shape {vertices.shape} and faces of shape "
+                          f"{faces.shape} (expected m x 3 and n x 3)", "the file is corrupt; export it again")
+    if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+        raise FormatError(f"{where}#{obj.name}", f"a face refers to a vertex outside 0..{len(vertices) - 1}",
+                          "the file is corrupt; export it again")
+    if np.array_equal(matrix, np.eye(4)):
+        return vertices, faces, True
+    linear = matrix[:3, :3]
+    out = vertices.astype(np.float64) @ linear.T + matrix[:3, 3]
+    if np.linalg.det(linear) < 0:
+        faces = faces[:, ::-1]
+    return out, faces, False
+
+
+def _stored_dtype(vertices: np.ndarray) -> str:
+    return "float32" if vertices.dtype == np.float32 else "float64"
+
+
+def object_source(fmt: str, where: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,
+                  unit: str) -> MeshSource:
+    """A ``MeshSource`` over one placed object."""
+    vertices = vertices if vertices.dtype in (np.float32, np.float64) else vertices.astype(np.float64)
+    faces = faces.astype(np.intp, copy=False)
+
+    def read_blocks() -> Iterator[np.ndarray]:
+        for start in range(0, len(faces), BLOCK):
+            yield vertices[faces[start:start + BLOCK]]
+
+    return MeshSource(fmt, int(len(faces)), dtype, read_blocks, where=where, length_unit=unit)
+
+
+def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float, kind: str,
+                 warnings=()) -> MeshSource:
+    """One ``MeshSource`` for a scene's objects (see the module's description).
+
+    Parameters
+    ----------
+    fmt : str
+        ``MeshSource.format`` (``gltf``, ``3mf``, ``dae``, ``amf``).
+    where : str
+        The input's name; an object's is ``where#name``.
+    objects : list of SceneObject
+    metres : float
+        The file's length unit in metres.
+    kind : str
+        What the file calls its objects (``nodes``, ``build items``), for the record.
+
+    Raises
+    ------
+    InputError
+        No object with faces.
+    """
+    unit, factor = unit_for(metres)
+    parts = []
+    for obj in objects:
+        if not len(obj.faces):
+            continue
+        vertices, faces, kept = placed(obj, factor, where)
+        dtype = _stored_dtype(obj.vertices) if kept else "float64"
+        parts.append((obj.name, object_source(fmt, f"{where}#{obj.name}", vertices, faces, dtype, unit)))
+    if not parts:
+        raise InputError(where, "the file holds no triangles (no mesh object with faces)",
+                         "export the model with its meshes")
+    dtypes = {source.coordinate_dtype for _, source in parts}
+
+    def read_blocks() -> Iterator[np.ndarray]:
+        for _, source in parts:
+            yield from source.read_blocks()
+
+    listed = tuple(parts) if len(parts) > 1 else ()
+    return MeshSource(fmt, sum(s.face_count for _, s in parts), "float32" if dtypes == {"float32"} else "float64",
+                      read_blocks, None, tuple(warnings), where, length_unit=unit, objects=listed,
+                      object_kind=kind if listed else "")
+
+
+def unique_names(names: list[str]) -> list[str]:
+    """``names`` made unique by ``-2``, ``-3``... suffixes on repeats (and ``object`` for blanks)."""
+    seen: dict[str, int] = {}
+    out = []
+    for name in names:
+        name = name or "object"
+        count = seen.get(name, 0) + 1
+        seen[name] = count
+        out.append(name if count == 1 else f"{name}-{count}")
+    return out
