@@ -58,6 +58,12 @@ _API = {
     "Moments": "p3d_cli.results",
     "Bounds": "p3d_cli.results",
     "CheckResult": "p3d_cli.mesh.verdicts",
+    # robot descriptions (URDF, MJCF, SDF)
+    "load_robot": "p3d_cli.robots",
+    "check_robot": "p3d_cli.robots",
+    "fill_robot": "p3d_cli.robots",
+    # assemblies
+    "load_assembly": "p3d_cli.assembly",
     # constraint scenes
     "load_scene": "p3d_cli.constraints",
     "parse_scene": "p3d_cli.constraints",
