@@ -29,6 +29,10 @@ CODES: dict[str, str] = {
     "montecarlo-winding": "Monte Carlo ignores the winding (its volume is positive)",
     "montecarlo-open": "Monte Carlo on an open mesh counts escaping points as half inside",
     "montecarlo-empty": "no Monte Carlo sample fell inside the solid",
+    "montecarlo-few-inside": "too few Monte Carlo samples fell inside for standard errors: bounds instead",
+    "montecarlo-cap": "the sample count a Monte Carlo tolerance needs is over the cap",
+    "montecarlo-flat-box": "the solid's bounding box is flat: nothing to sample",
+    "implausible": "a result no solid has (non-positive mass, triangle inequality, centre outside)",
     "reader": "any other warning of a mesh reader (meshio's own messages among them)",
 }
 
@@ -44,7 +48,11 @@ THRESHOLDS: dict[str, float] = {"coarse-float32": 1e-6}
 PATTERNS: tuple[tuple[str, str], ...] = (
     ("montecarlo-winding", r"Monte Carlo's inside test ignores the winding"),
     ("montecarlo-open", r"Monte Carlo on an open mesh"),
-    ("montecarlo-empty", r"no Monte Carlo sample fell inside"),
+    ("montecarlo-empty", r"no Monte Carlo sample (of \d+ )?fell inside"),
+    ("montecarlo-few-inside", r"Monte Carlo samples fell inside the solid \(fewer than"),
+    ("montecarlo-cap", r"needs more than the cap of"),
+    ("montecarlo-flat-box", r"bounding box is flat, so nothing was sampled"),
+    ("implausible", r"are not both positive|break the triangle inequality|centre of mass lies outside the bounds"),
     ("open", r"\bmesh is not closed\b"),
     ("flat", r"encloses no volume"),
     ("inward", r"signed volume is negative"),

@@ -158,3 +158,14 @@ def test_check_requirements_by_glob(tmp_path, monkeypatch):
     assert run("check", "open.stl").exit_code == 1                  # everything else: every check
     assert run("check", "scans/open.stl", "--no-config").exit_code == 1
     assert run("check", "scans/open.stl", "--require", "closed").exit_code == 1   # the command line wins
+
+
+def test_library_warnings_get_their_own_codes_not_the_fallback():
+    import p3d_cli as p3d
+
+    tilted = p3d.Placement(rotation=p3d.rotation_from_quaternion(0.3, 0.5, -0.7, 0.2))
+    few = p3d.props("box:1,1,0.001", tilted, method="montecarlo", samples=2000, seed=1)
+    assert "montecarlo-few-inside" in few.warning_codes or "montecarlo-empty" in few.warning_codes
+    slip = p3d.props("box:50,40,5", density=7850)  # a millimetre-sized part, a kg/m³ density
+    assert "unit-slip" in slip.warning_codes
+    assert "reader" not in few.warning_codes + slip.warning_codes
