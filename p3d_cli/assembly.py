@@ -106,18 +106,12 @@ def load_assembly(path: str, _seen: tuple[str, ...] = ()) -> Assembly:
     InputError
         Not valid YAML, not an assembly, a bad part (``path: parts[i].key: ...``), a cycle.
     """
-    import yaml
+    from p3d_cli.constraints.yaml_loader import read_yaml
 
     real = os.path.realpath(path)
     if real in _seen:
         raise InputError(path, "includes itself (through nested assemblies)", "remove the cycle")
-    try:
-        with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(path, f"cannot be read ({exc})", "check the path") from None
-    except yaml.YAMLError as exc:
-        raise InputError(path, f"is not valid YAML ({str(exc).splitlines()[0]})", "fix the file") from None
+    data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict) or not isinstance(data.get("parts"), list) or not data["parts"]:
         raise InputError(path, "is not an assembly (no list of parts)", "write parts: with one entry per part")
     unknown = [k for k in data if k not in ("units", "parts", "name")]

@@ -11,7 +11,7 @@ import os
 
 import yaml
 
-from p3d_cli.errors import SceneError
+from p3d_cli.errors import InputError, SceneError
 
 
 class DuplicateKeyError(yaml.constructor.ConstructorError):
@@ -69,7 +69,7 @@ def _read_bounded(path: str) -> bytes:
         return f.read(MAX_SCENE_BYTES + 1)
 
 
-def read_yaml(path: str, where: str):
+def read_yaml(path: str, where: str, error: type[InputError] = SceneError):
     """The plain data (dicts, lists, scalars) of a YAML file.
 
     Parameters
@@ -78,31 +78,33 @@ def read_yaml(path: str, where: str):
         The file to read.
     where : str
         Its name in messages.
+    error : type
+        The error raised (a scene's ``SceneError``; an assembly's or a mass list's ``InputError``).
 
     Raises
     ------
-    SceneError
+    SceneError (or ``error``)
         The file cannot be read, is not valid YAML, or repeats a key in one mapping.
     """
     try:
         text = _read_bounded(path)
     except OSError as exc:
-        raise SceneError(where, f"cannot read the scene file ({exc.strerror or exc})",
-                         "check the path and its permissions") from None
+        raise error(where, f"cannot be read ({exc.strerror or exc})",
+                    "check the path and its permissions") from None
     if len(text) > MAX_SCENE_BYTES:
-        raise SceneError(where, f"is larger than {MAX_SCENE_BYTES >> 20} MB, far more than any scene",
-                         "give the scene's YAML file")
+        raise error(where, f"is larger than {MAX_SCENE_BYTES >> 20} MB, far more than such a file needs",
+                    "give the YAML file")
     try:
         return yaml.load(text, Loader=UniqueKeySafeLoader)  # noqa: S506 - a SafeLoader subclass
     except RecursionError:
-        raise SceneError(where, "nests lists or mappings too deeply to read",
-                         "a scene needs a few levels of nesting; check the brackets") from None
+        raise error(where, "nests lists or mappings too deeply to read",
+                    "a scene needs a few levels of nesting; check the brackets") from None
     except DuplicateKeyError as exc:
-        raise SceneError(f"{where}:{exc.line}", f"key {exc.key!r} appears twice in one mapping",
-                         "YAML would silently keep only the last one; rename or remove one") from None
+        raise error(f"{where}:{exc.line}", f"key {exc.key!r} appears twice in one mapping",
+                    "YAML would silently keep only the last one; rename or remove one") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         place = f"{where}:{mark.line + 1}" if mark is not None else where
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SceneError(place, f"not valid YAML: {problem}",
-                         "fix the syntax (indentation, colons, brackets)") from None
+        raise error(place, f"not valid YAML: {problem}",
+                    "fix the syntax (indentation, colons, brackets)") from None

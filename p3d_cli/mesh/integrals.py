@@ -68,23 +68,9 @@ def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> tuple[np.ndar
     # would cost page faults and cache misses, not arithmetic.
     t = np.empty(n)
     u = np.empty(n)
-    e1 = np.subtract(p2, p1)
-    e2 = np.subtract(p3, p1)
-    magnitude = np.zeros(n)
+    magnitude = np.empty(n)
     det = out[0]
-    det[:] = 0.0
-    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        # cross_i = e1_j e2_k - e1_k e2_j;  D += p1_i cross_i
-        np.multiply(e1[j], e2[k], out=t)
-        np.multiply(e1[k], e2[j], out=u)
-        cross = np.subtract(t, u)
-        cross *= p1[i]
-        det += cross
-        np.abs(t, out=t)
-        np.abs(u, out=u)
-        t += u
-        t *= np.abs(p1[i], out=u)
-        magnitude += t
+    determinants(p1, p2, p3, det, magnitude, t, u)
     # s = p1 + p2 + p3
     s = np.add(p1, p2)
     s += p3
@@ -104,6 +90,32 @@ def tetra_terms(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> tuple[np.ndar
             weighted[i] = np.multiply(magnitude, q, out=t).sum()
         np.multiply(q, det, out=out[row])
     return out, magnitude, weighted
+
+
+def determinants(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray, det: np.ndarray, magnitude: np.ndarray,
+                 t: np.ndarray | None = None, u: np.ndarray | None = None) -> None:
+    """Row 0 of ``tetra_terms``, ``D = p1 · ((p2 - p1) × (p3 - p1))``, and its magnitude (the
+    one copy of this formula; ``p3d_cli.mesh.volume`` streams it alone), written into ``det``
+    and ``magnitude`` (``(n,)``); ``t`` and ``u`` are optional ``(n,)`` scratch buffers."""
+    n = det.shape[0]
+    t = np.empty(n) if t is None else t
+    u = np.empty(n) if u is None else u
+    e1 = np.subtract(p2, p1)
+    e2 = np.subtract(p3, p1)
+    det[:] = 0.0
+    magnitude[:] = 0.0
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        # cross_i = e1_j e2_k - e1_k e2_j;  D += p1_i cross_i
+        np.multiply(e1[j], e2[k], out=t)
+        np.multiply(e1[k], e2[j], out=u)
+        cross = np.subtract(t, u)
+        cross *= p1[i]
+        det += cross
+        np.abs(t, out=t)
+        np.abs(u, out=u)
+        t += u
+        t *= np.abs(p1[i], out=u)
+        magnitude += t
 
 
 def _abs_bounds(total_magnitude: float, weighted: np.ndarray) -> np.ndarray:

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from p3d_cli.mesh.integrals import columns
+from p3d_cli.mesh.integrals import columns, determinants
 
 #: Faces per summed block: ``triangle_moments``' default block.
 BLOCK = 65536
@@ -46,7 +46,8 @@ class SignedVolume:
         while start < k:
             take = min(BLOCK - self._filled, k - start)
             at = slice(self._filled, self._filled + take)
-            _determinants(cols[:, :, start:start + take], self._det[at], self._magnitude[at])
+            block = cols[:, :, start:start + take]
+            determinants(block[0], block[1], block[2], self._det[at], self._magnitude[at])
             self._filled += take
             start += take
             if self._filled == BLOCK:
@@ -75,25 +76,3 @@ class SignedVolume:
         if abs(total) <= bound:
             return 0.0
         return total / 6.0
-
-
-def _determinants(cols: np.ndarray, det: np.ndarray, magnitude: np.ndarray) -> None:
-    """Row 0 of ``tetra_terms`` and its magnitude, written into ``det`` and ``magnitude``."""
-    p1, p2, p3 = cols[0], cols[1], cols[2]
-    e1 = np.subtract(p2, p1)
-    e2 = np.subtract(p3, p1)
-    t = np.empty(det.size)
-    u = np.empty(det.size)
-    det[:] = 0.0
-    magnitude[:] = 0.0
-    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        np.multiply(e1[j], e2[k], out=t)
-        np.multiply(e1[k], e2[j], out=u)
-        cross = np.subtract(t, u)
-        cross *= p1[i]
-        det += cross
-        np.abs(t, out=t)
-        np.abs(u, out=u)
-        t += u
-        t *= np.abs(p1[i], out=u)
-        magnitude += t

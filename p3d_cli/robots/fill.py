@@ -64,15 +64,9 @@ def load_masses(path: str) -> dict[str, float]:
     InputError
         Not readable, not a mapping, a value that is not a positive mass.
     """
-    import yaml
+    from p3d_cli.constraints.yaml_loader import read_yaml
 
-    try:
-        with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(path, f"cannot be read ({exc})", "check the path") from None
-    except yaml.YAMLError as exc:
-        raise InputError(path, f"is not valid YAML ({str(exc).splitlines()[0]})", "fix the file") from None
+    data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict):
         raise InputError(path, "is not a mapping of link names to masses", "write one line per link: forearm: 1.2 kg")
     out = {}
