@@ -165,8 +165,8 @@ def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, N
 
 def _chunk_results(client, work, parts: list[list[str]], futures: list) -> Generator[tuple, None, None]:
     """The packed results of each chunk in turn, as each is done. A chunk that killed its
-    workers (``KilledWorker``) is done again one input a task, ahead of the rest, so that only
-    the input that kills a worker again is lost, as with forked workers."""
+    workers (``KilledWorker``) is done again one input at a time, ahead of the rest, so that
+    only the input that kills a worker again is lost, as with forked workers."""
     from concurrent.futures import CancelledError
 
     from dask.distributed import KilledWorker
@@ -184,10 +184,12 @@ def _chunk_results(client, work, parts: list[list[str]], futures: list) -> Gener
             for item in part:
                 yield _dask_failure(item, exc)
             continue
-        singles = [client.submit(_run_packed, (work, item), pure=False, priority=1) for item in part]
-        for item, single in zip(part, singles):
+        # One at a time, ahead of the chunks still queued: a task waiting on a worker when it
+        # dies counts as a suspect as well, so inputs redone side by side would be lost with
+        # the culprit (Dask gives up on a task after ``allowed-failures`` such deaths).
+        for item in part:
             try:
-                yield single.result()
+                yield client.submit(_run_packed, (work, item), pure=False, priority=1).result()
             except (KilledWorker, CancelledError) as exc:
                 yield _dask_failure(item, exc)
 
