@@ -10,7 +10,8 @@ Where the work runs:
   workers (``p3d_cli.batch.workers``), or ``multiprocessing.Pool`` where fork is unsafe; the
   default is the number of cores this process may use;
 - on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``p3d-cli[dask]``;
-  the workers need p3d installed and must see the same paths).
+  the workers need p3d installed and must see the same paths), in chunks of files sized from
+  the files' sizes (``p3d_cli.batch.chunks``), a chunk's results delivered when it is done.
 
 Standard input is always read here, at its turn. The work function may be sent to other
 processes (Dask, or a pool started by spawn), so it must be picklable: a module-level
@@ -30,6 +31,7 @@ import signal
 from dataclasses import dataclass
 from typing import Callable, Generator, Iterable
 
+from p3d_cli.batch import chunks
 from p3d_cli.batch.inputs import expand_inputs
 from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError
 
@@ -134,10 +136,10 @@ def _serial(items: list[str], work) -> Generator[Outcome, None, None]:
 
 
 def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, None]:
-    from concurrent.futures import CancelledError
-
+    """The inputs on the Dask cluster at ``address``, in chunks of files
+    (``p3d_cli.batch.chunks``), all submitted at once; standard input here, at its turn."""
     try:
-        from dask.distributed import Client, KilledWorker
+        from dask.distributed import Client
     except ImportError:
         raise MissingExtraError("dask", "needs dask.distributed, which is not installed",
                                 "pip install 'p3d-cli[dask]'") from None
@@ -147,22 +149,58 @@ def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, N
         raise UsageError("dask", f"cannot connect to a Dask scheduler at {address!r} ({exc})",
                          "give the scheduler's address, e.g. tcp://host:8786") from None
     try:
-        remote = [(i, item) for i, item in enumerate(items) if item != "-"]
-        futures = dict(zip((i for i, _ in remote),
-                           client.map(_run_packed, [(work, item) for _, item in remote], pure=False)))
-        for i, item in enumerate(items):
-            if i not in futures:
-                packed = _run_packed((work, item))
-            else:
-                try:
-                    packed = futures[i].result()
-                except KilledWorker as exc:
-                    packed = _died(item, f"every Dask worker that tried it died ({exc.allowed_failures + 1} tried)")
-                except CancelledError:
-                    packed = _died(item, "the Dask cluster cancelled it (a worker or the scheduler was lost)")
-            yield _unpack(item, packed)
+        remote = [item for item in items if item != "-"]
+        slots = sum(client.nthreads().values())  # worker threads now (0 if none has joined yet)
+        spans = chunks.plan_chunks(chunks.file_weights(remote), slots)
+        # One submit per chunk, in order: each is its own graph, so the scheduler runs them
+        # first come, first served, and results come back roughly in input order.
+        futures = [client.submit(chunks.run_chunk, (_run_packed, work, remote[span.start:span.stop]), pure=False)
+                   for span in spans]
+        results = _chunk_results(client, work, [remote[span.start:span.stop] for span in spans], futures)
+        for item in items:
+            yield _unpack(item, _run_packed((work, item)) if item == "-" else next(results))
     finally:
         client.close()
+
+
+def _chunk_results(client, work, parts: list[list[str]], futures: list) -> Generator[tuple, None, None]:
+    """The packed results of each chunk in turn, as each is done. A chunk that killed its
+    workers (``KilledWorker``) is done again one input at a time, ahead of the rest, so that
+    only the input that kills a worker again is lost, as with forked workers."""
+    from concurrent.futures import CancelledError
+
+    from dask.distributed import KilledWorker
+
+    for k, (part, future) in enumerate(zip(parts, futures)):
+        futures[k] = None  # the cluster may forget a chunk's results once they are taken
+        try:
+            yield from future.result()
+            continue
+        except KilledWorker as exc:
+            if len(part) == 1:
+                yield _dask_failure(part[0], exc)
+                continue
+        except CancelledError as exc:  # the scheduler or this client's connection was lost
+            for item in part:
+                yield _dask_failure(item, exc)
+            continue
+        # One at a time, ahead of the chunks still queued: a task waiting on a worker when it
+        # dies counts as a suspect as well, so inputs redone side by side would be lost with
+        # the culprit (Dask gives up on a task after ``allowed-failures`` such deaths).
+        for item in part:
+            try:
+                yield client.submit(_run_packed, (work, item), pure=False, priority=1).result()
+            except (KilledWorker, CancelledError) as exc:
+                yield _dask_failure(item, exc)
+
+
+def _dask_failure(item: str, exc: BaseException) -> tuple:
+    """The packed error of an input that the cluster could not do."""
+    from dask.distributed import KilledWorker
+
+    if isinstance(exc, KilledWorker):
+        return _died(item, f"every Dask worker that tried it died ({exc.allowed_failures + 1} tried)")
+    return _died(item, "the Dask cluster cancelled it (a worker or the scheduler was lost)")
 
 
 def run_each(inputs: Iterable[str | InputError], work: Callable[[str], object], *,
