@@ -100,7 +100,7 @@ def test_open_box_at_1e8_inertia_positive():
 @pytest.mark.parametrize("offset", [0.0, 1e6])
 def test_random_open_soups_check_and_props_agree(dtype, offset):
     rng = np.random.default_rng(7)
-    for trial in range(5):
+    for _trial in range(5):
         pts = rng.normal(size=(8, 3)) + offset
         t = pts[rng.integers(0, 8, size=(20, 3))].astype(dtype)
         t = t[np.ptp(t.reshape(len(t), -1), axis=1) > 0]

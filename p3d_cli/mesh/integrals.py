@@ -260,9 +260,9 @@ def volume_from(total: float | Fraction, bound: float) -> float:
 
     The one rule ``p3d props`` and ``p3d check`` share (``total / 6`` rounded once).
     """
-    if abs(total) <= bound:
-        return 0.0
-    return float(total / 6) if isinstance(total, Fraction) else float(total) / 6.0
+    if isinstance(total, Fraction):
+        return 0.0 if abs(total) <= Fraction(bound) else float(total / 6)
+    return 0.0 if abs(total) <= bound else float(total) / 6.0
 
 
 def _exact_finish(origin: np.ndarray, total: list[Fraction], bound: np.ndarray) -> Moments:

@@ -141,6 +141,7 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
+    volume = _volume(blocks, corners, edges)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
     vertex_samples = [int(v) for v in nonmanifold[:SAMPLES]]
@@ -155,8 +156,8 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         misoriented_edges=int(edges.misoriented.size), nonmanifold_vertices=int(nonmanifold.size),
         zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated.size),
         degenerate_faces=int(zero.size), duplicate_faces=int(duplicates.shape[0]),
-        shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, corners.volume)),
-        volume=_volume(blocks, corners, edges), boundary_edge_samples=boundary,
+        shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, volume)),
+        volume=volume, boundary_edge_samples=boundary,
         nonmanifold_edge_samples=nonmanifold_edges, misoriented_edge_samples=misoriented,
         nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
                                          for v in vertex_samples),
