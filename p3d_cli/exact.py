@@ -87,14 +87,20 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     check_range(solid.source, found.moments, found.moments)
     facts = mesh_facts(solid, found)
     warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
+    moments = found.moments
+    if not moments.is_empty and moments.volume < 0:
+        # Wound inward: measure the solid the faces enclose. Every signed integral flips with
+        # the winding, so the volume and the central second moments change sign together
+        # (docs/method.md, "Inward-wound meshes"); the centre does not move.
+        moments = Moments(-moments.volume, moments.center, -moments.central, moments.errors)
+        facts = dataclasses.replace(facts, wound_inward=True)
     if found.inverted_tetrahedra:
         warnings.append(CodedWarning(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed "
                                      "inside out (negative orientation); each was counted with its positive "
                                      "volume", "inverted-tetrahedra"))
-    moments = found.moments
     if placed_bounds is not None:
-        moments = placement.moments(moments)
-        check_range(solid.source, found.moments, moments)
+        unplaced, moments = moments, placement.moments(moments)
+        check_range(solid.source, unplaced, moments)
         facts = dataclasses.replace(facts, bounds=placed_bounds())
     props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
@@ -154,7 +160,7 @@ def mesh_facts(solid: Solid, found: MeshAnalysis) -> MeshFacts:
     """What the analysis of ``solid``'s mesh found, for the record."""
     mesh = solid.mesh
     return MeshFacts(solid.source, mesh.format, found.face_count, found.closed, found.bounds,
-                     mesh.coordinate_dtype)
+                     mesh.coordinate_dtype, found.bounding)
 
 
 def shape_triangles(shape, tessellate: int) -> np.ndarray:
@@ -176,20 +182,27 @@ def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[str]:
     """Plain-words warnings for results that are not a clean solid's, each a ``CodedWarning``
     (``p3d_cli.warning_codes``: open, flat, inward, self-intersecting, coarse-float32)."""
     out: list[str] = []
-    if facts.closed is False:
+    if facts.closed is False and facts.bounding:
+        out.append(CodedWarning("mesh is non-manifold but bounding (some edge is used by more than two faces, "
+                                "but every edge is used as often in each direction, vertices matched by exact "
+                                "coordinates): the faces bound a solid, and these numbers are its own, "
+                                "independent of the origin", "non-manifold"))
+    elif facts.closed is False:
         out.append(CodedWarning("mesh is not closed (some edge is not shared by exactly two faces in opposite "
                    "directions, vertices matched by exact coordinates): an open surface has no "
-                   "well-defined volume, and these numbers depend on the formula and the origin", "open"))
+                   "well-defined volume, and these numbers depend on the formula and the origin "
+                   "(p3d sums signed tetrahedra from the world origin)", "open"))
     if moments.is_empty:
         out.append(CodedWarning("mesh encloses no volume (flat or degenerate): centre of mass and inertia are "
                                 "undefined", "flat"))
     elif moments.volume < 0:
         what = "closed but wound inward" if facts.closed else "wound mostly inward"
         out.append(CodedWarning(f"signed volume is negative: the mesh is {what} (faces point into the solid); "
-                                "mass and inertia carry the same negative sign; reverse the face winding to "
-                                "fix", "inward"))
-    elif facts.closed:
-        principal = np.linalg.eigvalsh(inertia_from_second_moments(moments.central))
+                                "the volume, mass and inertia reported are the enclosed solid's (positive; "
+                                "signed_volume keeps the sign); reverse the face winding to fix", "inward"))
+    if not moments.is_empty and facts.bounding:
+        central = moments.central if moments.volume > 0 else -moments.central
+        principal = np.linalg.eigvalsh(inertia_from_second_moments(central))
         if breaks_triangle_inequality(principal):
             out.append(CodedWarning("inertia is not a solid's (a principal moment is negative or breaks the "
                                     "triangle inequality): the mesh probably intersects itself",

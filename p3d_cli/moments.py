@@ -12,6 +12,8 @@ import numpy as np
 
 from p3d_cli.results import MomentErrors, Moments
 
+_EPS = float(np.finfo(np.float64).eps)
+
 
 def scale_moments(moments: Moments, scale) -> Moments:
     """Moments of the solid after the diagonal scale ``x -> (sx x, sy y, sz z)``.
@@ -32,16 +34,21 @@ def scale_moments(moments: Moments, scale) -> Moments:
     outer = np.outer(s, s)
     volume = moments.volume * det
     if moments.is_empty:
-        return Moments(volume, None, None, _scaled_errors(moments.errors, s, det, outer))
+        return Moments(volume, None, None, _scaled_errors(moments, s, det, outer))
     return Moments(volume, moments.center * s, moments.central * outer * det,
-                   _scaled_errors(moments.errors, s, det, outer))
+                   _scaled_errors(moments, s, det, outer))
 
 
-def _scaled_errors(errors, s, det, outer):
+def _scaled_errors(moments, s, det, outer):
+    errors = moments.errors
     if errors is None:
         return None
-    return MomentErrors(errors.volume * abs(det), errors.center * np.abs(s),
-                        errors.central * np.abs(outer * det))
+    center = errors.center * np.abs(s)
+    if moments.center is not None:
+        # The unplaced centre was rounded to the nearest float (half an ulp) and ``c s``
+        # rounds once more: both scale with the part's distance from the origin.
+        center = center + (np.spacing(np.abs(moments.center)) + _EPS * np.abs(moments.center)) * np.abs(s)
+    return MomentErrors(errors.volume * abs(det), center, errors.central * np.abs(outer * det))
 
 
 def rotate_moments(moments: Moments, rotation) -> Moments:
@@ -58,9 +65,15 @@ def rotate_moments(moments: Moments, rotation) -> Moments:
         return moments
     errors = moments.errors
     if errors is not None:
-        # Rotating mixes components; bound each by the largest before rotation.
-        errors = MomentErrors(errors.volume, np.full(3, np.linalg.norm(errors.center)),
-                              np.full((3, 3), np.linalg.norm(errors.central)))
+        # Rotating mixes components; bound each by the largest before rotation. The product
+        # ``R c`` also rounds (3 products and 2 sums per component, each a relative eps/2 of at
+        # most |c|), and the unplaced centre itself was rounded to half an ulp: far from the
+        # origin these dominate (a box at 1e8 turned 45°). Likewise ``R C Rᵀ``.
+        norm_c = float(np.linalg.norm(moments.center))
+        center = (np.linalg.norm(errors.center) + float(np.linalg.norm(np.spacing(np.abs(moments.center))))
+                  + 4 * _EPS * norm_c)
+        central = np.linalg.norm(errors.central) + 8 * _EPS * float(np.linalg.norm(moments.central))
+        errors = MomentErrors(errors.volume, np.full(3, center), np.full((3, 3), central))
     return Moments(moments.volume, r @ moments.center, r @ moments.central @ r.T, errors)
 
 
@@ -69,4 +82,12 @@ def translate_moments(moments: Moments, offset) -> Moments:
     t = np.asarray(offset, dtype=np.float64).reshape(3)
     if moments.is_empty:
         return moments
-    return Moments(moments.volume, moments.center + t, moments.central, moments.errors)
+    center = moments.center + t
+    errors = moments.errors
+    if errors is not None:
+        # The unplaced centre was rounded to half an ulp of ITS magnitude, and ``c + t`` rounds
+        # to half an ulp of the sum's: a part at 1e8 moved back by -1e8 keeps the first, which
+        # the final centre's own ulp no longer covers.
+        errors = MomentErrors(errors.volume, errors.center + np.spacing(np.abs(moments.center))
+                              + np.spacing(np.abs(center)), errors.central)
+    return Moments(moments.volume, center, moments.central, errors)

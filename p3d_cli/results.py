@@ -169,6 +169,13 @@ class MeshFacts:
     bounds : Bounds or None
     coordinate_dtype : str
         ``float32`` or ``float64``: the precision of the coordinates as stored.
+    bounding : bool or None
+        Every directed edge matched by as many uses the opposite way (true for closed meshes,
+        and for non-manifold ones such as two cubes sharing an edge, which still bound a
+        solid); None where it does not apply.
+    wound_inward : bool
+        The faces' signed volume was negative: the reported volume, mass and inertia are the
+        enclosed solid's (positive), and ``-volume`` is the signed volume.
     """
 
     source: str
@@ -177,6 +184,8 @@ class MeshFacts:
     closed: bool | None
     bounds: Bounds | None
     coordinate_dtype: str = "float64"
+    bounding: bool | None = None
+    wound_inward: bool = False
 
 
 @dataclass(frozen=True)

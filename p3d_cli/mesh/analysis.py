@@ -13,6 +13,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
+from p3d_cli.mesh.boundary import EXACT_LIMIT, boundary_sums, net_boundary, unbalanced_edges
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_sums
 from p3d_cli.results import Bounds, Moments
@@ -31,6 +32,12 @@ class MeshAnalysis:
     face_count : int
     inverted_tetrahedra : int
         Tetrahedra of a volume mesh listed with negative orientation (counted positive).
+    bounding : bool or None
+        Every directed edge is matched by as many uses in the opposite direction (the net
+        boundary is empty, ``p3d_cli.mesh.boundary``): true for closed meshes and for
+        non-manifold ones that still bound a region. None where the closed test was not run.
+    boundary_edges : int
+        Directed edges of the net boundary, counted with multiplicity.
     """
 
     moments: Moments
@@ -38,6 +45,8 @@ class MeshAnalysis:
     closed: bool | None
     face_count: int
     inverted_tetrahedra: int = 0
+    bounding: bool | None = None
+    boundary_edges: int = 0
 
 
 def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis:
@@ -94,28 +103,47 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
     if seen != source.face_count:
         raise FormatError(where, f"expected {source.face_count} faces but read {seen}",
                           "the file is truncated or corrupt; export it again")
-    is_closed = None
+    is_closed = bounding = None
+    boundary = 0
+    moments = None
     if keys is not None:
         keys = keys[:filled]
-        is_closed = keys_pair_up(keys)
+        is_closed = bounding = keys_pair_up(keys)
         if not is_closed:
+            unbalanced = unbalanced_edges(keys)
             # A 64-bit hash collision can only make a closed mesh look open: most failures
             # prove openness from the sorted keys alone; the few doubtful edges are compared
             # exactly in one more pass.
             doubtful = doubtful_edges(keys)
             del keys
             is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
+            bounding = is_closed or unbalanced.size == 0
+            if not bounding:
+                moments, boundary = _open_moments(source, sums, unbalanced)
     bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
-    moments = sums.moments()
-    if is_closed is False:
-        # An open surface bounds no solid: its divergence-theorem sums depend on the origin of
-        # the tetrahedra. Report the convention of the reference tools, signed
-        # tetrahedra from the world origin, rather than one that moves with our local origin.
-        about_world = MomentSums(np.zeros(3))
-        for block in source.read_blocks():
-            about_world.add_triangles(block)
-        moments = about_world.moments()
-    return MeshAnalysis(moments, bounds, is_closed, seen)
+    if moments is None:
+        moments = sums.moments()
+    return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary)
+
+
+def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: np.ndarray) -> tuple[Moments, int]:
+    """An open surface's moments in the world-origin convention, and its net boundary size.
+
+    An open surface bounds no solid: its divergence-theorem sums depend on the origin of the
+    tetrahedra. p3d reports the convention of the reference tools, signed tetrahedra from the
+    world origin (docs/method.md, "Open and non-manifold meshes"), computed as the local sums
+    plus the net boundary's exact terms, so that a part far from the origin keeps its accuracy.
+    """
+    start, end, count = net_boundary(source.read_blocks(), unbalanced)
+    total = int(count.sum())
+    if total <= EXACT_LIMIT:
+        return sums.moments(boundary_sums(start, end, count, sums.origin)), total
+    # Too many boundary edges for exact terms (a soup of loose faces): plain sums about the
+    # world origin, whose rounding bound grows with the distance from it.
+    about_world = MomentSums(np.zeros(3))
+    for block in source.read_blocks():
+        about_world.add_triangles(block)
+    return about_world.moments(), total
 
 
 def _analyze_tetrahedra(source: MeshSource, where: str) -> MeshAnalysis:

@@ -189,6 +189,29 @@ def sides_pair_up_exactly(source_blocks, doubtful: np.ndarray) -> bool:
         The triangles again, in blocks.
     doubtful : (d,) uint64, sorted
     """
+    start, end = sides_of_edges(source_blocks, doubtful)
+    if start.shape[0] == 0:
+        return False
+    # Undirected edge: its two end points in lexicographic order; direction: which came first.
+    swap = _lex_less(end, start)
+    lo = np.where(swap[:, None], end, start)
+    hi = np.where(swap[:, None], start, end)
+    _, inverse, counts = np.unique(np.concatenate([lo, hi], axis=1), axis=0,
+                                   return_inverse=True, return_counts=True)
+    forward = np.bincount(inverse.reshape(-1), weights=~swap, minlength=counts.size)
+    return bool((counts == 2).all() and (forward == 1).all())
+
+
+def sides_of_edges(source_blocks, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end points ``(k, 3)`` of every side whose edge id (key without its direction
+    bit) is in the sorted ``edges``; ``-0.0`` read as ``0.0``.
+
+    Parameters
+    ----------
+    source_blocks : iterable of (k, 3, 3) arrays
+        The triangles again, in blocks.
+    edges : (d,) uint64, sorted
+    """
     from p3d_cli.mesh.integrals import columns as to_columns
 
     ends = []
@@ -199,7 +222,7 @@ def sides_pair_up_exactly(source_blocks, doubtful: np.ndarray) -> bool:
         scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)
         h = _column_hashes(cols, scratch)
         keys, keep = _side_keys(h, scratch)
-        hit = np.isin(keys >> _ONE, doubtful)
+        hit = np.isin(keys >> _ONE, edges)
         if not hit.any():
             continue
         # Corner coordinates in the keys' (slot, face) layout, +0.0 so -0.0 equals 0.0.
@@ -207,20 +230,11 @@ def sides_pair_up_exactly(source_blocks, doubtful: np.ndarray) -> bool:
         start, end = corners, corners[[1, 2, 0]]
         if keep is not None:
             start, end = start[keep], end[keep]
-        start, end = start.reshape(-1, 3)[hit], end.reshape(-1, 3)[hit]
-        ends.append(np.concatenate([start, end], axis=1))
+        ends.append(np.concatenate([start.reshape(-1, 3)[hit], end.reshape(-1, 3)[hit]], axis=1))
     if not ends:
-        return False
+        return np.zeros((0, 3)), np.zeros((0, 3))
     sides = np.concatenate(ends)
-    start, end = sides[:, :3], sides[:, 3:]
-    # Undirected edge: its two end points in lexicographic order; direction: which came first.
-    swap = _lex_less(end, start)
-    lo = np.where(swap[:, None], end, start)
-    hi = np.where(swap[:, None], start, end)
-    _, inverse, counts = np.unique(np.concatenate([lo, hi], axis=1), axis=0,
-                                   return_inverse=True, return_counts=True)
-    forward = np.bincount(inverse.reshape(-1), weights=~swap, minlength=counts.size)
-    return bool((counts == 2).all() and (forward == 1).all())
+    return sides[:, :3], sides[:, 3:]
 
 
 def _lex_less(a: np.ndarray, b: np.ndarray) -> np.ndarray:

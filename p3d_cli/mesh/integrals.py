@@ -22,6 +22,7 @@ pairwise within a block (``numpy.sum``) and the block totals with ``math.fsum``.
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -227,8 +228,17 @@ class MomentSums:
         total = np.array([math.fsum(blocks[:, k]) for k in range(N_SUMS)])
         return total, np.array(self._abs_totals).sum(axis=0)
 
-    def moments(self) -> Moments:
-        """The solid's ``Moments``; volume 0 and no centre when the sum is within rounding of 0."""
+    def moments(self, extra: list[Fraction] | None = None) -> Moments:
+        """The solid's ``Moments``; volume 0 and no centre when the sum is within rounding of 0.
+
+        Parameters
+        ----------
+        extra : list of 10 Fraction, optional
+            Exact terms to add to the totals (an open mesh's boundary terms,
+            ``p3d_cli.mesh.boundary.boundary_sums``); the sum and the shift to the centre are
+            then done exactly and rounded once, so that a centre far from the local origin
+            loses nothing to cancellation.
+        """
         total, abs_total = self.totals()
         # A-priori rounding bound per summed quantity. Each term D·f: D's error is at most
         # ~6 roundings of its products' magnitudes, f's a few roundings of its own magnitude
@@ -239,9 +249,11 @@ class MomentSums:
         # loses up to half the smallest subnormal, whatever the magnitudes: ~40 operations per
         # term, each at most 2^-1075 off. Negligible for any part of ordinary size.
         bound = rounding * abs_total + 40 * self.count * _SMALLEST
-        volume = total[0] / 6.0
+        if extra is not None:
+            return _exact_finish(self.origin, [Fraction(float(t)) + e for t, e in zip(total, extra)], bound)
+        volume = volume_from(total[0], bound[0])
         volume_error = bound[0] / 6.0
-        if self.count == 0 or abs(total[0]) <= bound[0]:
+        if self.count == 0 or volume == 0.0:
             return Moments(0.0, None, None, MomentErrors(volume_error, np.zeros(3), np.zeros((3, 3))))
         first = total[1:4] / 24.0
         second = np.empty((3, 3))
@@ -253,6 +265,32 @@ class MomentSums:
         center = self.origin + offset
         errors = _errors(volume, offset, bound, volume_error)
         return Moments(volume, center, central, errors)
+
+
+def volume_from(total: float | Fraction, bound: float) -> float:
+    """The volume from the summed ``6V`` and its rounding bound: 0.0 within the bound.
+
+    The one rule ``p3d props`` and ``p3d check`` share (``total / 6`` rounded once).
+    """
+    if isinstance(total, Fraction):
+        return 0.0 if abs(total) <= Fraction(bound) else float(total / 6)
+    return 0.0 if abs(total) <= bound else float(total) / 6.0
+
+
+def _exact_finish(origin: np.ndarray, total: list[Fraction], bound: np.ndarray) -> Moments:
+    """``moments()`` from exact totals: ``c = F/V`` and ``C = S - V c cᵀ`` in rationals."""
+    volume = volume_from(total[0], bound[0])
+    volume_error = bound[0] / 6.0
+    if volume == 0.0:
+        return Moments(0.0, None, None, MomentErrors(volume_error, np.zeros(3), np.zeros((3, 3))))
+    v = total[0] / 6
+    offset = [t / 24 / v for t in total[1:4]]
+    central = np.empty((3, 3))
+    for row, (i, j) in enumerate(_PAIRS):
+        central[i, j] = central[j, i] = float(total[4 + row] / 120 - v * offset[i] * offset[j])
+    center = np.array([float(Fraction(float(o)) + d) for o, d in zip(origin, offset)])
+    offset_float = np.array([float(d) for d in offset])
+    return Moments(volume, center, central, _errors(volume, offset_float, bound, volume_error))
 
 
 def _errors(volume, offset, bound, volume_error) -> MomentErrors:

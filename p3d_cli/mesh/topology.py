@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.mesh.boundary import EXACT_LIMIT, boundary_of, boundary_sums
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
@@ -47,6 +48,7 @@ from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
 from p3d_cli.mesh.vertices import corner_coords, group_corners
+from p3d_cli.mesh.volume import SignedVolume
 
 __all__ = ["Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
            "TopologyReport", "VertexSample", "components", "corner_vertex_ids",
@@ -139,6 +141,7 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
+    volume = _volume(blocks, corners, edges)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
     vertex_samples = [int(v) for v in nonmanifold[:SAMPLES]]
@@ -153,14 +156,31 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         misoriented_edges=int(edges.misoriented.size), nonmanifold_vertices=int(nonmanifold.size),
         zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated.size),
         degenerate_faces=int(zero.size), duplicate_faces=int(duplicates.shape[0]),
-        shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, corners.volume)),
-        volume=corners.volume, boundary_edge_samples=boundary,
+        shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, volume)),
+        volume=volume, boundary_edge_samples=boundary,
         nonmanifold_edge_samples=nonmanifold_edges, misoriented_edge_samples=misoriented,
         nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
                                          for v in vertex_samples),
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
+
+
+def _volume(blocks, corners, edges: Edges) -> float:
+    """The signed volume ``p3d props`` reports for the same triangles (one convention,
+    docs/method.md, "Open and non-manifold meshes"): the local sums when every edge cancels,
+    plus the net boundary's exact terms when some does not (``p3d_cli.mesh.boundary``)."""
+    if not (edges.boundary.size or edges.nonmanifold.size or edges.misoriented.size):
+        return corners.volume                       # closed: nothing to add
+    start, end, count = boundary_of(blocks)
+    if count.size == 0:
+        return corners.volume                       # non-manifold but bounding
+    if int(count.sum()) <= EXACT_LIMIT:
+        return corners.volume_sums.volume(boundary_sums(start, end, count, corners.volume_sums.origin)[0])
+    about_world = SignedVolume(np.zeros(3), block=None)   # the fallback of analysis._open_moments
+    for block in blocks():
+        about_world.add(block)
+    return about_world.volume()
 
 
 def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> np.ndarray:

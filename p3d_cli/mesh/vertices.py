@@ -43,7 +43,11 @@ class Corners:
     points : (m, 3) float
         Coordinates of each vertex (as stored in the input, not widened).
     volume : float
-        Signed volume of the soup (``triangle_moments`` about the bounding-box centre).
+        Signed volume of the soup's local sums (about the first block's bounding-box centre,
+        each block summed as ``p3d props``' one-pass analysis sums it); a closed or bounding
+        mesh's volume. An open mesh's adds its net boundary's terms (``volume_sums``).
+    volume_sums : SignedVolume
+        The accumulator behind ``volume``, for ``volume_sums.volume(extra)``.
     """
 
     ids: np.ndarray
@@ -52,6 +56,7 @@ class Corners:
     first: np.ndarray
     points: np.ndarray
     volume: float
+    volume_sums: SignedVolume | None = None
 
     @property
     def count(self) -> int:
@@ -89,20 +94,24 @@ def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None 
     keys, lo, hi, float32 = _hashed_keys(blocks, n, bits, on_block, hasher, where)
     keys.sort()
     ids, first = _ids_from_sorted(keys, n, bits)
+    # The origin ``p3d props`` sums about (the first block's bounding-box centre), so that both
+    # commands report one number (docs/method.md, "Open and non-manifold meshes").
     points, volume, mixed = _confirm(blocks, ids, keys, first, bits,
                                      origin_from_bounds(lo, hi, float32) if n else np.zeros(3))
     if mixed.size:
         ids, first, points = _split_groups(blocks, keys, ids, first, points, bits, mixed)
-    return Corners(ids, keys, bits, first, points, volume)
+    return Corners(ids, keys, bits, first, points, volume.volume(), volume)
 
 
 def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
-    """Pass 1: the packed keys ``(hash high bits) | corner index``, and the bounds."""
+    """Pass 1: the packed keys ``(hash high bits) | corner index``, and the first block's
+    bounds and dtype (the local origin's, as in ``p3d_cli.mesh.analysis``)."""
     keys = np.empty(3 * n, dtype=np.uint64)
     high = np.uint64(((1 << 64) - 1) ^ ((1 << bits) - 1))
     lo = hi = None
     float32 = False
     done = 0
+    first_bounds = None
     for block in blocks():
         cols = columns(block)
         k = cols.shape[2]
@@ -121,6 +130,8 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
                              "repair or re-export the mesh")
         lo = block_lo if lo is None else np.minimum(lo, block_lo)
         hi = block_hi if hi is None else np.maximum(hi, block_hi)
+        if first_bounds is None:
+            first_bounds = (block_lo, block_hi, float32)
         if on_block is not None:
             on_block(done, cols, block)
         if hasher is None:
@@ -133,7 +144,9 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
         done += k
     if done != n:
         _count_error(where, n, str(done))
-    return keys, lo, hi, float32
+    if first_bounds is None:
+        return keys, lo, hi, float32
+    return (keys, *first_bounds)
 
 
 def _count_error(where: str | None, n: int, read: str):
@@ -179,7 +192,7 @@ def _confirm(blocks, ids, keys, first, bits, origin):
     # exact coordinates, which compare equal exactly when the stored ones do).
     axes = None
     bad = []
-    volume = SignedVolume(origin)
+    volume = SignedVolume(origin, block=None)
     done = 0
     for block in blocks():
         cols = columns(block)                       # (slot, axis, face), contiguous
@@ -208,7 +221,7 @@ def _confirm(blocks, ids, keys, first, bits, origin):
         done += k
     points = np.ascontiguousarray(axes.T) if axes is not None else np.zeros((m, 3))
     mixed = np.unique(np.concatenate(bad)) if bad else np.zeros(0, dtype=np.int64)
-    return points, volume.volume(), mixed
+    return points, volume, mixed
 
 
 def _split_groups(blocks, keys, ids, first, points, bits, mixed):

@@ -11,23 +11,32 @@ volume (the tests compare the two).
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.integrals import columns, determinants
+from p3d_cli.mesh.integrals import columns, determinants, volume_from
 
 #: Faces per summed block: ``triangle_moments``' default block.
 BLOCK = 65536
 _UNIT_ROUNDOFF = np.finfo(np.float64).eps / 2
+_SMALLEST = 2.0 ** -1074
 
 
 class SignedVolume:
-    """Running signed volume about ``origin``; feed blocks of any size in file order."""
+    """Running signed volume about ``origin``; feed blocks of any size in file order.
 
-    def __init__(self, origin: np.ndarray) -> None:
+    ``block`` faces are summed pairwise at a time (``BLOCK``: as ``triangle_moments``); with
+    ``block=None`` each fed block is summed on its own, as the one-pass analysis of
+    ``p3d props`` sums the blocks a ``MeshSource`` yields, so that ``p3d check`` fed the same
+    blocks about the same origin gets the same bits.
+    """
+
+    def __init__(self, origin: np.ndarray, block: int | None = BLOCK) -> None:
         self.origin = np.asarray(origin, dtype=np.float64).reshape(3)
-        self._det = np.empty(BLOCK)
-        self._magnitude = np.empty(BLOCK)
+        self._block = block
+        self._det = np.empty(block or 0)
+        self._magnitude = np.empty(block or 0)
         self._filled = 0
         self._totals: list[float] = []
         self._abs_totals: list[float] = []
@@ -43,14 +52,21 @@ class SignedVolume:
         place to the origin."""
         cols -= self.origin[None, :, None]
         start, k = 0, cols.shape[2]
+        if self._block is None:
+            if k:
+                self._det, self._magnitude = np.empty(k), np.empty(k)
+                determinants(cols[0], cols[1], cols[2], self._det, self._magnitude)
+                self._filled = k
+                self._flush()
+            return
         while start < k:
-            take = min(BLOCK - self._filled, k - start)
+            take = min(self._block - self._filled, k - start)
             at = slice(self._filled, self._filled + take)
             block = cols[:, :, start:start + take]
             determinants(block[0], block[1], block[2], self._det[at], self._magnitude[at])
             self._filled += take
             start += take
-            if self._filled == BLOCK:
+            if self._filled == self._block:
                 self._flush()
 
     def _flush(self) -> None:
@@ -63,16 +79,20 @@ class SignedVolume:
             self._longest = max(self._longest, k)
         self._filled = 0
 
-    def volume(self) -> float:
-        """The volume, 0.0 when the sum is within its rounding bound of zero (as ``Moments``)."""
+    def volume(self, extra: Fraction | None = None) -> float:
+        """The volume, 0.0 when the sum is within its rounding bound of zero (as ``Moments``).
+
+        ``extra``: exact ``6V`` terms to add first (an open mesh's boundary terms,
+        ``p3d_cli.mesh.boundary.boundary_sums``), as ``MomentSums.moments`` adds them.
+        """
         self._flush()
-        if not self._totals:
+        if not self._totals and extra is None:
             return 0.0
         total = math.fsum(self._totals)
         abs_total = 0.0
         for value in self._abs_totals:      # the row-by-row sum of MomentSums.totals
             abs_total += value
-        bound = (20 + math.log2(self._longest)) * _UNIT_ROUNDOFF * abs_total
-        if abs(total) <= bound:
-            return 0.0
-        return total / 6.0
+        bound = ((20 + math.log2(self._longest)) * _UNIT_ROUNDOFF * abs_total
+                 + 40 * self._count * _SMALLEST)
+        return volume_from(total if extra is None else Fraction(total) + extra, bound)
+

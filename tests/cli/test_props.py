@@ -96,13 +96,15 @@ def test_several_inputs_one_bad(cube, tmp_path):
 
 
 def test_inward_wound_mesh_warns_and_keeps_sign(tmp_path):
+    # Issue 12.6: an inward-wound mesh is measured as the solid its faces enclose (positive
+    # volume, mass and inertia); the sign is kept in signed_volume and the warning.
     path = tmp_path / "inside_out.stl"
     write_binary_stl(path, cube_triangles()[:, ::-1])
     result = run("props", str(path), "--json")
     assert result.exit_code == 0
     record = json.loads(result.stdout)
-    assert record["volume"] == -1.0 and record["mass"] == -1.0
-    assert np.all(np.diag(record["inertia"]) < 0)
+    assert record["volume"] == 1.0 and record["mass"] == 1.0 and record["signed_volume"] == -1.0
+    assert np.all(np.diag(record["inertia"]) > 0)
     assert any("negative" in w and "wound inward" in w for w in record["warnings"])
     assert "p3d: warning:" in result.stderr
     strict = run("props", str(path), "--strict")
