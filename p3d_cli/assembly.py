@@ -26,19 +26,18 @@ parser (``p3d_cli.placement.placement_from_mapping``), as for scenes and the com
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass, field
 from typing import Any
 
 from p3d_cli.errors import InputError, P3DError, UsageError
 from p3d_cli.placement import IDENTITY, Placement, placement_from_mapping
+from p3d_cli.solid import names_assembly_file
 
 #: Keys of one part.
 PART_KEYS = ("name", "mesh", "shape", "assembly", "density", "mass", "translate", "rotate", "quat", "rpy",
              "scale")
 #: What a part is made of: exactly one of these.
 KINDS = ("mesh", "shape", "assembly")
-_PARTS_LINE = re.compile(rb"^parts\s*:", re.MULTILINE)
 
 
 @dataclass(frozen=True)
@@ -86,14 +85,7 @@ def find_assembly(thing) -> Assembly | None:
         return thing
     if isinstance(thing, os.PathLike):
         thing = os.fspath(thing)
-    if not isinstance(thing, str) or thing == "-" or not os.path.isfile(thing):
-        return None
-    try:
-        with open(thing, "rb") as f:
-            head = f.read(1 << 14)
-    except OSError:
-        return None
-    if b"\0" in head or not _PARTS_LINE.search(head):
+    if not isinstance(thing, str) or not names_assembly_file(thing):
         return None
     return load_assembly(thing)
 

@@ -17,7 +17,7 @@ from p3d_cli.errors import UsageError
 from p3d_cli.placement import IDENTITY, Placement, then
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
-from p3d_cli.solid import as_solid
+from p3d_cli.solid import as_solid, names_assembly_file
 
 #: The values of ``props(method=...)``.
 METHODS = ("exact", "montecarlo")
@@ -83,9 +83,8 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     placement = IDENTITY if placement is None else placement
     check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     from p3d_cli import units as unit_rules
-    from p3d_cli.assembly import find_assembly
 
-    found = find_assembly(thing)
+    found = _assembly(thing)
     solid = None
     if found is None:
         # A scene file (glTF, 3MF, DAE, AMF) declares its unit, and one of several objects is an
@@ -112,6 +111,19 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
                            tolerance=tolerance)
     return finish(result, system, user_placement, density_given)
+
+
+def _assembly(thing):
+    """``thing`` as an ``Assembly`` when it is one or names an assembly file, else None; the
+    assembly modules are imported only then (a mesh's run does not pay for them)."""
+    import os
+
+    if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly":
+        if type(thing).__name__ == "Assembly" or names_assembly_file(thing):
+            from p3d_cli.assembly import find_assembly
+
+            return find_assembly(thing)
+    return None
 
 
 def check_props_options(method, density, mass, tessellate, samples, seed, tolerance) -> None:
@@ -156,9 +168,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
     [1.0, 2.0, 3.0]
     """
     placement = IDENTITY if placement is None else placement
-    from p3d_cli.assembly import find_assembly
-
-    found = find_assembly(thing)
+    found = _assembly(thing)
     if found is not None:
         from p3d_cli.assemble import assembly_bounds
 

@@ -10,6 +10,7 @@ gives. The road then runs one way: read (here) → validate (as the triangles st
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from typing import Any, BinaryIO, TypeGuard, Union
 
@@ -148,3 +149,18 @@ def spec_warnings(source: str) -> list[str]:
         return [f"{source!r} is read as a shape spec, not as the file of that name; "
                 f"write ./{source} for the file"]
     return []
+
+
+def names_assembly_file(path) -> bool:
+    """True for a text file with a top-level ``parts:`` line: an assembly (YAML, recognised by
+    its content; ``p3d_cli.assembly``), told without importing the assembly modules."""
+
+    path = os.fspath(path)
+    if path == "-" or not os.path.isfile(path):
+        return False
+    try:
+        with open(path, "rb") as f:
+            head = f.read(1 << 14)
+    except OSError:
+        return False
+    return b"\0" not in head and re.search(rb"^parts\s*:", head, re.MULTILINE) is not None

@@ -18,7 +18,6 @@ import numpy as np
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import BLOCK, MeshSource
-from p3d_cli.io.stl_ascii import load_ascii
 
 _HEADER = 84
 _RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
@@ -60,6 +59,8 @@ def load(raw: RawInput) -> MeshSource:
     if n is not None and _HEADER + 50 * n == raw.size:
         return _load_binary(raw, n, ())
     if _starts_with_solid(head) and b"\0" not in head[:256]:
+        from p3d_cli.io.stl_ascii import load_ascii  # a binary STL's run does not import it
+
         return load_ascii(raw)
     if n is None:
         raise FormatError(raw.where, f"{raw.size} bytes is too short for a binary STL (84-byte header) and the "
