@@ -173,9 +173,7 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
     -------
     Estimate
     """
-    samples = int(samples)
-    if samples < 2:
-        raise UsageError("samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+    samples = check_samples(samples)
     rng = np.random.default_rng(seed)
     half, centre = 0.5 * bounds.size, bounds.center
     total = np.zeros(10)
@@ -200,6 +198,22 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
     return Estimate(bounds, samples, seed, mean, covariance, origin)
 
 
+def check_samples(samples) -> int:
+    """``samples`` as an int in [2, ``MAX_SAMPLES``], refused before any point is drawn.
+
+    The upper limit keeps a run to minutes, not days (1e13 points would take weeks): the
+    error falls only as ``1/√N``, so 1e8 points already give a relative error near 1e-4.
+    """
+    samples = int(samples)
+    if samples < 2:
+        raise UsageError("samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+    if samples > MAX_SAMPLES:
+        raise UsageError("samples", f"{samples} is over the limit of {MAX_SAMPLES:,} samples",
+                         f"give at most {MAX_SAMPLES}; the error falls only as 1/sqrt(samples), "
+                         "so average independent seeds if you need more")
+    return samples
+
+
 def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
                           seed: int = DEFAULT_SEED) -> int:
     """Samples needed for a relative standard error ``tolerance`` on the volume.
@@ -214,11 +228,17 @@ def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
         raise UsageError("tolerance", f"{tolerance!r} is not a positive relative error",
                          "give e.g. tolerance=1e-3 for 0.1 %")
     pilot = sample(inside, bounds, PILOT_SAMPLES, seed=(int(seed), 1))
-    p, var = pilot.mean[0], pilot.covariance[0, 0]
+    p, var = float(pilot.mean[0]), float(pilot.covariance[0, 0])
     if not p > 0:
         return MAX_SAMPLES
-    need = max(var / (p * p * tolerance * tolerance), 1.25 * MIN_INSIDE / p)
-    return int(min(MAX_SAMPLES, max(MIN_SAMPLES, math.ceil(need))))
+    # (s / (p tolerance))² formed as a square of a quotient, so that a tiny tolerance gives
+    # inf (then the cap) rather than 0 / 0 = nan; a solid filling its box has s = 0.
+    ratio = math.sqrt(max(var, 0.0)) / p
+    spread = ratio / tolerance if ratio > 0 else 0.0
+    need = max(spread * spread, 1.25 * MIN_INSIDE / p)  # a float product: inf, never an exception
+    if not need < MAX_SAMPLES:
+        return MAX_SAMPLES
+    return int(max(MIN_SAMPLES, math.ceil(need)))
 
 
 def triangles_inside(triangles: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
@@ -359,6 +379,7 @@ def _mesh_setup(solid: Solid, placement: Placement):
     return triangles_inside(flat.reshape(-1, 3, 3)), bounds, 0.5 * (lo + hi) + shift, facts, warnings
 
 
-__all__ = ["Estimate", "sample", "samples_for_tolerance", "montecarlo_moments", "montecarlo_props",
+__all__ = ["Estimate", "sample", "check_samples", "MAX_SAMPLES", "samples_for_tolerance",
+           "montecarlo_moments", "montecarlo_props",
            "triangles_inside", "conservative_errors", "clopper_pearson", "sampling_warnings",
            "DEFAULT_SAMPLES", "DEFAULT_SEED", "MIN_INSIDE", "ALPHA"]

@@ -7,6 +7,7 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.options import FiniteFloat, json_option
 from p3d_cli.constraints import SolveResult, load_scene, solve_scene
+from p3d_cli.constraints.simulation import check_steps
 from p3d_cli.constraints.trajectory import trajectory_writer
 from p3d_cli.errors import UsageError
 
@@ -42,6 +43,7 @@ def solve(scene, steps, dt, trajectory, as_json):
         raise UsageError(option, "only applies when stepping", "add --steps N")
     if steps > 0 and dt is None:
         raise UsageError("--dt", "stepping needs a time step", "give --dt, e.g. --dt 0.001")
+    check_steps(steps, dt)  # the limits that need no scene, before reading it
     parsed = load_scene(scene)
     if trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)

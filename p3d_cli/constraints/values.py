@@ -16,6 +16,10 @@ from p3d_cli.errors import SceneError
 from p3d_cli.inertia import breaks_triangle_inequality
 
 
+#: float64's smallest normal number.
+TINY = float(np.finfo(np.float64).tiny)
+
+
 def is_number(value) -> bool:
     # YAML's true/false are Python bools, which are ints: never accept them as numbers.
     return isinstance(value, (int, float)) and not isinstance(value, bool)
@@ -49,6 +53,10 @@ def number(value, where: str, *, positive: bool = False) -> float:
         raise SceneError(where, f"{value!r} is not finite", "write a finite number")
     if positive and x <= 0:
         raise SceneError(where, f"must be positive, got {value!r}", "write a number greater than 0")
+    if positive and x < TINY:
+        # A subnormal keeps only a few digits, and its inverse (the solver's) overflows.
+        raise SceneError(where, f"{value!r} is below float64's normal range (about 2.2e-308)",
+                         "give it in a larger unit")
     return x
 
 
@@ -107,6 +115,9 @@ def inertia(value, where: str) -> np.ndarray:
         raise SceneError(where, f"is not positive definite (principal moments {_join(principal)})",
                          "every principal moment of a solid is > 0 (p3d uses the positive tensor, "
                          "Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm)")
+    if principal[0] < TINY:
+        raise SceneError(where, f"principal moment {principal[0]:.3g} is below float64's normal range "
+                         "(about 2.2e-308), so its inverse overflows", "give the inertia in a larger unit")
     if breaks_triangle_inequality(principal):
         raise SceneError(where, f"breaks the triangle inequality: principal moments {_join(principal)} "
                          f"have {principal[0]:.6g} + {principal[1]:.6g} < {principal[2]:.6g}",
