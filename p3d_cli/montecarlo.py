@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from p3d_cli.errors import UsageError
+from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.exact import mesh_facts, mesh_warnings
 from p3d_cli.inertia import density_for, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import analyze
@@ -123,10 +123,17 @@ class Estimate:
         m = self.mean
         if self.conservative:
             return conservative_errors(self, density, mass)
-        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, density, mass)  # noqa: E731
+        # Mass and inertia are linear in the density (or the mass given): differentiate at
+        # unit density or mass and scale the errors after, so that a mass near float64's largest
+        # does not overflow the finite differences (whose steps are 1e-6 of m0).
+        factor = mass if mass is not None else (1.0 if density is None else density)
+        unit_density, unit_mass = (None, 1.0) if mass is not None else (1.0, None)
+        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, unit_density, unit_mass)  # noqa: E731
         jac = _jacobian(f, m, step=1e-6 * m[0])
         cov = jac @ self.covariance @ jac.T / self.samples
         se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        se[1] *= factor
+        se[5:] *= factor
         return {"volume": float(se[0]), "mass": float(se[1]), "center_of_mass": se[2:5],
                 "inertia": se[5:14].reshape(3, 3)}
 
@@ -298,7 +305,10 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
     setup = _shape_setup if solid.shape is not None else _mesh_setup
     inside, bounds, origin, facts, warnings = setup(solid, placement)
     estimate, moments = None, Moments(0.0, None, None)
-    if np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size)):
+    if not np.all(np.isfinite(bounds.size)):
+        raise RangeError(solid.source, "the placed solid's bounding box overflows float64 (the part is too "
+                         "large)", "measure in a larger unit (e.g. m instead of mm)")
+    if np.all(bounds.size > 0):
         estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance,
                                       origin=origin)
         moments = estimate.moments()
@@ -313,10 +323,19 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
         warnings += sampling_warnings(estimate, uncertainty["volume"], tolerance)
+        _check_uncertainty(uncertainty, solid.source)
     details: dict = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
     if not placement.is_identity:
         details["placement"] = placement.describe()
     return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty, details)
+
+
+def _check_uncertainty(uncertainty: dict, where: str) -> None:
+    """Standard errors are finite (they are at most about the values, which are checked)."""
+    for key, value in uncertainty.items():
+        if value is not None and not np.all(np.isfinite(value)):
+            raise RangeError(where, f"the Monte Carlo error of the {key.replace('_', ' ')} overflows float64",
+                             "measure in units that keep the numbers nearer 1")
 
 
 def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[str]:
