@@ -248,7 +248,8 @@ def test_a_large_but_finite_time_step_still_steps(tmp_path):
     ("shape: box, density: 1.0e-320, velocity: [0, 1, 0]", ["bodies.bob.density", "below float64's normal range"]),
     ("mass: 1, inertia: [1.0e-320, 1.0e-320, 1.0e-320], velocity: [0, 1, 0]",
      ["bodies.bob.inertia", "below float64's normal range"]),
-    ("shape: 'sphere:1e-120', velocity: [0, 1, 0]", ["sphere:1e-120", "underflow"]),
+    ("shape: 'sphere:1e-120', velocity: [0, 1, 0]", ["bodies.bob.shape: 'sphere:1e-120'", "underflow"]),
+    ("shape: 'box:1e308,0.02,1', velocity: [0, 1, 0]", ["bodies.bob.shape: 'box:1e308,0.02,1'", "overflow"]),
     ("shape: 'box:1e-110,1,1', velocity: [0, 1, 0]", ["underflow"]),
 ])
 def test_overflow_in_a_scene_is_one_error_naming_it(tmp_path, bob, parts):
