@@ -285,3 +285,25 @@ def test_hostile_props_are_a_right_result_or_one_error_without_numpy_warnings(ar
         one_error_line(result)
     else:
         assert "NaN" not in result.stdout and "Infinity" not in result.stdout
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_extreme_but_valid_scene_values_are_read_without_overflow(tmp_path):
+    from p3d_cli.constraints import values
+    from p3d_cli.errors import SceneError
+
+    np.testing.assert_array_equal(values.inertia([1e308, 1e308, 1e308], "i"), np.diag([1e308] * 3))
+    with pytest.raises(SceneError, match="triangle inequality"):
+        values.inertia([1e308, 1e307, 1e306], "i")
+    s = math.sqrt(0.5)
+    for q in ([1e200, 1e200, 0, 0], [1e-300, 1e-300, 0, 0]):
+        np.testing.assert_allclose(values.rotation({"quat": q}, "r"), [s, s, 0, 0], rtol=1e-15)
+    # A hinge axis written at any scale is the same axis: the solve is the same as with [0, 0, 1].
+    hinge = ("bodies:\n  base: {fixed: true}\n  door: {mass: 1, inertia: [1, 1, 1], position: [1, 0, 0],"
+             " angular_velocity: [1, 2, 3]}\nconstraints:\n  - {type: hinge, a: base, b: door, attach_a: [0, 0, 0],"
+             " axis_a: [0, 0, AXIS], axis_b: [0, 0, 1]}\n")
+    records = [json.loads(run("solve", scene_file(tmp_path, hinge.replace("AXIS", a)), "--json").stdout)
+               for a in ("1", "1.0e+200", "1.0e-300")]
+    omega = records[0]["bodies"]["door"]["angular_velocity"]
+    assert omega[:2] == [0.0, 0.0] and omega[2] > 0     # only the turn about the hinge is left
+    assert records[1] == records[0] and records[2] == records[0]

@@ -289,7 +289,7 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
     axis_a = axis_b = length = None
     if kind == "hinge":
         axis_a, axis_b = _pair(spec, "axis", place, bodies[a], bodies[b], point=False)
-        axis_a, axis_b = axis_a / np.linalg.norm(axis_a), axis_b / np.linalg.norm(axis_b)
+        axis_a, axis_b = values.unit_vector(axis_a), values.unit_vector(axis_b)   # nonzero, finite
     if kind == "bar":
         world_a = bodies[a].position + quat_to_matrix(bodies[a].rotation) @ attach_a
         world_b = bodies[b].position + quat_to_matrix(bodies[b].rotation) @ attach_b
