@@ -307,3 +307,10 @@ def test_extreme_but_valid_scene_values_are_read_without_overflow(tmp_path):
     omega = records[0]["bodies"]["door"]["angular_velocity"]
     assert omega[:2] == [0.0, 0.0] and omega[2] > 0     # only the turn about the hinge is left
     assert records[1] == records[0] and records[2] == records[0]
+
+
+def test_the_step_limits_in_the_help_are_the_ones_enforced():
+    from p3d_cli.constraints.simulation import MAX_STEP_WORK, MAX_STEPS
+
+    text = " ".join(run("solve", "--help").stdout.split())
+    assert f"at most {MAX_STEPS:,}, and {MAX_STEP_WORK:,} / (bodies + constraints)" in text

@@ -15,7 +15,8 @@ from p3d_cli.errors import UsageError
 @click.command()
 @click.argument("scene", metavar="SCENE.yaml")
 @click.option("--steps", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Advance the scene this many time steps under its gravity (0: one velocity solve).")
+              help="Advance the scene this many time steps under its gravity (0: one velocity solve; "
+                   "at most 10,000,000, and 100,000,000 / (bodies + constraints): docs/solve.md).")
 @click.option("--dt", type=FiniteFloat(positive=True), default=None, metavar="SECONDS",
               help="Time step for --steps.")
 @click.option("--trajectory", type=click.Path(dir_okay=False, writable=True), default=None, metavar="FILE.csv",
