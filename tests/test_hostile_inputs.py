@@ -41,6 +41,10 @@ def one_error_line(result, *parts):
      ["bodies.a.position", "too large"]),
     (BASE + "constraints:\n  - {type: [ball], a: a, b: b, attach_a: [0, 0, 0], attach_b: [0, 0, 0]}\n",
      ["constraints[0].type", "expected a type name, got a list of 1"]),
+    (BASE + "constraints:\n  - {type: ball, a: [0, 0, 1], b: b, attach_a: [0, 0, 0]}\n",
+     ["constraints[0].a", "expected a body name, got a list of 3"]),
+    (BASE + "constraints:\n  - {type: ball, a: a, b: {x: 1}, attach_a: [0, 0, 0]}\n",
+     ["constraints[0].b", "expected a body name, got a mapping"]),
     ("bodies:\n  a: {mass: 1e300, inertia: [1, 1, 1]}\n", ["bodies.a.mass", "write it with a dot"]),
     ("bodies:\n  a: {mass: 1, mass: 2, inertia: [1, 1, 1]}\n", ["key 'mass' appears twice"]),
 ])

@@ -276,6 +276,9 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
         name = spec.get(side)
         if name is None:
             raise SceneError(f"{place}.{side}", "missing", f"name the body on side {side}")
+        if not isinstance(name, str):     # a list or mapping is not even hashable
+            raise SceneError(f"{place}.{side}", f"expected a body name, got {values.describe(name)}",
+                             "bodies are: " + ", ".join(bodies))
         if name not in bodies:
             raise SceneError(f"{place}.{side}", f"no body named {name!r}", "bodies are: " + ", ".join(bodies))
         names.append(name)

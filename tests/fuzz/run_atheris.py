@@ -23,6 +23,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.exact  # noqa: F401 - instrumented before the targets import them
     import p3d_cli.io.formats  # noqa: F401
+    import p3d_cli.constraints.scene  # noqa: F401 - the scene targets' code, instrumented too
+    import p3d_cli.constraints.simulation  # noqa: F401
     from targets import TARGETS, seeds
 
 
