@@ -139,6 +139,10 @@ def check_props_options(method, density, mass, tessellate, samples, seed, tolera
     if method == "montecarlo" and tessellate is not None:
         raise UsageError("tessellate", "given with method=montecarlo",
                          "Monte Carlo samples the exact shape; drop one of them")
+    if samples is not None:
+        from p3d_cli.montecarlo import check_samples
+
+        check_samples(samples)  # a limit, checked before any input is read
 
 
 def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | None = None,

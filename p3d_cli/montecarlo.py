@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from p3d_cli.errors import UsageError
+from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.exact import mesh_facts, mesh_warnings
 from p3d_cli.inertia import density_for, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import analyze
@@ -123,10 +123,17 @@ class Estimate:
         m = self.mean
         if self.conservative:
             return conservative_errors(self, density, mass)
-        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, density, mass)  # noqa: E731
+        # Mass and inertia are linear in the density (or the mass given): differentiate at
+        # unit density or mass and scale the errors after, so that a mass near float64's largest
+        # does not overflow the finite differences (whose steps are 1e-6 of m0).
+        factor = mass if mass is not None else (1.0 if density is None else density)
+        unit_density, unit_mass = (None, 1.0) if mass is not None else (1.0, None)
+        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, unit_density, unit_mass)  # noqa: E731
         jac = _jacobian(f, m, step=1e-6 * m[0])
         cov = jac @ self.covariance @ jac.T / self.samples
         se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        se[1] *= factor
+        se[5:] *= factor
         return {"volume": float(se[0]), "mass": float(se[1]), "center_of_mass": se[2:5],
                 "inertia": se[5:14].reshape(3, 3)}
 
@@ -173,9 +180,7 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
     -------
     Estimate
     """
-    samples = int(samples)
-    if samples < 2:
-        raise UsageError("samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+    samples = check_samples(samples)
     rng = np.random.default_rng(seed)
     half, centre = 0.5 * bounds.size, bounds.center
     total = np.zeros(10)
@@ -200,6 +205,22 @@ def sample(inside: Callable[[np.ndarray], np.ndarray], bounds: Bounds, samples: 
     return Estimate(bounds, samples, seed, mean, covariance, origin)
 
 
+def check_samples(samples) -> int:
+    """``samples`` as an int in [2, ``MAX_SAMPLES``], refused before any point is drawn.
+
+    The upper limit keeps a run to minutes, not days (1e13 points would take weeks): the
+    error falls only as ``1/√N``, so 1e8 points already give a relative error near 1e-4.
+    """
+    samples = int(samples)
+    if samples < 2:
+        raise UsageError("samples", f"{samples} is too few", "give at least 2 (thousands for a useful answer)")
+    if samples > MAX_SAMPLES:
+        raise UsageError("samples", f"{samples} is over the limit of {MAX_SAMPLES:,} samples",
+                         f"give at most {MAX_SAMPLES}; the error falls only as 1/sqrt(samples), "
+                         "so average independent seeds if you need more")
+    return samples
+
+
 def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
                           seed: int = DEFAULT_SEED) -> int:
     """Samples needed for a relative standard error ``tolerance`` on the volume.
@@ -214,11 +235,17 @@ def samples_for_tolerance(inside: Callable, bounds: Bounds, tolerance: float,
         raise UsageError("tolerance", f"{tolerance!r} is not a positive relative error",
                          "give e.g. tolerance=1e-3 for 0.1 %")
     pilot = sample(inside, bounds, PILOT_SAMPLES, seed=(int(seed), 1))
-    p, var = pilot.mean[0], pilot.covariance[0, 0]
+    p, var = float(pilot.mean[0]), float(pilot.covariance[0, 0])
     if not p > 0:
         return MAX_SAMPLES
-    need = max(var / (p * p * tolerance * tolerance), 1.25 * MIN_INSIDE / p)
-    return int(min(MAX_SAMPLES, max(MIN_SAMPLES, math.ceil(need))))
+    # (s / (p tolerance))² formed as a square of a quotient, so that a tiny tolerance gives
+    # inf (then the cap) rather than 0 / 0 = nan; a solid filling its box has s = 0.
+    ratio = math.sqrt(max(var, 0.0)) / p
+    spread = ratio / tolerance if ratio > 0 else 0.0
+    need = max(spread * spread, 1.25 * MIN_INSIDE / p)  # a float product: inf, never an exception
+    if not need < MAX_SAMPLES:
+        return MAX_SAMPLES
+    return int(max(MIN_SAMPLES, math.ceil(need)))
 
 
 def triangles_inside(triangles: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
@@ -278,7 +305,10 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
     setup = _shape_setup if solid.shape is not None else _mesh_setup
     inside, bounds, origin, facts, warnings = setup(solid, placement)
     estimate, moments = None, Moments(0.0, None, None)
-    if np.all(bounds.size > 0) and np.all(np.isfinite(bounds.size)):
+    if not np.all(np.isfinite(bounds.size)):
+        raise RangeError(solid.source, "the placed solid's bounding box overflows float64 (the part is too "
+                         "large)", "measure in a larger unit (e.g. m instead of mm)")
+    if np.all(bounds.size > 0):
         estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance,
                                       origin=origin)
         moments = estimate.moments()
@@ -293,10 +323,19 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
         warnings += sampling_warnings(estimate, uncertainty["volume"], tolerance)
+        _check_uncertainty(uncertainty, solid.source)
     details: dict = {"samples": 0 if estimate is None else estimate.samples, "seed": seed}
     if not placement.is_identity:
         details["placement"] = placement.describe()
     return PropsResult(facts, props, "montecarlo", tuple(warnings), uncertainty, details)
+
+
+def _check_uncertainty(uncertainty: dict, where: str) -> None:
+    """Standard errors are finite (they are at most about the values, which are checked)."""
+    for key, value in uncertainty.items():
+        if value is not None and not np.all(np.isfinite(value)):
+            raise RangeError(where, f"the Monte Carlo error of the {key.replace('_', ' ')} overflows float64",
+                             "measure in units that keep the numbers nearer 1")
 
 
 def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[str]:
@@ -359,6 +398,7 @@ def _mesh_setup(solid: Solid, placement: Placement):
     return triangles_inside(flat.reshape(-1, 3, 3)), bounds, 0.5 * (lo + hi) + shift, facts, warnings
 
 
-__all__ = ["Estimate", "sample", "samples_for_tolerance", "montecarlo_moments", "montecarlo_props",
+__all__ = ["Estimate", "sample", "check_samples", "MAX_SAMPLES", "samples_for_tolerance",
+           "montecarlo_moments", "montecarlo_props",
            "triangles_inside", "conservative_errors", "clopper_pearson", "sampling_warnings",
            "DEFAULT_SAMPLES", "DEFAULT_SEED", "MIN_INSIDE", "ALPHA"]

@@ -7,6 +7,7 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.options import FiniteFloat, json_option
 from p3d_cli.constraints import SolveResult, load_scene, solve_scene
+from p3d_cli.constraints.simulation import check_steps
 from p3d_cli.constraints.trajectory import trajectory_writer
 from p3d_cli.errors import UsageError
 
@@ -14,7 +15,8 @@ from p3d_cli.errors import UsageError
 @click.command()
 @click.argument("scene", metavar="SCENE.yaml")
 @click.option("--steps", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Advance the scene this many time steps under its gravity (0: one velocity solve).")
+              help="Advance the scene this many time steps under its gravity (0: one velocity solve; "
+                   "at most 10,000,000, and 100,000,000 / (bodies + constraints): docs/solve.md).")
 @click.option("--dt", type=FiniteFloat(positive=True), default=None, metavar="SECONDS",
               help="Time step for --steps.")
 @click.option("--trajectory", type=click.Path(dir_okay=False, writable=True), default=None, metavar="FILE.csv",
@@ -42,6 +44,7 @@ def solve(scene, steps, dt, trajectory, as_json):
         raise UsageError(option, "only applies when stepping", "add --steps N")
     if steps > 0 and dt is None:
         raise UsageError("--dt", "stepping needs a time step", "give --dt, e.g. --dt 0.001")
+    check_steps(steps, dt)  # the limits that need no scene, before reading it
     parsed = load_scene(scene)
     if trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)

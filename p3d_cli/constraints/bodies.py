@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.errors import P3DError, SceneError
+from p3d_cli.errors import P3DError, RangeError, SceneError
 from p3d_cli.inertia import mass_properties
 from p3d_cli.results import Moments
 
@@ -70,15 +70,21 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     from p3d_cli.solid import Solid, as_solid
 
     shape = parse_shape_spec(spec_or_path, where)
-    if shape is not None:
-        moments = solid_moments(Solid(spec_or_path, shape=shape))
-    else:
-        path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
-        try:
-            moments = solid_moments(as_solid(path))
-        except P3DError as exc:
-            raise SceneError(where, f"cannot use mesh {spec_or_path!r}: {exc.message}",
-                             "fix or re-export the mesh") from None
+    # Out-of-range moments end in one RangeError (checked where they are made), as for p3d props:
+    # numpy's overflow warnings on the way would only repeat it.
+    with np.errstate(all="ignore"):
+        if shape is not None:
+            try:
+                moments = solid_moments(Solid(spec_or_path, shape=shape))
+            except RangeError as exc:      # named by the body that gives the shape
+                raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
+        else:
+            path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
+            try:
+                moments = solid_moments(as_solid(path))
+            except P3DError as exc:
+                raise SceneError(where, f"cannot use mesh {spec_or_path!r}: {exc.message}",
+                                 "fix or re-export the mesh") from None
     if moments.is_empty or moments.volume <= 0:
         what = ("encloses no volume" if moments.is_empty else
                 "has negative signed volume (faces wound inward)")
@@ -135,7 +141,9 @@ def _inertial(body, scene_dir, cache, counter) -> Inertial:
     mass = body.mass
     inertia = body.inertia
     if moments is not None and (mass is None or inertia is None):
-        props = mass_properties(moments, density=None if mass is not None else body.density, mass=mass)
+        with np.errstate(all="ignore"):     # an overflow is one RangeError from mass_properties
+            props = mass_properties(moments, density=None if mass is not None else body.density, mass=mass,
+                                    where=body.where)
         mass = props.mass if mass is None else mass
         inertia = props.inertia if inertia is None else inertia
     return Inertial(float(mass), np.asarray(inertia, dtype=np.float64), np.asarray(com, dtype=np.float64))

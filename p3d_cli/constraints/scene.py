@@ -276,6 +276,9 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
         name = spec.get(side)
         if name is None:
             raise SceneError(f"{place}.{side}", "missing", f"name the body on side {side}")
+        if not isinstance(name, str):     # a list or mapping is not even hashable
+            raise SceneError(f"{place}.{side}", f"expected a body name, got {values.describe(name)}",
+                             "bodies are: " + ", ".join(bodies))
         if name not in bodies:
             raise SceneError(f"{place}.{side}", f"no body named {name!r}", "bodies are: " + ", ".join(bodies))
         names.append(name)
@@ -289,11 +292,15 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
     axis_a = axis_b = length = None
     if kind == "hinge":
         axis_a, axis_b = _pair(spec, "axis", place, bodies[a], bodies[b], point=False)
-        axis_a, axis_b = axis_a / np.linalg.norm(axis_a), axis_b / np.linalg.norm(axis_b)
+        axis_a, axis_b = values.unit_vector(axis_a), values.unit_vector(axis_b)   # nonzero, finite
     if kind == "bar":
         world_a = bodies[a].position + quat_to_matrix(bodies[a].rotation) @ attach_a
         world_b = bodies[b].position + quat_to_matrix(bodies[b].rotation) @ attach_b
-        gap = float(np.linalg.norm(world_b - world_a))
+        with np.errstate(all="ignore"):     # an overflow is checked for just below
+            gap = float(np.linalg.norm(world_b - world_a))
+        if not np.isfinite(gap):
+            raise SceneError(place, "the distance between the bar's attachment points overflows float64",
+                             "give positions and attachments in units that keep them nearer 1")
         if spec.get("length") is not None:
             length = values.number(spec["length"], f"{place}.length")
             if length <= 0:
@@ -318,10 +325,15 @@ def _pair(spec: dict, stem: str, place: str, body_a: BodySpec, body_b: BodySpec,
     va = values.vector(spec[key_a], f"{place}.{key_a}", nonzero=not point) if given_a else None
     vb = values.vector(spec[key_b], f"{place}.{key_b}", nonzero=not point) if given_b else None
     ra, rb = quat_to_matrix(body_a.rotation), quat_to_matrix(body_b.rotation)
-    if va is None:
-        world = rb @ vb + (body_b.position if point else 0.0)
-        va = ra.T @ (world - (body_a.position if point else 0.0))
-    if vb is None:
-        world = ra @ va + (body_a.position if point else 0.0)
-        vb = rb.T @ (world - (body_b.position if point else 0.0))
+    with np.errstate(all="ignore"):     # an overflow is checked for just below
+        if va is None:
+            world = rb @ vb + (body_b.position if point else 0.0)
+            va = ra.T @ (world - (body_a.position if point else 0.0))
+        if vb is None:
+            world = ra @ va + (body_a.position if point else 0.0)
+            vb = rb.T @ (world - (body_b.position if point else 0.0))
+    for key, v in ((key_a, va), (key_b, vb)):
+        if not np.isfinite(v).all():
+            raise SceneError(f"{place}.{key}", "carried into its body's frame, it overflows float64",
+                             f"give {key} yourself, or positions nearer the origin")
     return va, vb

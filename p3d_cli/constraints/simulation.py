@@ -15,11 +15,17 @@ from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.constraints.outcome import BodyState, ConstraintOutcome, SolveResult
 from p3d_cli.constraints.solver import DENSE_LIMIT
 from p3d_cli.constraints.world import World
-from p3d_cli.errors import UsageError
+from p3d_cli.errors import RangeError, UsageError
 
 #: Position correction stops once every position error is below this fraction of the
 #: scene's length scale (the largest attachment offset).
 POSITION_RTOL = 1e-12
+
+#: Limits on stepping, checked before any work (docs/solve.md, "Limits"): a step of a small
+#: scene takes about 0.2 ms, so these bound a run to hours, not the ages ``--steps 1e20`` asks.
+MAX_STEPS = 10_000_000
+#: ... and on steps × (bodies + constraints), which a step's cost (and a trajectory's rows) grow with.
+MAX_STEP_WORK = 100_000_000
 
 #: Header of the trajectory rows ``trajectory_rows`` produces.
 TRAJECTORY_HEADER = ("t", "body", "x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
@@ -80,17 +86,55 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     ------
     SceneError, UsageError
     """
-    if steps < 0:
-        raise UsageError("--steps", f"must be 0 or more, got {steps}", "give a whole number of steps")
-    if steps > 0 and (dt is None or not math.isfinite(dt) or dt <= 0):
-        raise UsageError("--dt", "stepping needs a positive time step", "give --dt, e.g. --dt 0.001")
+    check_steps(steps, dt, scene)
     inertials = resolve_inertials(needed_bodies(scene, steps > 0, centers or on_step is not None),
                                   scene_dir or os.getcwd(), shape_counter)
+    # Overflow is found by the explicit checks below (``_check_finite``), which name what
+    # overflowed: numpy's warnings would only repeat it, a dozen lines at a time.
+    with np.errstate(all="ignore"):
+        try:
+            return _solve(scene, inertials, steps, dt, on_step, dense_limit)
+        except np.linalg.LinAlgError:
+            # The constraint system's entries grow as (attachment - centre of mass)² / inertia; an
+            # eigen-decomposition fails only when they are no longer finite.
+            raise _overflow(scene.where, "the constraint system (bodies far from their joints)",
+                            "take a smaller dt, or give the scene in units that keep its numbers "
+                            "nearer 1") from None
+
+
+def check_steps(steps: int, dt: float | None = None, scene=None) -> None:
+    """Refuse a step count or time step before any work: negative, over ``MAX_STEPS``, or (with
+    ``scene``) over ``MAX_STEP_WORK`` steps × (bodies + constraints); a non-positive ``dt``.
+
+    Raises
+    ------
+    UsageError
+    """
+    if steps < 0:
+        raise UsageError("steps", f"must be 0 or more, got {steps}", "give a whole number of steps")
+    if steps > MAX_STEPS:
+        raise UsageError("steps", f"{steps} is over the limit of {MAX_STEPS:,} steps",
+                         "take a larger dt, or run the scene in parts from its last state")
+    if scene is not None:
+        size = len(scene.bodies) + len(scene.constraints)
+        if steps * size > MAX_STEP_WORK:
+            raise UsageError("steps", f"{steps} steps of a scene of {len(scene.bodies)} bodies and "
+                             f"{len(scene.constraints)} constraints is over the limit of {MAX_STEP_WORK:,} "
+                             "steps × (bodies + constraints)",
+                             f"give at most {MAX_STEP_WORK // size} steps, or a larger dt")
+    if steps > 0 and (dt is None or not math.isfinite(dt) or dt <= 0):
+        raise UsageError("dt", "stepping needs a positive, finite time step", "give dt=, e.g. dt=0.001")
+
+
+def _solve(scene, inertials, steps, dt, on_step, dense_limit) -> SolveResult:
     world = World(scene, inertials, dense_limit)
+    _check_inverses(world)
     before = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
+    _check_totals(scene, before, "before the solve")
     tolerance = POSITION_RTOL * _length_scale(scene)
     if steps == 0:
         solution = world.solve_velocities()
+        _check_state(world, "after the velocity solve")
         worst = max((float(np.abs(e).max()) for e in world.position_residuals(world.geometries())), default=0.0)
         return _result(world, solution, before, 0, 0.0, worst)
     # RATTLE (Andersen 1983; Leimkuhler & Skeel 1994) with the velocity solve of eq. 20 as its
@@ -104,19 +148,61 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     half_kick = 0.5 * dt * scene.gravity
     worst, _, _ = world.correct_positions(tolerance)
     solution = world.solve_velocities()
+    _check_state(world, "after assembling the scene")
     for step in range(1, steps + 1):
         frozen = world.frozen_rows()
         world.vel[world.active] += half_kick
         world.drift(dt)
+        _check_state(world, step, dt)
         error, dx, dtheta = world.correct_positions(tolerance, frozen)
         world.vel += dx / dt
         world.omega += dtheta / dt
         worst = max(worst, error)
         world.vel[world.active] += half_kick
         solution = world.solve_velocities()
+        _check_state(world, step, dt)   # the correction's kick
         if on_step is not None:
             on_step(step * dt, _bodies(world))
     return _result(world, solution, before, steps, steps * dt, worst)
+
+
+def _overflow(where: str, what: str, hint: str = "") -> RangeError:
+    return RangeError(where, f"{what} overflows float64 (or is not a number)",
+                      hint or "give the scene in units that keep its numbers nearer 1 (e.g. tonnes, km), "
+                      "or smaller velocities")
+
+
+def _check_inverses(world: World) -> None:
+    """Inverse masses and inertias are finite (a mass or inertia near float64's smallest is not)."""
+    for i, body in enumerate(world.scene.bodies):
+        if not (np.isfinite(world.inv_mass[i]) and np.isfinite(world.inv_inertia_body[i]).all()):
+            raise _overflow(body.where, "the inverse mass or inertia",
+                            "give mass and inertia in a smaller unit, so that they are nearer 1")
+
+
+def _check_totals(scene, totals, when: str) -> None:
+    for name, value in zip(("kinetic energy", "momentum", "angular momentum"), totals):
+        if not np.isfinite(value).all():
+            raise _overflow(scene.where, f"the {name} {when}")
+
+
+def _check_state(world: World, when: str | int, dt: float | None = None) -> None:
+    """Every body's position, orientation and velocities are finite, else one RangeError naming
+    the first body and quantity that overflowed (a huge dt or velocity does this); ``when`` is a
+    phrase, or the step number (its message is only formatted on failure)."""
+    # One scalar per step: a sum is finite when every term is (a sum that overflows although
+    # its terms do not only costs the search below, which then finds nothing).
+    if math.isfinite(world.com.sum() + world.quat.sum() + world.vel.sum() + world.omega.sum()):
+        return
+    arrays = (("position", world.com), ("rotation", world.quat), ("velocity", world.vel),
+              ("angular_velocity", world.omega))
+    for name, values in arrays:
+        bad = ~np.isfinite(values).all(axis=1)
+        if bad.any():
+            body = world.scene.bodies[int(np.argmax(bad))]
+            if isinstance(when, int):
+                when = f"at step {when} (t = {when * (dt or 0.0):g})"
+            raise _overflow(body.where, f"the {name} {when}", "take a smaller dt" if dt is not None else "")
 
 
 def trajectory_row(t: float, body: BodyState) -> list:
@@ -151,11 +237,15 @@ def _result(world: World, solution, before, steps: int, time: float, worst: floa
     constraints = []
     for k, spec in enumerate(world.scene.constraints):
         report = world.modules[k].impulse(geos[k], solution.multipliers[k])
+        if not all(np.isfinite(report[key]).all() for key in ("impulse", "angular_impulse") if key in report
+                   and report[key] is not None):
+            raise _overflow(spec.where or world.scene.where, "the impulse")
         constraints.append(ConstraintOutcome(spec.type, spec.a, spec.b, report["impulse"],
                                              report.get("angular_impulse"),
                                              float(np.linalg.norm(velocity[k])),
                                              float(np.linalg.norm(position[k])), world.island_of[k]))
     after = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
+    _check_totals(world.scene, after, "after the solve")
     return SolveResult(_bodies(world), tuple(constraints), solution.rank, solution.equations,
                        len(world.islands), (before[0], after[0]), (before[1], after[1]),
                        (before[2], after[2]), steps, time, worst)

@@ -16,6 +16,10 @@ from p3d_cli.errors import SceneError
 from p3d_cli.inertia import breaks_triangle_inequality
 
 
+#: float64's smallest normal number.
+TINY = float(np.finfo(np.float64).tiny)
+
+
 def is_number(value) -> bool:
     # YAML's true/false are Python bools, which are ints: never accept them as numbers.
     return isinstance(value, (int, float)) and not isinstance(value, bool)
@@ -49,6 +53,10 @@ def number(value, where: str, *, positive: bool = False) -> float:
         raise SceneError(where, f"{value!r} is not finite", "write a finite number")
     if positive and x <= 0:
         raise SceneError(where, f"must be positive, got {value!r}", "write a number greater than 0")
+    if positive and x < TINY:
+        # A subnormal keeps only a few digits, and its inverse (the solver's) overflows.
+        raise SceneError(where, f"{value!r} is below float64's normal range (about 2.2e-308)",
+                         "give it in a larger unit")
     return x
 
 
@@ -80,6 +88,22 @@ def vector(value, where: str, *, nonzero: bool = False) -> np.ndarray:
     return out
 
 
+def unit_vector(v: np.ndarray) -> np.ndarray:
+    """``v / |v|``, divided first by its largest component so that the norm neither overflows
+    (components near 1e200) nor underflows to 0 (near 1e-300).
+
+    Raises
+    ------
+    ValueError
+        ``v`` is zero or not finite.
+    """
+    scale = float(np.abs(v).max()) if v.size else 0.0
+    if not (math.isfinite(scale) and scale > 0):
+        raise ValueError("zero or not finite")
+    v = v / scale
+    return v / np.linalg.norm(v)
+
+
 def inertia(value, where: str) -> np.ndarray:
     """A (3, 3) inertia tensor about the centre of mass: symmetric positive definite, and its
     principal moments obey the triangle inequality ``I1 + I2 >= I3`` (every real solid's do).
@@ -99,15 +123,22 @@ def inertia(value, where: str) -> np.ndarray:
     scale = float(np.abs(matrix).max())
     if scale == 0.0:
         raise SceneError(where, "is zero", "a body with mass has a positive definite inertia")
-    if np.abs(matrix - matrix.T).max() > 1e-9 * scale:
+    # Differences, halves and the eigen-decomposition are taken of the matrix divided by its
+    # largest entry, so that entries near float64's largest do not overflow on the way.
+    unit = matrix / scale
+    if np.abs(unit - unit.T).max() > 1e-9:
         raise SceneError(where, "is not symmetric", "an inertia tensor has Ixy = Iyx, Ixz = Izx, Iyz = Izy")
-    matrix = 0.5 * (matrix + matrix.T)
-    principal = np.linalg.eigvalsh(matrix)
+    unit = 0.5 * (unit + unit.T)
+    matrix = unit * scale
+    principal = np.linalg.eigvalsh(unit) * scale
     if principal[0] <= 1e-12 * scale:
         raise SceneError(where, f"is not positive definite (principal moments {_join(principal)})",
                          "every principal moment of a solid is > 0 (p3d uses the positive tensor, "
                          "Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm)")
-    if breaks_triangle_inequality(principal):
+    if principal[0] < TINY:
+        raise SceneError(where, f"principal moment {principal[0]:.3g} is below float64's normal range "
+                         "(about 2.2e-308), so its inverse overflows", "give the inertia in a larger unit")
+    if breaks_triangle_inequality(principal / scale):     # scale-free: I1 + I2 may overflow
         raise SceneError(where, f"breaks the triangle inequality: principal moments {_join(principal)} "
                          f"have {principal[0]:.6g} + {principal[1]:.6g} < {principal[2]:.6g}",
                          "no solid has such an inertia; check the units and the diagonal")
@@ -125,12 +156,11 @@ def rotation(value, where: str) -> np.ndarray:
         q = value["quat"]
         if not isinstance(q, list) or len(q) != 4 or not all(is_number(v) for v in q):
             raise SceneError(f"{where}.quat", f"expected four numbers [w, x, y, z], got {describe(q)}", hint)
-        out = np.array(q, dtype=np.float64)
-        norm = float(np.linalg.norm(out))
-        if not math.isfinite(norm) or norm == 0.0:
+        try:
+            return unit_vector(np.array(q, dtype=np.float64))
+        except ValueError:
             raise SceneError(f"{where}.quat", "is zero or not finite, so it is no rotation",
-                             "the identity is [1, 0, 0, 0]")
-        return out / norm
+                             "the identity is [1, 0, 0, 0]") from None
     angle_keys = keys & {"degrees", "radians"}
     if "axis" in keys and len(angle_keys) == 1 and keys == {"axis"} | angle_keys:
         axis = vector(value["axis"], f"{where}.axis", nonzero=True)

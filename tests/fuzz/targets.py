@@ -43,25 +43,45 @@ def measure_bytes(data: bytes, fmt: str):
     return result
 
 
-def load_scene_bytes(data: bytes):
-    """Parse and solve ``data`` as a scene file (one velocity solve), as ``p3d solve`` would:
-    the ``SolveResult``, or None when p3d refused the scene with a ``P3DError``."""
+def load_scene_bytes(data: bytes, steps: int = 0):
+    """Parse and solve ``data`` as a scene file (one velocity solve, or ``steps`` steps of
+    0.01 s), as ``p3d solve`` would: the ``SolveResult``, or None when p3d refused the scene with
+    a ``P3DError``. A numpy RuntimeWarning is a bug too (an overflow must be one RangeError),
+    and so is a non-finite number in the result."""
+    import warnings
+
     from p3d_cli.constraints import load_scene, solve_scene
 
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "scene.yaml")
         with open(path, "wb") as f:
             f.write(data)
-        try:
-            return solve_scene(load_scene(path))
-        except P3DError:
-            return None
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            try:
+                result = solve_scene(load_scene(path), steps=steps, dt=0.01 if steps else None)
+            except P3DError:
+                return None
+    _assert_finite_solve(result)
+    return result
+
+
+def _assert_finite_solve(result) -> None:
+    numbers = [*result.kinetic_energy, *result.momentum, *result.angular_momentum, result.max_position_error]
+    for body in result.bodies:
+        numbers += [body.position, body.rotation, body.velocity, body.angular_velocity]
+    for c in result.constraints:
+        numbers += [c.impulse, c.error, c.position_error]
+        if c.angular_impulse is not None:
+            numbers.append(c.angular_impulse)
+    for value in numbers:
+        assert np.all(np.isfinite(value)), value
 
 
 def seeds(name: str) -> list[bytes]:
     """Valid inputs of each target to mutate from: the bundled samples and examples."""
     samples = REPO / "sample_meshes"
-    if name == "scene":
+    if name in ("scene", "scene_steps"):
         return [p.read_bytes() for p in sorted((REPO / "examples").glob("*.yaml"))]
     if name == "stl":
         return [(samples / "bracket.stl").read_bytes()[:MAX_INPUT], (samples / "tetrahedron.stl").read_bytes(),
@@ -103,4 +123,5 @@ TARGETS = {
     "ply": lambda data: measure_bytes(data, "ply"),
     "off": lambda data: measure_bytes(data, "off"),
     "scene": load_scene_bytes,
+    "scene_steps": lambda data: load_scene_bytes(data, steps=3),
 }
