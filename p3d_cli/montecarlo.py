@@ -278,11 +278,13 @@ def montecarlo_props(solid: Solid, placement: Placement = IDENTITY, *, samples: 
     placement : Placement
         Scale, rotate and move the solid before sampling.
     samples : int, optional
-        Points to draw (default ``DEFAULT_SAMPLES``); ignored when ``tolerance`` is given.
+        Points to draw (default ``DEFAULT_SAMPLES``, at most ``MAX_SAMPLES``); ignored when
+        ``tolerance`` is given.
     seed : int, optional
         Random seed (default ``DEFAULT_SEED``): the same seed gives the same numbers.
     tolerance : float, optional
-        Target relative standard error of the volume; picks the sample count.
+        Target relative standard error of the volume; picks the sample count (at most
+        ``MAX_SAMPLES``: a tolerance that needs more runs the cap and warns, however small).
     density, mass, about
         As for ``p3d_cli.exact.exact_props``.
 

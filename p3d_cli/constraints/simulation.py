@@ -66,7 +66,8 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     scene : Scene
     steps : int
         0: one velocity solve (no motion). N > 0: N steps of velocity solve, integration of
-        positions and orientations, and position correction, under the scene's gravity.
+        positions and orientations, and position correction, under the scene's gravity; at
+        most ``MAX_STEPS``, and ``MAX_STEP_WORK`` / (bodies + constraints).
     dt : float, optional
         Time step; required when ``steps > 0``.
     on_step : callable, optional
@@ -85,11 +86,16 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     Raises
     ------
     SceneError, UsageError
+        An invalid scene, or steps or dt out of their limits (before any work).
+    RangeError
+        A number the solve reaches (energy, momentum, a state, an impulse, the constraint
+        system) overflows float64 or is not a number: never nan in a result.
     """
     check_steps(steps, dt, scene)
     inertials = resolve_inertials(needed_bodies(scene, steps > 0, centers or on_step is not None),
                                   scene_dir or os.getcwd(), shape_counter)
-    # Overflow is found by the explicit checks below (``_check_finite``), which name what
+    # Overflow is found by the explicit checks of ``_solve`` (``_check_inverses``, ``_check_totals``,
+    # ``_check_state``, the impulses in ``_result``), which name what
     # overflowed: numpy's warnings would only repeat it, a dozen lines at a time.
     with np.errstate(all="ignore"):
         try:
