@@ -187,7 +187,8 @@ def _vertices(text: bytes, n: int) -> np.ndarray | None:
 def faces(text: bytes, n: int):
     """``(corners, sizes)`` of ``n`` face lines: raw OBJ indices (1-based or negative) and
     vertices per face, or None when the lines are not of a form handled here."""
-    first_corner = text[2:].split(None, 1)[0] if len(text) > 2 else b""
+    words = text[2:].split(None, 1)
+    first_corner = words[0] if words else b""  # an 'f' line with no corner: the careful parser names it
     slashes = first_corner.count(b"/")
     body = _strip_keyword(text)
     if slashes == 0:
