@@ -6,14 +6,32 @@ inside"). ``p3d_cli.montecarlo.Estimate.uncertainty`` uses them below ``MIN_INSI
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from p3d_cli.inertia import density_for, inertia_from_second_moments
+from p3d_cli.results import Bounds
 
-if TYPE_CHECKING:
-    from p3d_cli.montecarlo import Estimate
+
+class Sampled(Protocol):
+    """What the bounds read of a run (``p3d_cli.montecarlo.Estimate`` is one); a protocol, so
+    that this module does not import the estimator that uses it."""
+
+    @property
+    def bounds(self) -> Bounds: ...
+
+    @property
+    def samples(self) -> int: ...
+
+    @property
+    def mean(self) -> np.ndarray: ...
+
+    @property
+    def inside(self) -> float: ...
+
+    @property
+    def box_volume(self) -> float: ...
 
 #: 2 Φ(-3) ≈ 0.0027, the Gaussian ±3σ miss rate: conservative bounds hold at 1 - ALPHA.
 ALPHA = math.erfc(3.0 / math.sqrt(2.0))
@@ -30,7 +48,7 @@ def _central(m: np.ndarray, box_volume: float) -> np.ndarray:
     return box_volume * (second - np.outer(m1, m1) / m[0])
 
 
-def conservative_errors(est: "Estimate", density: float | None = None, mass: float | None = None) -> dict:
+def conservative_errors(est: Sampled, density: float | None = None, mass: float | None = None) -> dict:
     """Error bounds for few inside samples: a third of half-widths that each hold with
     probability at least ``1 - ALPHA``, so ``±3`` of them misses no more often than a Gaussian
     ``±3σ``, whatever the shape (docs/accuracy.md, "Few samples inside").
