@@ -194,13 +194,19 @@ def parse_turn(text: str) -> np.ndarray:
 def parse_quaternion(text: str) -> np.ndarray:
     """The rotation of ``W,X,Y,Z`` text (normalised); ``UsageError`` when malformed."""
     hint = "write --quat W,X,Y,Z (scalar first), e.g. --quat 0.7071,0,0,0.7071 for 90° about z"
+    return rotation_from_quaternion(*_numbers(text, 4, "quat", hint))
+
+
+def _numbers(text: str, count: int, parameter: str, hint: str) -> list[float]:
+    """``count`` comma-separated numbers of ``text``; ``UsageError`` naming ``parameter`` else."""
+    words = {3: "three", 4: "four"}.get(count, str(count))
     try:
         values = [float(p) for p in str(text).split(",")]
     except ValueError:
-        raise UsageError("quat", f"{text!r} is not four numbers", hint) from None
-    if len(values) != 4:
-        raise UsageError("quat", f"{text!r} has {len(values)} numbers, not 4", hint)
-    return rotation_from_quaternion(*values)
+        raise UsageError(parameter, f"{text!r} is not {words} numbers", hint) from None
+    if len(values) != count:
+        raise UsageError(parameter, f"{text!r} has {len(values)} numbers, not {count}", hint)
+    return values
 
 
 def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -228,13 +234,7 @@ def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
 def parse_rpy(text: str) -> np.ndarray:
     """The rotation of ``R,P,Y`` text (radians, URDF convention); ``UsageError`` when malformed."""
     hint = "write R,P,Y in radians (roll about x, then pitch about y, then yaw about z, fixed axes)"
-    try:
-        values = [float(p) for p in str(text).split(",")]
-    except ValueError:
-        raise UsageError("rpy", f"{text!r} is not three numbers", hint) from None
-    if len(values) != 3:
-        raise UsageError("rpy", f"{text!r} has {len(values)} numbers, not 3", hint)
-    return rotation_from_rpy(*values)
+    return rotation_from_rpy(*_numbers(text, 3, "rpy", hint))
 
 
 def matrix_quaternion(rotation) -> np.ndarray:
