@@ -78,6 +78,8 @@ def measure_link(link: Link, role: str, source: str, *, density: float | None = 
         if exc.where != "parts":
             raise
         return LinkGeometry(None, False, ("the geometry encloses no volume (flat or empty)",))
+    except RangeError as exc:  # a geom's own error names its spec: say whose geometry it is
+        raise RangeError(f"{source}: link {link.name!r}: {role}", f"{exc.where}: {exc.what}", exc.hint) from None
     except OverflowError:
         raise RangeError(assembly.source, "a geometry's size overflows float64 in its moments",
                          "check the sizes and their unit (metres)") from None
