@@ -9,7 +9,7 @@ translation changes: ``t -> f t``), and each leaf's mesh coordinates are scaled 
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Iterator
 
 import numpy as np
@@ -41,10 +41,43 @@ def _in_output(placement: Placement, factor: float) -> Placement:
     return Placement(placement.scale, placement.rotation, placement.translation * factor)
 
 
+@dataclass(frozen=True)
+class Leaf:
+    """A mesh or shape part as the whole assembly sees it.
+
+    Attributes
+    ----------
+    part : Part
+    placement : Placement
+        Its whole placement, in the output frame.
+    units : str or None
+        The length unit of the file it is written in.
+    name : str
+        Its name path (``bracket/clip`` for a part of a nested assembly).
+    density : float or None
+        The density (in output units) of the nearest enclosing nested-assembly part that gives
+        one: the default of this part when it gives none.
+    group : tuple or None
+        ``(where, mass)`` of the enclosing nested-assembly part that gives a ``mass`` (in
+        output units): the parts under it are scaled together to that mass.
+    """
+
+    part: Part
+    placement: Placement
+    units: str | None
+    name: str
+    density: float | None = None
+    group: tuple[str, float] | None = None
+
+
 def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
-           units: str | None = None, path: str = "") -> Iterator[tuple[Part, Placement, str | None, str]]:
-    """Every mesh or shape part, with its whole placement in the output frame, its file's unit
-    and its name path (``bracket/clip`` for a part of a nested assembly)."""
+           units: str | None = None, path: str = "", density: float | None = None,
+           group: tuple[str, float] | None = None) -> Iterator[Leaf]:
+    """Every mesh or shape part of ``assembly`` (nested ones too), as a ``Leaf``.
+
+    A nested assembly's part may give a ``density`` (the default of its parts that give none)
+    or a ``mass`` (its parts' total, which then may not give their own).
+    """
     units = assembly.units or units
     factor = 1.0 if system is None or units is None else LENGTHS[units] / LENGTHS[system.length]
     if system is None and assembly.units is not None:
@@ -53,9 +86,16 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
     for part in assembly.parts:
         name = f"{path}{part.name}"
         own = _in_output(part.placement, factor)
+        if group is not None and (part.density is not None or part.mass is not None):
+            raise InputError(part.where, f"gives its own {'mass' if part.mass is not None else 'density'}, "
+                             f"and {group[0]} gives the mass of the parts it holds",
+                             "give the mass once: on the nested assembly or on its parts")
         try:
             if isinstance(part.thing, Assembly):
-                yield from leaves(part.thing, then(own, outer), system, units, name + "/")
+                d, m = _amounts(part, units, system, None, None)
+                inner = (part.where, m) if m is not None else group
+                yield from leaves(part.thing, then(own, outer), system, units, name + "/",
+                                  density if d is None else d, inner)
                 continue
             scale = np.full(3, factor) if own.scale is None else own.scale * factor
             total = then(Placement(None if np.all(scale == 1) else scale, own.rotation, own.translation), outer)
@@ -63,7 +103,7 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
             raise
         except P3DError as exc:
             raise InputError(f"{part.where}.{exc.where}", exc.what, exc.hint) from None
-        yield part, total, units, name
+        yield Leaf(part, total, units, name, density, group)
 
 
 def _amounts(part: Part, units, system: UnitSystem | None, density, mass):
@@ -102,25 +142,37 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     whole_mass = mass
     if whole_mass is not None and density is not None:
         raise UsageError("mass, density", "both given; they are exclusive", "give one")
-    results = []
+    results: list[PropsResult] = []
     top = None if system is None else system.mesh_length
-    for part, total, part_units, name in leaves(assembly, outer, system, top):
-        if whole_mass is not None and (part.density is not None or part.mass is not None):
-            raise InputError(f"{part.where}", "gives its own density or mass, and the whole's mass is given",
+    groups: dict[str, tuple[float, list[int]]] = {}
+    for leaf in leaves(assembly, outer, system, top):
+        part = leaf.part
+        if whole_mass is not None and (part.density is not None or part.mass is not None or leaf.group
+                                       or leaf.density is not None):
+            raise InputError(f"{(leaf.group or (part.where,))[0]}",
+                             "gives its own density or mass, and the whole's mass is given",
                              "drop mass=, or the parts' own")
-        d, m = _amounts(part, part_units, system, density, None)
+        if part.density is None and part.mass is None and leaf.density is not None:
+            d, m = leaf.density, None           # a nested assembly's, already in output units
+        else:
+            d, m = _amounts(part, leaf.units, system, density, None)
         solid = as_solid(part.thing)
-        total = declared_scale(solid, part, part_units, system, total)
+        total = declared_scale(solid, part, leaf.units, system, leaf.placement)
         shape_only = tessellate if solid.shape is not None else None
         result = measure_solid(solid, total, method=method, density=d, mass=m, about=about_out,
                                tessellate=shape_only, samples=samples, seed=seed, tolerance=tolerance)
         result = finish(result, system, total, density_given=d is not None)
-        results.append(replace(result, details={"name": name, **result.details}))
+        if leaf.group is not None:
+            groups.setdefault(leaf.group[0], (leaf.group[1], []))[1].append(len(results))
+        results.append(replace(result, details={"name": leaf.name, **result.details}))
     if whole_mass is not None:
         _, target = _amounts(Part("", "", where=assembly.source), assembly.units or units, system, None,
                                 whole_mass)
-        k = target / sum(r.properties.mass for r in results)
-        results = [replace(r, properties=_rescaled(r.properties, k), uncertainty=None) for r in results]
+        groups[assembly.source] = (target, list(range(len(results))))
+    for target, members in groups.values():
+        k = target / sum(results[i].properties.mass for i in members)
+        for i in members:
+            results[i] = replace(results[i], properties=_rescaled(results[i].properties, k), uncertainty=None)
     props = combine_mass_properties([r.properties for r in results], about_out)
     facts = MeshFacts(assembly.source, "assembly", sum(r.facts.faces for r in results), _closed(results),
                       _union([r.facts.bounds for r in results]))
@@ -186,12 +238,11 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
     system = _system(assembly, units, output_units)
     outer = _in_output(placement, 1.0 if system is None else system.factor)
     found = []
-    for part, total, part_units, name in leaves(assembly, outer, system,
-                                                None if system is None else system.mesh_length):
-        solid = as_solid(part.thing)
-        total = declared_scale(solid, part, part_units, system, total)
+    for leaf in leaves(assembly, outer, system, None if system is None else system.mesh_length):
+        solid = as_solid(leaf.part.thing)
+        total = declared_scale(solid, leaf.part, leaf.units, system, leaf.placement)
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
-        found.append(replace(result, warnings=tuple(f"{name}: {w}" for w in result.warnings)))
+        found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}
     return BoundsResult(assembly.source, "assembly", methods.pop() if len(methods) == 1 else "mixed",
                         _union([r.bounds for r in found]), sum(r.faces for r in found),

@@ -119,9 +119,34 @@ def load_assembly(path: str, _seen: tuple[str, ...] = ()) -> Assembly:
         except UsageError as exc:
             raise InputError(f"{path}: units", exc.what, exc.hint) from None
         units = str(units)
-    folder = os.path.dirname(path)
-    parts = tuple(_part(entry, f"{path}: parts[{i}]", folder, _seen + (real,)) for i, entry in enumerate(data["parts"]))
-    return Assembly(path, parts, units)
+    return parts_assembly(data["parts"], path, f"{path}: parts", os.path.dirname(path), units, _seen + (real,))
+
+
+def parts_assembly(entries: list, source: str, where: str, folder: str, units: str | None = None,
+                   _seen: tuple[str, ...] = ()) -> Assembly:
+    """The assembly of a YAML list of parts (an assembly file's ``parts:``, a scene body's).
+
+    Parameters
+    ----------
+    entries : list
+        One mapping per part (``mesh:``/``shape:``/``assembly:``, placement, density or mass).
+    source : str
+        What the assembly is called in results (a file's path, ``scene.yaml: bodies.arm``).
+    where : str
+        The list's place for messages (``scene.yaml: bodies.arm.parts``).
+    folder : str
+        Mesh and assembly paths are relative to it.
+    units : str, optional
+
+    Raises
+    ------
+    InputError
+        An empty list, or a bad part (``<where>[i].key: ...``).
+    """
+    if not isinstance(entries, list) or not entries:
+        raise InputError(where, "is not a list of parts", "write one entry per part: - shape: box:1,1,1")
+    parts = tuple(_part(entry, f"{where}[{i}]", folder, _seen) for i, entry in enumerate(entries))
+    return Assembly(source, parts, units)
 
 
 def _part(entry, where: str, folder: str, seen: tuple[str, ...]) -> Part:

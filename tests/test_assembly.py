@@ -230,3 +230,36 @@ def test_plausibility_checks():
     # Every real shape passes.
     for spec in ("box:1,2,3", "wedge:1,2,3", "corner:3,2,1", "capsule:1,4", "ecylinder:1,3,2"):
         assert not p3d.props(spec, p3d.Placement(scale=[1, -1, 1], translation=[5, 0, 0])).warnings
+
+
+def test_a_nested_assembly_part_gives_its_parts_a_density_or_their_total_mass(tmp_path):
+    # Two unit boxes (volume 8 each) in a nested file that gives no material.
+    (tmp_path / "pair.yaml").write_text("parts:\n  - {shape: box}\n  - {shape: box, translate: [2, 0, 0]}\n")
+    (tmp_path / "dense.yaml").write_text("parts:\n  - {assembly: pair.yaml, density: 3}\n  - {shape: box, "
+                                         "translate: [4, 0, 0], density: 1}\n")
+    got = p3d.props(tmp_path / "dense.yaml")
+    assert [r.properties.mass for r in got.parts] == pytest.approx([24, 24, 8], rel=1e-15)
+    assert got.properties.mass == pytest.approx(56, rel=1e-15)
+    # A mass on the nested part is its parts' total, shared by volume (equal here).
+    (tmp_path / "heavy.yaml").write_text("parts:\n  - {assembly: pair.yaml, mass: 10}\n  - {shape: box, "
+                                         "translate: [4, 0, 0], mass: 1}\n")
+    got = p3d.props(tmp_path / "heavy.yaml")
+    assert [r.properties.mass for r in got.parts] == pytest.approx([5, 5, 1], rel=1e-15)
+    np.testing.assert_allclose(got.properties.center_of_mass, [(5 * 0 + 5 * 2 + 4) / 11, 0, 0], rtol=1e-15)
+    # The nested part's inertia is that of its parts scaled by the same factor: a 4 x 2 x 2 block
+    # of mass 10 about its own centre, 10/3 (b² + c²) about x.
+    nested = p3d.props(tmp_path / "pair.yaml", mass=10)
+    assert nested.properties.inertia[0, 0] == pytest.approx(10 / 3 * (1 + 1), rel=1e-14)
+
+
+def test_a_mass_given_twice_over_nested_parts_is_refused(tmp_path):
+    (tmp_path / "pair.yaml").write_text("parts:\n  - {shape: box, mass: 2}\n  - {shape: box, translate: [2, 0, 0]}\n")
+    (tmp_path / "top.yaml").write_text("parts:\n  - {assembly: pair.yaml, mass: 10}\n")
+    with pytest.raises(InputError) as info:
+        p3d.props(tmp_path / "top.yaml")
+    assert info.value.where.endswith("pair.yaml: parts[0]") and "mass" in info.value.what
+    (tmp_path / "top.yaml").write_text("parts:\n  - {assembly: pair.yaml, density: 10}\n")
+    assert p3d.props(tmp_path / "top.yaml").parts[1].properties.mass == pytest.approx(80)
+    (tmp_path / "plain.yaml").write_text("parts:\n  - {assembly: pair.yaml, density: 10}\n")
+    with pytest.raises(InputError, match="whole's mass"):
+        p3d.props(tmp_path / "plain.yaml", mass=5)

@@ -26,8 +26,8 @@ from p3d_cli.errors import UsageError
 def solve(scene, steps, dt, trajectory, as_json):
     """Solve ball, hinge and bar constraints between rigid bodies.
 
-    Reads a YAML scene (bodies with shapes, meshes or plain mass and inertia; constraints
-    between them; see docs/solve.md), solves the constraint equations (eq. 20 of the Physics3D note, in
+    Reads a YAML scene (bodies with shapes, meshes, parts as in an assembly file, or plain mass
+    and inertia; constraints between them; see docs/solve.md), solves the constraint equations (eq. 20 of the Physics3D note, in
     world coordinates) for the impulses that make the bodies' motions agree, and reports the
     new velocities, each constraint's impulse and remaining error, kinetic energy and momentum
     before and after, and the rank of the system (redundant constraints are solved in the

@@ -123,6 +123,8 @@ def resolve_inertials(bodies, scene_dir: str, counter: dict | None = None) -> di
 
 
 def _inertial(body, scene_dir, cache, counter) -> Inertial:
+    if body.parts is not None:
+        return _parts_inertial(body)
     need_shape = body.shape is not None and (
         body.center_of_mass is None or (not body.fixed and (body.inertia is None or body.mass is None)))
     moments = None
@@ -147,3 +149,45 @@ def _inertial(body, scene_dir, cache, counter) -> Inertial:
         mass = props.mass if mass is None else mass
         inertia = props.inertia if inertia is None else inertia
     return Inertial(float(mass), np.asarray(inertia, dtype=np.float64), np.asarray(com, dtype=np.float64))
+
+
+#: Warning codes of a part that make it no solid for a body.
+NOT_A_SOLID = frozenset({"open", "inward", "flat", "self-intersecting", "implausible", "inverted-tetrahedra"})
+
+
+def _parts_inertial(body) -> Inertial:
+    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.assemble``).
+
+    The body's ``density`` is the default of the parts that give none, its ``mass`` the
+    whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
+    """
+    from p3d_cli.assemble import assembly_props
+    from p3d_cli.placement import IDENTITY
+
+    from p3d_cli.warning_codes import code_of
+
+    where = f"{body.where}.parts"
+    try:
+        with np.errstate(all="ignore"):     # an overflow is one RangeError, as for a shape
+            result = assembly_props(body.parts, IDENTITY, density=body.density, mass=body.mass)
+    except SceneError:
+        raise
+    except P3DError as exc:
+        raise SceneError(exc.where if exc.where.startswith(body.where) else where, exc.what, exc.hint) from None
+    # A scene has nowhere to show a warning, and a body needs a solid: a part that is not one
+    # (open, wound inward, flat, self-intersecting) is refused, as a body's shape: is.
+    for index, part in enumerate(result.parts):
+        bad = [w for w in part.warnings if code_of(w) in NOT_A_SOLID]
+        if bad:
+            raise SceneError(f"{where}[{index}]" if len(body.parts.parts) == len(result.parts) else where,
+                             f"{part.details.get('name', part.facts.source)}: {bad[0]}",
+                             "use closed, outward-wound meshes, or give mass:, inertia: and center_of_mass:")
+    whole = result.properties
+    if not whole.mass > 0 or whole.center_of_mass is None or whole.inertia is None:
+        raise SceneError(where, "the parts have no positive mass together",
+                         "use closed, outward-wound meshes, or give mass:, inertia: and center_of_mass:")
+    com = body.center_of_mass if body.center_of_mass is not None else whole.center_of_mass
+    if body.fixed:
+        return Inertial(float("inf"), np.full((3, 3), np.inf), np.asarray(com, dtype=np.float64))
+    inertia = body.inertia if body.inertia is not None else whole.inertia
+    return Inertial(float(whole.mass), np.asarray(inertia, dtype=np.float64), np.asarray(com, dtype=np.float64))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -17,8 +18,10 @@ from p3d_cli.constraints.yaml_loader import read_yaml
 from p3d_cli.errors import SceneError
 
 TOP_KEYS = ("gravity", "bodies", "constraints")
-BODY_KEYS = ("shape", "density", "mass", "inertia", "center_of_mass", "fixed", "position",
-             "rotation", "velocity", "angular_velocity")
+BODY_KEYS = ("shape", "parts", "density", "mass", "inertia", "center_of_mass", "fixed", "position",
+             "rotation", "translate", "rotate", "quat", "rpy", "velocity", "angular_velocity")
+#: The placement vocabulary of assembly parts and the command line, also taken for a body's pose.
+POSE_KEYS = ("translate", "rotate", "quat", "rpy")
 #: Constraint type -> the keys it takes besides ``type``, ``a`` and ``b``.
 CONSTRAINT_KEYS = {
     "ball": ("attach_a", "attach_b"),
@@ -40,6 +43,10 @@ class BodySpec:
         A primitive spec or a mesh path, as written.
     shape_path : str or None
         The mesh path resolved against the scene's folder (None for a primitive spec).
+    parts : Assembly or None
+        A body made of parts (``parts:``, the syntax of an assembly file's parts, placed in the
+        body's frame); then ``density`` is the default of parts that give none and ``mass``
+        the whole body's.
     density, mass : float or None
     inertia : (3, 3) float64 or None
         About the centre of mass, body axes.
@@ -69,6 +76,7 @@ class BodySpec:
     rotation: np.ndarray
     velocity: np.ndarray
     angular_velocity: np.ndarray
+    parts: Any = None
 
     @property
     def moving(self) -> bool:
@@ -209,27 +217,31 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
     fixed = get.get("fixed", False)
     if not isinstance(fixed, bool):
         raise SceneError(f"{place}.fixed", f"expected true or false, got {values.describe(fixed)}", "write fixed: true")
-    shape = shape_path = None
+    shape = shape_path = parts = None
+    if "shape" in get and "parts" in get:
+        raise SceneError(f"{place}.parts", "given with shape:", "give one: a shape, or a list of parts")
     if "shape" in get:
         shape, shape_path = _shape(get["shape"], f"{place}.shape", directory)
+    if "parts" in get:
+        parts = _parts(get["parts"], place, directory)
+    solid = shape is not None or parts is not None
     density = values.number(get["density"], f"{place}.density", positive=True) if "density" in get else None
     mass = values.number(get["mass"], f"{place}.mass", positive=True) if "mass" in get else None
     if density is not None and mass is not None:
         raise SceneError(f"{place}.density", "both density and mass are given",
                          "give one: the other follows from the shape's volume")
-    if density is not None and shape is None:
+    if density is not None and not solid:
         raise SceneError(f"{place}.density", "a density needs a shape to give a mass",
-                         "add shape:, or give mass: and inertia: directly")
+                         "add shape: or parts:, or give mass: and inertia: directly")
     inertia = values.inertia(get["inertia"], f"{place}.inertia") if "inertia" in get else None
     com = values.vector(get["center_of_mass"], f"{place}.center_of_mass") if "center_of_mass" in get else None
     if not fixed:
-        if mass is None and shape is None:
+        if mass is None and not solid:
             raise SceneError(place, "has no mass", "give mass: and inertia:, or a shape:, or mark it fixed: true")
-        if inertia is None and shape is None:
+        if inertia is None and not solid:
             raise SceneError(place, "has no inertia",
                              "give inertia: (about the centre of mass, body axes), or a shape:")
-    position = values.vector(get["position"], f"{place}.position") if "position" in get else np.zeros(3)
-    rotation = values.rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
+    position, rotation = _pose(get, place)
     velocity = values.vector(get["velocity"], f"{place}.velocity") if "velocity" in get else np.zeros(3)
     omega = (values.vector(get["angular_velocity"], f"{place}.angular_velocity")
              if "angular_velocity" in get else np.zeros(3))
@@ -238,7 +250,49 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
         raise SceneError(f"{place}.{key}", "a fixed body never moves, so it cannot have a velocity",
                          f"remove {key}: or fixed: true")
     return BodySpec(name, place, shape, shape_path, density, mass, inertia, com, fixed, position,
-                    rotation, velocity, omega)
+                    rotation, velocity, omega, parts)
+
+
+def _pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
+    """The body frame's world position and orientation quaternion.
+
+    ``position:`` and ``rotation:`` are the scene's own keys; ``translate:``, ``rotate:``,
+    ``quat:`` and ``rpy:`` are the placement vocabulary of assembly parts and the command line,
+    read by the same parser (``placement_from_mapping``) and taken as the body's pose.
+    """
+    given = [k for k in POSE_KEYS if k in get]
+    for own, others in (("position", ["translate"]), ("rotation", ["rotate", "quat", "rpy"])):
+        clash = [k for k in others if k in given]
+        if own in get and clash:
+            raise SceneError(f"{place}.{clash[0]}", f"given with {own}:", f"give the body's {own} once")
+    position = values.vector(get["position"], f"{place}.position") if "position" in get else np.zeros(3)
+    rotation = values.rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
+    if not given:
+        return position, rotation
+    from p3d_cli.errors import InputError
+    from p3d_cli.placement_text import placement_from_mapping
+    from p3d_cli.rotation import matrix_quaternion
+
+    try:
+        placement = placement_from_mapping({k: get[k] for k in given}, place)
+    except InputError as exc:
+        raise SceneError(exc.where, exc.what, exc.hint) from None
+    if placement.translation is not None:
+        position = placement.translation
+    if placement.rotation is not None:
+        rotation = np.asarray(matrix_quaternion(placement.rotation), dtype=np.float64)
+    return position, rotation
+
+
+def _parts(value, place: str, directory: str):
+    """A body made of parts: the assembly-file syntax, in the body's frame."""
+    from p3d_cli.assembly import parts_assembly
+    from p3d_cli.errors import InputError
+
+    try:
+        return parts_assembly(value, place, f"{place}.parts", directory)
+    except InputError as exc:
+        raise SceneError(exc.where, exc.what, exc.hint) from None
 
 
 def _shape(value, where: str, directory: str) -> tuple[str, str | None]:
