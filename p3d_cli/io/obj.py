@@ -35,8 +35,10 @@ from p3d_cli.io.source import MeshSource, indexed_source
 
 _IGNORED = frozenset(IGNORED)
 _HINT = "fix the file or export it again"
-#: Lines that are no statement are tolerated up to one per this many statements.
-_GARBLED_RATIO = 100
+#: Lines that are no statement are skipped as long as they are at most half of all lines that
+#: hold something (a real model's stray ``1/617/894`` lines); a file made mostly of them is
+#: not an OBJ, and is refused at its first one rather than read as a handful of faces.
+_GARBLED_RATIO = 2
 #: Indices beyond this cannot address any mesh (and would not fit the int64 arrays).
 _INDEX_LIMIT = 1 << 62
 
@@ -273,6 +275,7 @@ def _warnings(mesh: _Mesh) -> tuple[str, ...]:
                         "of the mass properties")
     if mesh.garbled:
         number, words = mesh.first_garbled
-        warnings.append(f"skipped {mesh.garbled} line{'s' if mesh.garbled > 1 else ''} that are no OBJ "
-                        f"statement (the first is line {number}: {_text(words)!r})")
+        many = mesh.garbled > 1
+        warnings.append(f"skipped {mesh.garbled} line{'s that are' if many else ' that is'} no OBJ "
+                        f"statement ({'the first is ' if many else ''}line {number}: {_text(words)!r})")
     return tuple(warnings)

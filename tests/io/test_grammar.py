@@ -173,7 +173,7 @@ def ref_obj(text: str):
             triangles += [(polygon[0], polygon[i], polygon[i + 1]) for i in range(1, len(polygon) - 1)]
         elif not words[0][:1].isalpha():
             garbled += 1
-    if garbled * 100 > count or any(i >= len(vertices) for t in triangles for i in t):
+    if garbled * 2 > count or any(i >= len(vertices) for t in triangles for i in t):
         return None
     return np.array(vertices, dtype=float).reshape(-1, 3), np.array(triangles, dtype=np.int64).reshape(-1, 3)
 

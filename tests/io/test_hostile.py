@@ -192,6 +192,21 @@ def test_bare_corner_line_is_skipped_with_one_warning(tmp_path):
     assert "skipped 1 line" in mesh.warnings[0]
 
 
+def test_many_stray_lines_are_skipped_and_counted_but_a_file_made_of_them_is_refused(tmp_path):
+    from p3d_cli.errors import FormatError
+
+    _, tris = read(write(tmp_path, big_obj("", 400), "plain.obj"))
+    stray = "\n".join(["1/617/894"] * 60)          # 60 of 657 lines: a tenth of the file
+    mesh, odd = read(write(tmp_path, big_obj(stray, 350), "stray.obj"))
+    np.testing.assert_array_equal(odd, tris)
+    assert len(mesh.warnings) == 1 and "skipped 60 lines" in mesh.warnings[0] and "line 351" in mesh.warnings[0]
+    # More stray lines than statements: not an OBJ, refused at the first stray line.
+    junk = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" + "1/2/3 4\n" * 5
+    with pytest.raises(FormatError) as info:
+        read(write(tmp_path, junk, "junk.obj"))
+    assert "line 5" in info.value.where
+
+
 def test_unknown_statements_counted_with_first_line(tmp_path):
     mesh, _ = read(write(tmp_path, big_obj("cstype bspline\ndeg 3", 310), "u.obj"))
     assert len(mesh.warnings) == 1

@@ -204,7 +204,7 @@ def test_no_faces_is_input_error(tmp_path):
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", 4, "at least 3"),
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n", 4, "3a"),
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/ 2/3 3\n", 4, None),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\n12 13 14\nf 1 2 3\n", 4, "unexpected"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\n12 13 14\n7 8 9\n1 2 3\n4 5 6\n0 0 0\nf 1 2 3\n", 4, "unexpected"),  # mostly no OBJ
 ])
 def test_malformed_lines_name_the_line(tmp_path, text, line, word):
     err = raises(tmp_path, text)
