@@ -47,7 +47,7 @@ from p3d_cli.results import PropsResult
                    "sample the bounding box with an inside test, with standard errors (an "
                    "independent check of a mesh you distrust).")
 @click.option("--samples", type=click.IntRange(min=2), default=None, metavar="N",
-              help="Monte Carlo sample count (default 100000).")
+              help="Monte Carlo sample count (default 100000, at most 100000000).")
 @click.option("--seed", type=click.IntRange(min=0), default=None, metavar="S",
               help="Monte Carlo random seed (default 0): the same seed gives the same numbers.")
 @click.option("--tolerance", type=click.FloatRange(min=0, min_open=True), default=None, metavar="REL",
