@@ -317,3 +317,12 @@ def test_a_tetrahedron_of_size_1e40_prints_json():
     result = p3d.props(tet)
     assert result.properties.volume == pytest.approx(1e120 / 6, rel=1e-15)
     assert all(np.isfinite(np.ravel(x)).all() for x in result.uncertainty.values())
+
+
+def test_triangle_inequality_check_at_the_ends_of_float64(recwarn):
+    from p3d_cli.inertia import breaks_triangle_inequality
+
+    assert not breaks_triangle_inequality([1e308, 1.5e308, 1.7e308])      # the sum overflows: no break
+    assert not breaks_triangle_inequality([5e-324, 5e-324, 1e-323])       # subnormal, exactly equal
+    assert breaks_triangle_inequality([1.0, 2.0, 3.1]) and breaks_triangle_inequality([-1.0, 2.0, 2.0])
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
