@@ -27,11 +27,12 @@ def solve(scene, steps, dt, trajectory, as_json):
     """Solve ball, hinge and bar constraints between rigid bodies.
 
     Reads a YAML scene (bodies with shapes, meshes, parts as in an assembly file, or plain mass
-    and inertia; constraints between them; see docs/solve.md), solves the constraint equations (eq. 20 of the Physics3D note, in
-    world coordinates) for the impulses that make the bodies' motions agree, and reports the
-    new velocities, each constraint's impulse and remaining error, kinetic energy and momentum
-    before and after, and the rank of the system (redundant constraints are solved in the
-    minimum-norm sense). With --steps and --dt it steps the scene in time under gravity.
+    and inertia; constraints between them; see docs/solve.md), solves the constraint equations
+    (eq. 20 of the Physics3D note, in world coordinates) for the impulses that make the bodies'
+    motions agree, and reports the new velocities, each constraint's impulse and remaining
+    error, kinetic energy and momentum before and after, and the rank of the system (redundant
+    constraints are solved in the minimum-norm sense). With --steps and --dt it steps the scene
+    in time under gravity.
 
     \b
     Examples:

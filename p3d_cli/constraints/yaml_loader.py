@@ -8,6 +8,7 @@ loader below is a ``SafeLoader`` subclass whose mapping constructor refuses that
 from __future__ import annotations
 
 import os
+import re
 
 import yaml
 
@@ -57,6 +58,14 @@ def _construct_unique_mapping(loader: UniqueKeySafeLoader, node: yaml.MappingNod
 
 UniqueKeySafeLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
                                     _construct_unique_mapping)
+
+# PyYAML follows YAML 1.1, whose floats need a dot: ``1e8`` and ``-2.5e-3`` without one would
+# be read as the strings '1e8' and refused as "not a number", a trap for anyone who writes
+# numbers as every programming language (and YAML 1.2) does. Such plain scalars are floats
+# here too. (Added after the standard float resolver, so it only sees what that one missed.)
+UniqueKeySafeLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float", re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
 
 
 def _read_bounded(path: str) -> bytes:

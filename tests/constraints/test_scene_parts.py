@@ -222,3 +222,20 @@ def test_the_documented_scene_format_loads_and_solves(tmp_path):
     inertial = resolve_inertials([hand], str(tmp_path))["hand"]
     assert inertial.mass == pytest.approx(2700 * 0.08 * 0.1 * 0.02 + 0.2, rel=1e-12)
     assert solve_scene(scene, scene_dir=str(tmp_path)).rank > 0
+
+
+def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
+    """YAML 1.1 (PyYAML) reads ``1e8`` as text; scenes and assemblies read it as every language
+    (and YAML 1.2) does, and keep quoted text as text."""
+    from p3d_cli.constraints.yaml_loader import read_yaml
+
+    path = tmp_path / "n.yaml"
+    path.write_text("a: [1e8, -2.5e-3, +3E2, 1.0e+8, 7, 1_0, '1e8', 1e, e5, 0x10]\n")
+    assert read_yaml(str(path), "n.yaml")["a"] == [1e8, -2.5e-3, 300.0, 1e8, 7, 10, "1e8", "1e", "e5", 16]
+    scene = tmp_path / "scene.yaml"
+    scene.write_text("bodies:\n  b: {mass: 2e0, inertia: [1e-1, 1e-1, 1e-1], position: [1e3, 0, 0]}\n")
+    body = load_scene(str(scene)).body("b")
+    assert body.mass == 2.0 and body.position[0] == 1000.0
+    scene.write_text("bodies:\n  b: {mass: 1e400, inertia: [1, 1, 1]}\n")
+    with pytest.raises(SceneError, match="not finite"):
+        load_scene(str(scene))
