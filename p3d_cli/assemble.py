@@ -172,8 +172,10 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     for target, members in groups.values():
         k = target / sum(results[i].properties.mass for i in members)
         for i in members:
-            results[i] = replace(results[i], properties=_rescaled(results[i].properties, k), uncertainty=None)
+            results[i] = replace(results[i], properties=_rescaled(results[i].properties, k),
+                                 uncertainty=_rescaled_uncertainty(results[i].uncertainty, k))
     props = combine_mass_properties([r.properties for r in results], about_out)
+    uncertainty = whole_uncertainty(results, props) if method == "exact" else None
     facts = MeshFacts(assembly.source, "assembly", sum(r.facts.faces for r in results), _closed(results),
                       _union([r.facts.bounds for r in results]))
     warnings = [f"{r.details['name']}: {w}" for r in results for w in r.warnings]
@@ -181,7 +183,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
         warnings += implausibilities(props, facts.bounds, method)
     units_record = results[0].units
     details = {} if placement.is_identity else {"placement": placement.describe()}
-    return PropsResult(facts, props, method, tuple(warnings), None, details, units_record, tuple(results))
+    return PropsResult(facts, props, method, tuple(warnings), uncertainty, details, units_record, tuple(results))
 
 
 def declared_scale(solid, part: Part, units: str | None, system: UnitSystem | None, total: Placement) -> Placement:
@@ -210,6 +212,53 @@ def _rescaled(p: MassProperties, k: float) -> MassProperties:
     return replace(p, density=p.density * k, mass=p.mass * k, inertia=times(p.inertia),
                    inertia_origin=times(p.inertia_origin), principal_moments=times(p.principal_moments),
                    second_moments=times(p.second_moments), inertia_about=times(p.inertia_about))
+
+
+def _rescaled_uncertainty(u: dict | None, k: float) -> dict | None:
+    """Bounds of a part whose density was multiplied by ``k``: mass and inertia scale (and
+    round once more), volume and centre do not."""
+    if u is None or u.get("inertia") is None:
+        return u
+    eps = np.finfo(np.float64).eps
+    return {**u, "mass": u["mass"] * k * (1 + 4 * eps), "inertia": u["inertia"] * k * (1 + 4 * eps)}
+
+
+def whole_uncertainty(results, whole: MassProperties) -> dict | None:
+    """A-priori bounds on the whole's volume, mass, centre and inertia, from the parts' bounds.
+
+    First-order propagation through ``combine_mass_properties`` with absolute values, plus the
+    rounding of its sums (``n + 4`` roundings of the sums of magnitudes): ``δM = Σ δmᵢ``; ``c =
+    Σ mᵢ cᵢ / M`` moves by ``Σ (mᵢ δcᵢ + δmᵢ |cᵢ - c|) / M``; each parallel-axis term ``mᵢ (|dᵢ|² E -
+    dᵢ dᵢᵀ)``, ``dᵢ = cᵢ - c``, by ``δmᵢ (|dᵢ|² E + |dᵢ||dᵢ|ᵀ) + mᵢ (2 |dᵢ|·δdᵢ E + δdᵢ|dᵢ|ᵀ +
+    |dᵢ|δdᵢᵀ)`` with ``δdᵢ = δcᵢ`` (the whole's centre error ``δc`` adds ``M (2|δc|² E + 2 δc δcᵀ)``
+    only: it cancels at first order). None when a part has no bound (Monte Carlo, or a part
+    without volume).
+    """
+    bounds = [r.uncertainty for r in results]
+    if not results or any(u is None or u.get("inertia") is None or u.get("mass") is None for u in bounds):
+        return None
+    eps = np.finfo(np.float64).eps
+    rounding = (len(results) + 4) * eps
+    parts = [r.properties for r in results]
+    c = whole.center_of_mass
+    total = abs(whole.mass)
+    volume = sum(u["volume"] for u in bounds) + rounding * sum(abs(p.volume) for p in parts)
+    mass = sum(u["mass"] for u in bounds) + rounding * sum(abs(p.mass) for p in parts)
+    moved = sum(abs(p.mass) * u["center_of_mass"] + u["mass"] * np.abs(p.center_of_mass - c)
+                for p, u in zip(parts, bounds))
+    center = (moved + rounding * sum(abs(p.mass) * np.abs(p.center_of_mass) for p in parts)) / total
+    center = center + np.spacing(np.abs(c))
+    # A shift e of the whole's centre changes Σ mᵢ dᵢ dᵢᵀ by M e eᵀ only (Σ mᵢ dᵢ = 0): second
+    # order. The parts' own centre errors enter at first order.
+    inertia = total * (2 * (center @ center) * np.eye(3) + 2 * np.outer(center, center))
+    for p, u in zip(parts, bounds):
+        d = np.abs(p.center_of_mass - c)
+        dd = u["center_of_mass"]
+        m, dm = abs(p.mass), u["mass"]
+        size = d @ d * np.eye(3) + np.outer(d, d)
+        inertia += (u["inertia"] + dm * size + m * (2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
+                    + rounding * (np.abs(p.inertia) + m * size))
+    return {"volume": volume, "mass": mass, "center_of_mass": center, "inertia": inertia}
 
 
 def _closed(results) -> bool | None:

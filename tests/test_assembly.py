@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from fractions import Fraction
 import math
 
 import numpy as np
@@ -263,3 +264,34 @@ def test_a_mass_given_twice_over_nested_parts_is_refused(tmp_path):
     (tmp_path / "plain.yaml").write_text("parts:\n  - {assembly: pair.yaml, density: 10}\n")
     with pytest.raises(InputError, match="whole's mass"):
         p3d.props(tmp_path / "plain.yaml", mass=5)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4, 1e8])
+def test_the_whole_has_a_bound_that_covers_its_error(tmp_path, offset):
+    """Mesh parts far from the origin: the whole's error against exact rational arithmetic on
+    the union's triangles (the parts do not overlap) is within its stated bound."""
+    from exact import exact_moments
+
+    rng = np.random.default_rng(7)
+    torus = p3d.parse_shape("ellipsoid:1,2,0.5").tessellate(24)
+    pieces = [torus * [1.0, 1.0, 1.0] + [offset, 0, 0], torus[:, :, [1, 2, 0]] * 0.7 + [offset + 5.1, 3.3, 0.2]]
+    pieces = [p + rng.uniform(-1e-3, 1e-3, 3) for p in pieces]
+    for i, tri in enumerate(pieces):
+        write_ascii_stl(tmp_path / f"p{i}.stl", tri)
+    (tmp_path / "a.yaml").write_text("parts:\n  - {mesh: p0.stl}\n  - {mesh: p1.stl}\n")
+    result = p3d.props(tmp_path / "a.yaml")
+    bound = result.uncertainty
+    assert bound is not None
+    reread = np.concatenate([p3d.load_mesh(tmp_path / f"p{i}.stl").triangles() for i in range(2)])
+    exact = exact_moments(reread)
+    got = result.properties
+    assert abs(got.volume - float(exact.volume)) <= bound["volume"]
+    center_error = np.array([abs(Fraction(x) - c) for x, c in zip(got.center_of_mass, exact.center)], float)
+    assert (center_error <= bound["center_of_mass"]).all()
+    trace = sum(exact.central[i][i] for i in range(3))
+    for i in range(3):
+        for j in range(3):
+            truth = (trace if i == j else 0) - exact.central[i][j]
+            assert abs(Fraction(got.inertia[i, j]) - truth) <= Fraction(bound["inertia"][i, j])
+    # Honest but not empty: a few orders of magnitude above float64's rounding of the result.
+    assert (bound["inertia"] < 1e-6 * np.abs(got.inertia).max()).all()
