@@ -290,9 +290,25 @@ def _parts(value, place: str, directory: str):
     from p3d_cli.errors import InputError
 
     try:
-        return parts_assembly(value, place, f"{place}.parts", directory)
+        parts = parts_assembly(value, place, f"{place}.parts", directory)
     except InputError as exc:
         raise SceneError(exc.where, exc.what, exc.hint) from None
+    _bare_amounts(parts)
+    return parts
+
+
+def _bare_amounts(assembly) -> None:
+    """A scene has no length unit, so a part's density or mass cannot carry one."""
+    from p3d_cli.assembly import Assembly
+    from p3d_cli.units import has_unit
+
+    for part in assembly.parts:
+        for key in ("density", "mass"):
+            if has_unit(getattr(part, key)):
+                raise SceneError(f"{part.where}.{key}", f"{getattr(part, key)} has a unit, and a scene's numbers "
+                                 "have none", "write a bare number in the scene's own units (SI in the examples)")
+        if isinstance(part.thing, Assembly):
+            _bare_amounts(part.thing)
 
 
 def _shape(value, where: str, directory: str) -> tuple[str, str | None]:

@@ -164,6 +164,7 @@ def test_rpy_pose_is_the_urdf_rotation():
     ("{parts: [{shape: box}], rotation: {quat: [1, 0, 0, 0]}, rpy: [0, 0, 1]}", "bodies.arm.rpy", "rotation"),
     ("{mass: 1, inertia: [1, 1, 1], rotate: {axis: q, degrees: 3}}", "bodies.arm.rotate", ""),
     ("{mass: 1, inertia: [1, 1, 1], quat: [0, 0, 0, 0]}", "bodies.arm.quat", ""),
+    ("{parts: [{shape: box, density: 7.85 g/cm^3}]}", "bodies.arm.parts[0].density", "has a unit"),
 ])
 def test_bad_parts_and_poses_are_one_scene_error_naming_the_key(tmp_path, body, where, what):
     path = tmp_path / "scene.yaml"
