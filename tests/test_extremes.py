@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+import math
 import numpy as np
 import pytest
 import trimesh
@@ -326,3 +327,13 @@ def test_triangle_inequality_check_at_the_ends_of_float64(recwarn):
     assert not breaks_triangle_inequality([5e-324, 5e-324, 1e-323])       # subnormal, exactly equal
     assert breaks_triangle_inequality([1.0, 2.0, 3.1]) and breaks_triangle_inequality([-1.0, 2.0, 2.0])
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_block_sums_near_the_float64_limit():
+    """fsum raises on partial sums beyond float64 and on inf - inf; the block sums do not: a
+    representable total comes back, an unrepresentable one as inf (refused downstream)."""
+    from p3d_cli.mesh.integrals import _fsum
+
+    assert _fsum([1.7e308, 1.7e308, -1.7e308]) == 1.7e308
+    assert _fsum([1.7e308, 1.7e308]) == math.inf
+    assert _fsum([1e-300, 1.0, -1.0]) == 1e-300

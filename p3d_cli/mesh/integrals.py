@@ -225,7 +225,12 @@ class MomentSums:
         if not self._totals:
             return np.zeros(N_SUMS), np.zeros(N_SUMS)
         blocks = np.array(self._totals)
-        total = np.array([math.fsum(blocks[:, k]) for k in range(N_SUMS)])
+        with np.errstate(all="ignore"):
+            if not np.isfinite(blocks).all():
+                # fsum refuses inf - inf; the plain sum's inf or nan is refused downstream (one
+                # RangeError: the moments overflow float64).
+                return blocks.sum(axis=0), np.array(self._abs_totals).sum(axis=0)
+        total = np.array([_fsum(blocks[:, k]) for k in range(N_SUMS)])
         return total, np.array(self._abs_totals).sum(axis=0)
 
     def moments(self, extra: list[Fraction] | None = None) -> Moments:
@@ -284,6 +289,16 @@ def volume_from(total: float | Fraction, bound: float) -> float:
     if isinstance(total, Fraction):
         return 0.0 if abs(total) <= Fraction(bound) else float(total / 6)
     return 0.0 if abs(total) <= bound else float(total) / 6.0
+
+
+def _fsum(values) -> float:
+    """``math.fsum``, also when its partial sums overflow float64 (it raises then): the values
+    are summed scaled by 2^-64 (exact but for subnormal parts, negligible beside values near
+    1e308) and scaled back, which is inf only when the sum itself is out of range."""
+    try:
+        return math.fsum(values)
+    except OverflowError:
+        return math.fsum(float(v) * 2.0 ** -64 for v in values) * 2.0 ** 64
 
 
 def _exact_finish(origin: np.ndarray, total: list[Fraction], bound: np.ndarray) -> Moments:
