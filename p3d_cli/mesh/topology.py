@@ -45,6 +45,7 @@ from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
+from p3d_cli.mesh.paired import Paired, paired_topology
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
 from p3d_cli.mesh.vertices import corner_coords, group_corners
@@ -117,6 +118,9 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     """
     if n == 0:
         return _empty_report()
+    fast = paired_topology(blocks, n, where)
+    if fast is not None:
+        return _paired_report(blocks, n, fast)
     zero_area: list[np.ndarray] = []
 
     def per_block(first_face: int, cols: np.ndarray, block) -> None:
@@ -159,6 +163,30 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, volume)),
         volume=volume, boundary_edge_samples=boundary,
         nonmanifold_edge_samples=nonmanifold_edges, misoriented_edge_samples=misoriented,
+        nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
+                                         for v in vertex_samples),
+        degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
+        duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
+    )
+
+
+def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
+    """The report of a soup whose every edge is used once each way (``p3d_cli.mesh.paired``):
+    no boundary, non-manifold or misoriented edge, no repeated vertex."""
+    ids = fast.ids
+    faces = ids.reshape(n, 3)
+    found = fast.shells
+    small = np.bincount(found.labels, minlength=found.count) <= 2   # see _duplicate_candidates
+    duplicates = duplicate_faces(faces, np.flatnonzero(small[found.labels]))
+    vertex_samples = [int(v) for v in fast.nonmanifold[:SAMPLES]]
+    points = _sample_points(blocks, ids, vertex_samples)
+    zero = fast.zero_area
+    return TopologyReport(
+        faces=n, vertices=fast.vertices, edges=3 * n // 2, boundary_edges=0, nonmanifold_edges=0,
+        misoriented_edges=0, nonmanifold_vertices=int(fast.nonmanifold.size),
+        zero_area_faces=int(zero.size), faces_with_repeated_vertex=0, degenerate_faces=int(zero.size),
+        duplicate_faces=int(duplicates.shape[0]), shells=int(found.count),
+        shell_list=tuple(shell_volumes(blocks, n, found, fast.volume)), volume=fast.volume,
         nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
                                          for v in vertex_samples),
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
