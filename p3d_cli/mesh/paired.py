@@ -138,22 +138,36 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
         if (start == end).any():
             return None                 # a side that may bound nothing: the general path
         forward = np.less(start, end).view(np.uint8).astype(np.uint64)
-        key = np.minimum(start, end)
+        # Computed in its place in ``keys``: where a key sits does not matter (they are sorted),
+        # so the block's keys are stored in (slot, face) order and carry their side number.
+        key = np.minimum(start, end, out=keys[3 * done:3 * (done + k)].reshape(3, k))
         key *= _GOLDEN
         key += np.maximum(start, end, out=end)
         _mix(key, scratch)
         key &= ~low
         forward <<= shift
         key |= forward
-        out = keys[3 * done:3 * (done + k)].reshape(k, 3)
-        np.copyto(out, key.T)
-        out |= np.arange(3 * done, 3 * (done + k), dtype=np.uint64).reshape(k, 3)
+        key += _side_numbers(k)
+        key += np.uint64(3 * done)
         volume.add_columns(cols)
         done += k
     if done != n:
         count_error(where, n, str(done))
     assert volume is not None
     return keys, np.concatenate(zero), volume.volume()
+
+
+_SIDES: list[np.ndarray] = []
+
+
+def _side_numbers(k: int) -> np.ndarray:
+    """``3 j + slot`` as ``(3, k)`` uint64 (slot, face): side numbers of a block's faces."""
+    if k > 1 << 16:                     # large blocks: not kept
+        return 3 * np.arange(k, dtype=np.uint64) + np.arange(3, dtype=np.uint64)[:, None]
+    if not _SIDES or _SIDES[0].shape[1] < k:
+        _SIDES[:] = [(3 * np.arange(max(k, 1 << 14), dtype=np.uint64)
+                      + np.arange(3, dtype=np.uint64)[:, None])]
+    return _SIDES[0][:, :k]
 
 
 def _orbit_map(keys: np.ndarray, bits: int, blocks):
@@ -167,10 +181,10 @@ def _orbit_map(keys: np.ndarray, bits: int, blocks):
     if clean:
         for lo in range(0, len(pairs), step):
             a, b = pairs[lo:lo + step, 0], pairs[lo:lo + step, 1]
-            ea, eb = a >> shift, b >> shift
-            # One edge per pair, direction 0 then 1: ``(2e, 2e + 1)`` above the side bits (a
-            # third use of an edge would break the pairing of the next pair).
-            if (ea & one).any() or not np.array_equal(ea + one, eb):
+            # One edge per pair, direction 0 then 1: the keys agree above the direction bit
+            # and differ in it (sorted, ``a`` has the 0); a third use of an edge would break
+            # the pairing of the next pair.
+            if not (((a ^ b) >> shift) == one).all():
                 clean = False
                 break
             _link(pi, (a & mask).astype(np.int64), (b & mask).astype(np.int64))
@@ -305,11 +319,14 @@ def _merge_fans(fan: np.ndarray, count: int, points: np.ndarray):
     """Exact vertex ids from the fans: fans at one point are one vertex (several fans: a
     non-manifold vertex). Returns ``(ids, vertices, nonmanifold)`` (see ``Paired``)."""
     hashes = corner_hashes(points)
-    ordered = np.sort(hashes)
+    # Fans whose hashes agree in their top 32 bits (a uint32 sort is faster): a few, by chance,
+    # besides those that share a point.
+    top = (hashes >> np.uint64(32)).astype(np.uint32)
+    ordered = np.sort(top)
     shared = ordered[1:][ordered[1:] == ordered[:-1]]
     if shared.size == 0:                # the usual case: one fan per point
         return fan, count, np.zeros(0, dtype=np.int64)
-    candidates = np.flatnonzero(np.isin(hashes, shared))
+    candidates = np.flatnonzero(np.isin(top, shared))
     coords = points[candidates].astype(np.float64) + 0.0
     h = hashes[candidates]
     # The general path's vertex order: full hash, then coordinates (vertices.py).
