@@ -95,12 +95,13 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
     if first is None:
         return None
     keys, zero, volume = first
+    del first                           # memory: the keys go as soon as they are read
     keys.sort()
     pi = _orbit_map(keys, bits, blocks)
     del keys
     if pi is None:
         return None
-    fan, count, is_first = _fan_ids(pi)
+    fan, count, is_first = _fan_ids(pi)     # overwrites pi: the fans take its buffer
     del pi
     points = _confirm(blocks, fan, count, is_first)
     del is_first
@@ -268,22 +269,34 @@ def _fan_ids(pi: np.ndarray):
     (window minima of a cycle longer than the window differ where the window leaves its
     smallest corner). Valence 6 or less, most vertices of most meshes, takes one round.
     """
-    start = np.arange(pi.size, dtype=pi.dtype)
-    twice = pi[pi]
-    label = np.minimum(start, pi)
-    np.minimum(label, twice, out=label)
-    jump = pi[twice]                    # pi applied 3 times: the window's length
-    del twice
+    label = np.arange(pi.size, dtype=pi.dtype)
+    np.minimum(label, pi, out=label)
+    jump = _gather(pi, pi)
+    np.minimum(label, jump, out=label)
+    jump, looked = _gather(pi, jump), jump  # pi applied 3 times: the window's length
     while True:
-        np.minimum(label, label[jump], out=label)
-        if np.array_equal(label, label[pi]):
+        np.minimum(label, _gather(label, jump, looked), out=label)
+        if np.array_equal(label, _gather(label, pi, looked)):
             break
-        jump = jump[jump]
-    del jump
-    first = label == start
+        jump, looked = _gather(jump, jump, looked), jump
+    del jump, looked
+    first = label == np.arange(pi.size, dtype=pi.dtype)
     number = np.cumsum(first, dtype=pi.dtype)
     number -= 1
-    return number[label], int(number[-1]) + 1, first
+    count = int(number[-1]) + 1
+    # The fan numbers go into pi's buffer, which is not needed any more (memory).
+    return _gather(number, label, pi), count, first
+
+
+def _gather(source: np.ndarray, index: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``source[index]`` into ``out`` (not ``source`` nor ``index``), in slices: numpy widens
+    int32 indices to a whole int64 copy first, which would double the memory of a lookup."""
+    if out is None:
+        out = np.empty(index.size, dtype=source.dtype)
+    for lo in range(0, index.size, 4 * CHUNK):
+        # Valid indices: mode="clip" only spares the copy of ``out`` the default mode makes.
+        np.take(source, index[lo:lo + 4 * CHUNK], out=out[lo:lo + 4 * CHUNK], mode="clip")
+    return out
 
 
 def _confirm(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
