@@ -32,8 +32,11 @@ ends coincide bounds nothing and is skipped, as in ``closed``).
   shared corner a non-manifold vertex). A face whose three corners coincide has no edge
   and is a shell of its own.
 
-Cost: one ``numpy.sort`` of ``3n`` packed 64-bit corner keys; everything else is a linear
-pass, a stable sort of already nearly sorted keys, or a union-find of a few rounds.
+Cost: a clean mesh (every edge used once each way) takes ``p3d_cli.mesh.paired``'s fast
+path: one ``numpy.sort`` of ``3n`` packed 64-bit side keys, fans by pointer doubling, one
+exact confirmation pass. Any other mesh takes the general path: one ``numpy.sort`` of ``3n``
+packed 64-bit corner keys; everything else is a linear pass, a stable sort of already nearly
+sorted keys, or a union-find of a few rounds. Both give the same report (the tests compare).
 """
 
 from __future__ import annotations
