@@ -247,3 +247,22 @@ def test_general_path_does_not_split_hash_groups_of_a_clean_mesh(monkeypatch):
     r = general(t)
     assert r.closed and r.shells == 3000 and r.vertices == 24000
     same(fast(t), r)
+
+
+def test_high_valence_fans_need_more_doubling_rounds_and_agree():
+    # Cones of 300 segments: 300 corners around each apex (many doubling rounds); apex to apex,
+    # a non-manifold vertex whose two fans are both long.
+    k = 300
+    angle = np.linspace(0, 2 * np.pi, k, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle), np.zeros(k)], 1)
+    apex, base = np.array([0.0, 0.0, 1.0]), np.zeros(3)
+    cone = np.array([[apex, ring[i], ring[(i + 1) % k]] for i in range(k)]
+                    + [[base, ring[(i + 1) % k], ring[i]] for i in range(k)])
+    cone = cone[np.random.default_rng(0).permutation(len(cone))]
+    two = np.concatenate([cone, (cone * [1, 1, -1])[:, ::-1] + [0, 0, 2]])
+    for t in (cone, two):
+        got = fast(t)
+        assert got is not None
+        same(got, general(t))
+    assert got.nonmanifold_vertices == 1 and got.shells == 2
+    assert got.nonmanifold_vertex_samples[0].point == (0.0, 0.0, 1.0)
