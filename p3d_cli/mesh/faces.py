@@ -33,19 +33,21 @@ def zero_area_faces(cols: np.ndarray) -> np.ndarray:
     cols : (3, 3, k) float64
         Vertex slot, axis, face (widened exactly from the input).
     """
-    a, b, c = cols[0], cols[1], cols[2]
-    certain = np.zeros(cols.shape[2], dtype=bool)
+    undecided = np.arange(cols.shape[2])
     # Overflow gives inf or nan, which no bound certifies: those faces are done exactly.
     with np.errstate(over="ignore", invalid="ignore"):
         for i, j in ((0, 1), (1, 2), (2, 0)):
+            # Each plane only for the faces the planes before left undecided: a face is
+            # certain when any plane certifies it, whatever the order.
+            a, b, c = (cols[k][:, undecided] if undecided.size < cols.shape[2] else cols[k]
+                       for k in range(3))
             # orient2d(a, b, c) on the (i, j) plane: (a_i - c_i)(b_j - c_j) - (a_j - c_j)(b_i - c_i)
             left = (a[i] - c[i]) * (b[j] - c[j])
             right = (a[j] - c[j]) * (b[i] - c[i])
             bound = _ORIENT_BOUND * (np.abs(left) + np.abs(right)) + _UNDERFLOW
-            certain |= np.abs(left - right) > bound
-    undecided = np.flatnonzero(~certain)
-    if undecided.size == 0:
-        return undecided
+            undecided = undecided[~(np.abs(left - right) > bound)]
+            if undecided.size == 0:
+                return undecided
     zero = [f for f in undecided.tolist() if _exact_zero_area(cols[:, :, f])]
     return np.array(zero, dtype=np.int64)
 

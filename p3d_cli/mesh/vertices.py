@@ -118,16 +118,9 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
         if k == 0:
             continue
         if done + k > n:
-            _count_error(where, n, f"more than {n}")
+            count_error(where, n, f"more than {n}")
         float32 = np.asarray(block).dtype == np.float32
-        block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
-        # min and max propagate NaN and show any infinity: a finite check for free.
-        if where is not None and not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
-            from p3d_cli.errors import InputError
-
-            bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
-            raise InputError(where, f"face {done + bad} has a NaN or infinite coordinate",
-                             "repair or re-export the mesh")
+        block_lo, block_hi = block_bounds(cols, where, done)
         lo = block_lo if lo is None else np.minimum(lo, block_lo)
         hi = block_hi if hi is None else np.maximum(hi, block_hi)
         if first_bounds is None:
@@ -143,13 +136,28 @@ def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
         out |= np.arange(3 * done, 3 * (done + k), dtype=np.uint64).reshape(k, 3)
         done += k
     if done != n:
-        _count_error(where, n, str(done))
+        count_error(where, n, str(done))
     if first_bounds is None:
         return keys, lo, hi, float32
     return (keys, *first_bounds)
 
 
-def _count_error(where: str | None, n: int, read: str):
+def block_bounds(cols: np.ndarray, where: str | None, done: int) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest coordinates of a block's ``(3, 3, k)`` columns; when ``where`` is
+    given, a NaN or infinite coordinate raises ``InputError`` naming the face (``done``: the
+    faces of earlier blocks)."""
+    block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
+    # min and max propagate NaN and show any infinity: a finite check for free.
+    if where is not None and not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
+        from p3d_cli.errors import InputError
+
+        bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
+        raise InputError(where, f"face {done + bad} has a NaN or infinite coordinate",
+                         "repair or re-export the mesh")
+    return block_lo, block_hi
+
+
+def count_error(where: str | None, n: int, read: str):
     from p3d_cli.errors import FormatError
 
     raise FormatError(where or "<mesh>", f"expected {n} faces but read {read}",

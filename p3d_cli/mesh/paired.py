@@ -1,0 +1,389 @@
+"""``p3d check``'s fast path for a soup whose sides pair up: one sort of edge keys, no vertex sort.
+
+The usual input of ``p3d check`` is a clean closed mesh. For it, one sort of packed *edge*
+keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
+
+1. **Pass 1** reads the blocks once: bounds, finite check, exact zero-area faces, the signed
+   volume (the same blocks about the same origin as ``vertices.group_corners``, so the same
+   bits) and, for every side ``3 f + k``, the key ``(edge hash high bits) | direction | side``.
+2. **One in-place sort.** When every key group is two sides running opposite ways, each side
+   has a twin, and ``pi(c) = next(twin(c))`` is a permutation of the corners whose cycles are
+   the fans around the vertices (``p3d_cli.mesh.fans``). Two colliding edges make a balanced
+   group of four or more: those few sides are paired by their exact end points (one more
+   pass over the file for them only). Anything else (a boundary, non-manifold or misoriented
+   edge, a side whose ends hash alike) leaves the fast path: the general one decides. Most
+   such meshes leave before the sort: the edge keys of sides used once each way cancel in
+   ``sum(forward keys) - sum(backward keys)`` (mod 2^64), so a sum that does not cancel
+   proves the mesh is not clean, at the cost of two sums per block.
+3. **Fans by pointer doubling**: ``label = min(label, label[q]); q = q[q]`` labels each cycle
+   with its smallest corner in ``log2(valence)`` rounds; each fan's first corner (file order)
+   is its representative, and fans are numbered in file order, so later work reads memory
+   nearly in order (the hash order of a corner sort reads it at random, which costs more
+   than the arithmetic).
+4. **Pass 2** compares every corner's coordinates with its fan representative's, exactly: it
+   proves that every twin really shares its two end points, whatever the hashes did (a
+   difference leaves the fast path). Fans at the same point are then found by sorting the
+   representatives' hashes (a sixth of the corners) and comparing coordinates exactly; each
+   such point is one vertex with several fans, a non-manifold vertex.
+5. **Shells** by union-find over the fans (each face joins its three: a fan's faces are
+   joined across its edges), which numbers them by first face with no sort.
+
+The results are those of the general path (``topology``): the tests compare both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, _mix, corner_hashes
+from p3d_cli.mesh.edges import corner_slot
+from p3d_cli.mesh.faces import zero_area_faces
+from p3d_cli.mesh.integrals import columns, origin_from_bounds
+from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
+from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
+from p3d_cli.mesh.volume import SignedVolume
+
+#: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
+_NEXT = np.array([1, 1, -2], dtype=np.int64)
+
+
+@dataclass
+class Paired:
+    """What the fast path found for a soup whose every edge is used once each way.
+
+    Attributes
+    ----------
+    ids : (3n,) int32 or int64
+        Exact vertex id of each corner (not contiguous: a vertex of several fans takes the
+        id of its first fan).
+    vertices : int
+        Number of distinct points.
+    nonmanifold : (k,) int
+        Ids of the vertices with more than one fan, in the general path's vertex order
+        (full corner hash, then coordinates).
+    zero_area : (z,) int64
+        Faces of exactly zero area, ascending.
+    volume : float
+    shells : Components
+    """
+
+    ids: np.ndarray
+    vertices: int
+    nonmanifold: np.ndarray
+    zero_area: np.ndarray
+    volume: float
+    shells: Components
+
+
+def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Paired | None:
+    """The fast path's findings, or None when some edge is not used exactly once each way.
+
+    Parameters
+    ----------
+    blocks : callable
+        Returns an iterator over ``(k, 3, 3)`` float arrays in file order (read twice, or
+        three times when edge keys collide).
+    n : int
+        Number of triangles (at least one).
+    where : str, optional
+        The input's name: when given, a NaN or infinite coordinate raises ``InputError``.
+    hasher : callable, optional
+        ``hasher(cols) -> (3, k) uint64`` corner hashes (default ``closed.corner_hashes``'):
+        any function gives the same results, which lets the tests force collisions.
+    """
+    bits = max(int(3 * n - 1).bit_length(), 1)
+    first = _keyed_pass(blocks, n, bits, where, hasher)
+    if first is None:
+        return None
+    keys, zero, volume = first
+    del first                           # memory: the keys go as soon as they are read
+    keys.sort()
+    pi = _orbit_map(keys, bits, blocks)
+    del keys
+    if pi is None:
+        return None
+    fan, count, is_first = _fan_ids(pi)     # overwrites pi: the fans take its buffer
+    del pi
+    points = _confirm(blocks, fan, count, is_first)
+    del is_first
+    if points is None:
+        return None
+    ids, vertices, nonmanifold = _merge_fans(fan, count, points)
+    return Paired(ids, vertices, nonmanifold, zero, volume, _shells(fan, count))
+
+
+def _keyed_pass(blocks, n: int, bits: int, where, hasher):
+    """Pass 1: the side keys ``edge hash | direction << bits | side``, zero-area faces and the
+    volume; None as soon as a side's two ends hash alike (the general path's case), or when
+    the edge keys do not balance."""
+    keys = np.empty(3 * n, dtype=np.uint64)
+    low = np.uint64((1 << (bits + 1)) - 1)
+    shift = np.uint64(bits)
+    zero: list[np.ndarray] = []
+    volume = None
+    done = balance = 0
+    for block in blocks():
+        cols = columns(block)
+        k = cols.shape[2]
+        if k == 0:
+            continue
+        if done + k > n:
+            count_error(where, n, f"more than {n}")
+        lo, hi = block_bounds(cols, where, done)
+        if volume is None:
+            # The origin ``p3d props`` sums about: the first block's bounding-box centre.
+            volume = SignedVolume(origin_from_bounds(lo, hi, np.asarray(block).dtype == np.float32),
+                                  block=None)
+        zero.append(zero_area_faces(cols) + done)
+        scratch = np.empty((3, k), dtype=np.uint64)
+        h = _column_hashes(cols, scratch) if hasher is None else np.asarray(hasher(cols), np.uint64)
+        start, end = h, h[[1, 2, 0]]
+        if (start == end).any():
+            return None                 # a side that may bound nothing: the general path
+        forward = np.less(start, end).view(np.uint8).astype(np.uint64)
+        # Computed in its place in ``keys``: where a key sits does not matter (they are sorted),
+        # so the block's keys are stored in (slot, face) order and carry their side number.
+        key = np.minimum(start, end, out=keys[3 * done:3 * (done + k)].reshape(3, k))
+        key *= _GOLDEN
+        key += np.maximum(start, end, out=end)
+        _mix(key, scratch)
+        key &= ~low
+        # Edge keys used once each way cancel in (sum forward - sum backward) mod 2^64; a
+        # sum that does not cancel proves some edge is not, before any sort.
+        balance += 2 * int(np.multiply(key, forward, out=scratch).sum()) - int(key.sum())
+        forward <<= shift
+        key |= forward
+        key += _side_numbers(k)
+        key += np.uint64(3 * done)
+        volume.add_columns(cols)
+        done += k
+    if done != n:
+        count_error(where, n, str(done))
+    if balance % 2**64:
+        return None
+    assert volume is not None
+    return keys, np.concatenate(zero), volume.volume()
+
+
+_SIDES: list[np.ndarray] = []
+
+
+def _side_numbers(k: int) -> np.ndarray:
+    """``3 j + slot`` as ``(3, k)`` uint64 (slot, face): side numbers of a block's faces."""
+    if k > 1 << 16:                     # large blocks: not kept
+        return 3 * np.arange(k, dtype=np.uint64) + np.arange(3, dtype=np.uint64)[:, None]
+    if not _SIDES or _SIDES[0].shape[1] < k:
+        _SIDES[:] = [(3 * np.arange(max(k, 1 << 14), dtype=np.uint64)
+                      + np.arange(3, dtype=np.uint64)[:, None])]
+    return _SIDES[0][:, :k]
+
+
+def _orbit_map(keys: np.ndarray, bits: int, blocks):
+    """``pi[c] = next(twin(c))`` from the sorted side keys, or None when some key group is
+    not one side each way (after pairing the sides of colliding groups exactly)."""
+    pi = np.empty(keys.size, dtype=np.int32 if keys.size < 2**31 else np.int64)
+    mask, shift, one = np.uint64((1 << bits) - 1), np.uint64(bits), np.uint64(1)
+    pairs = keys.reshape(-1, 2) if keys.size % 2 == 0 else None
+    step = CHUNK
+    clean = pairs is not None
+    if clean:
+        for lo in range(0, len(pairs), step):
+            a, b = pairs[lo:lo + step, 0], pairs[lo:lo + step, 1]
+            # One edge per pair, direction 0 then 1: the keys agree above the direction bit
+            # and differ in it (sorted, ``a`` has the 0); a third use of an edge would break
+            # the pairing of the next pair.
+            if not (((a ^ b) >> shift) == one).all():
+                clean = False
+                break
+            _link(pi, (a & mask).astype(np.int64), (b & mask).astype(np.int64))
+    if not clean:
+        return _orbit_map_grouped(keys, bits, blocks, pi)
+    return pi
+
+
+def _link(pi: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+    """Record twin sides ``a[i]``, ``b[i]``: ``pi[a] = next(b)`` and ``pi[b] = next(a)``."""
+    pi[a] = b + _NEXT[corner_slot(b)]
+    pi[b] = a + _NEXT[corner_slot(a)]
+
+
+def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
+    """``_orbit_map`` when the keys do not simply pair up: group them, pair the two-side
+    groups, and the sides of balanced groups of four or more (colliding hashes) exactly."""
+    shift, mask = np.uint64(bits), np.uint64((1 << bits) - 1)
+    edge = keys >> np.uint64(bits + 1)
+    new = np.ones(edge.size, dtype=bool)
+    np.not_equal(edge[1:], edge[:-1], out=new[1:])
+    starts = np.flatnonzero(new)
+    del edge, new
+    counts = np.diff(np.append(starts, keys.size))
+    forward = np.add.reduceat(((keys >> shift) & np.uint64(1)).astype(np.int64), starts)
+    if ((counts % 2 == 1) | (2 * forward != counts)).any():
+        return None                     # an edge not used once each way, whatever the hash
+    two = starts[counts == 2]
+    _link(pi, (keys[two] & mask).astype(np.int64), (keys[two + 1] & mask).astype(np.int64))
+    crowded = np.flatnonzero(counts > 2)
+    sizes = counts[crowded]
+    offsets = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    sides = (keys[np.repeat(starts[crowded], sizes) + offsets] & mask).astype(np.int64)
+    twins = _exact_twins(blocks, sides)
+    if twins is None:
+        return None
+    _link(pi, *twins)
+    return pi
+
+
+def _exact_twins(blocks, sides: np.ndarray):
+    """Pair sides by their exact end points: ``(a, b)`` with side ``b`` running back along
+    side ``a``; None when some exact edge is not used once each way."""
+    from p3d_cli.mesh.vertices import corner_coords
+
+    ends = sides + _NEXT[corner_slot(sides)]
+    coords = corner_coords(blocks, np.concatenate([sides, ends]))
+    start, end = coords[:sides.size], coords[sides.size:]
+    # Each undirected edge as (lower point, higher point) in lexicographic order.
+    lo_first = _lex_less(start, end)
+    lo = np.where(lo_first[:, None], start, end)
+    hi = np.where(lo_first[:, None], end, start)
+    order = np.lexsort((~lo_first, hi[:, 2], hi[:, 1], hi[:, 0], lo[:, 2], lo[:, 1], lo[:, 0]))
+    if order.size % 2:
+        return None
+    a, b = order[0::2], order[1::2]
+    same = (lo[a] == lo[b]).all(axis=1) & (hi[a] == hi[b]).all(axis=1)
+    if not (same.all() and lo_first[a].all() and not lo_first[b].any()):
+        return None
+    # Sorted, a third use of an edge would meet its pair's edge in the next pair.
+    if a.size > 1 and ((lo[a[1:]] == lo[a[:-1]]).all(axis=1) & (hi[a[1:]] == hi[a[:-1]]).all(axis=1)).any():
+        return None
+    return sides[a], sides[b]
+
+
+def _lex_less(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise ``tuple(a) < tuple(b)`` for ``(k, 3)`` arrays."""
+    less = a[:, 2] < b[:, 2]
+    for axis in (1, 0):
+        less = (a[:, axis] < b[:, axis]) | ((a[:, axis] == b[:, axis]) & less)
+    return less
+
+
+def _fan_ids(pi: np.ndarray):
+    """Fan number of every corner (the cycles of ``pi``, numbered in file order), the number
+    of fans, and the mask of each fan's first corner.
+
+    Pointer doubling: ``label[c]`` is the smallest corner among the first ``w`` of its cycle
+    from ``c``, ``w`` being 3 at the start (``c``, ``pi[c]``, ``pi[pi[c]]``: no lookup of labels
+    needed) and doubling each round; every cycle is covered when adjacent corners agree
+    (window minima of a cycle longer than the window differ where the window leaves its
+    smallest corner). Valence 6 or less, most vertices of most meshes, takes one round.
+    """
+    label = np.arange(pi.size, dtype=pi.dtype)
+    np.minimum(label, pi, out=label)
+    jump = _gather(pi, pi)
+    np.minimum(label, jump, out=label)
+    jump, looked = _gather(pi, jump), jump  # pi applied 3 times: the window's length
+    while True:
+        np.minimum(label, _gather(label, jump, looked), out=label)
+        if np.array_equal(label, _gather(label, pi, looked)):
+            break
+        jump, looked = _gather(jump, jump, looked), jump
+    del jump, looked
+    first = label == np.arange(pi.size, dtype=pi.dtype)
+    number = np.cumsum(first, dtype=pi.dtype)
+    number -= 1
+    count = int(number[-1]) + 1
+    # The fan numbers go into pi's buffer, which is not needed any more (memory).
+    return _gather(number, label, pi), count, first
+
+
+def _gather(source: np.ndarray, index: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``source[index]`` into ``out`` (not ``source`` nor ``index``), in slices: numpy widens
+    int32 indices to a whole int64 copy first, which would double the memory of a lookup."""
+    if out is None:
+        out = np.empty(index.size, dtype=source.dtype)
+    for lo in range(0, index.size, 4 * CHUNK):
+        # Valid indices: mode="clip" only spares the copy of ``out`` the default mode makes.
+        np.take(source, index[lo:lo + 4 * CHUNK], out=out[lo:lo + 4 * CHUNK], mode="clip")
+    return out
+
+
+def _confirm(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
+    """Pass 2: every corner against its fan's first corner, exactly. Returns the fans'
+    coordinates ``(count, 3)`` (the input's dtype), or None when some corner differs."""
+    axes = None
+    done = 0
+    for block in blocks():
+        # Compared as stored (float32 or float64; equal exactly when the widened values
+        # are, and -0.0 == 0.0): no widening copy.
+        block = np.asarray(block)
+        k = len(block)
+        if k == 0:
+            continue
+        if axes is None:
+            axes = np.zeros((3, count), dtype=block.dtype)
+        corners = np.ascontiguousarray(block).reshape(3 * k, 3)     # corner 3 f + k order
+        vid = fan[3 * done:3 * (done + k)]
+        # A fan's first corner is its earliest: in this block or before. So set the block's
+        # first corners first, then compare every corner.
+        own = is_first[3 * done:3 * (done + k)]
+        firsts = vid[own]
+        for axis in range(3):
+            axes[axis, firsts] = corners[own, axis]
+        differ = axes[0, vid] != corners[:, 0]
+        differ |= axes[1, vid] != corners[:, 1]
+        differ |= axes[2, vid] != corners[:, 2]
+        if differ.any():
+            return None                             # colliding keys paired two edges
+        done += k
+    assert axes is not None
+    return np.ascontiguousarray(axes.T)
+
+
+def _merge_fans(fan: np.ndarray, count: int, points: np.ndarray):
+    """Exact vertex ids from the fans: fans at one point are one vertex (several fans: a
+    non-manifold vertex). Returns ``(ids, vertices, nonmanifold)`` (see ``Paired``)."""
+    hashes = corner_hashes(points)
+    # Fans whose hashes agree in their top 32 bits (a uint32 sort is faster): a few, by chance,
+    # besides those that share a point.
+    top = (hashes >> np.uint64(32)).astype(np.uint32)
+    ordered = np.sort(top)
+    shared = ordered[1:][ordered[1:] == ordered[:-1]]
+    if shared.size == 0:                # the usual case: one fan per point
+        return fan, count, np.zeros(0, dtype=np.int64)
+    candidates = np.flatnonzero(np.isin(top, shared))
+    coords = points[candidates].astype(np.float64) + 0.0
+    h = hashes[candidates]
+    # The general path's vertex order: full hash, then coordinates (vertices.py).
+    order = np.lexsort((candidates, coords[:, 2], coords[:, 1], coords[:, 0], h))
+    candidates, coords, h = candidates[order], coords[order], h[order]
+    new = np.ones(candidates.size, dtype=bool)
+    new[1:] = (h[1:] != h[:-1]) | (coords[1:] != coords[:-1]).any(axis=1)
+    group = np.cumsum(new) - 1
+    starts = np.flatnonzero(new)
+    sizes = np.diff(np.append(starts, candidates.size))
+    if (sizes == 1).all():
+        return fan, count, np.zeros(0, dtype=np.int64)      # hash collisions only
+    # Each point takes the id of its first fan (the candidates are ascending within a point).
+    rep = np.arange(count, dtype=fan.dtype)
+    rep[candidates] = candidates[starts][group]
+    ids = rep[fan]
+    return ids, count - int((sizes - 1).sum()), candidates[starts[sizes > 1]].astype(np.int64)
+
+
+def _shells(fan: np.ndarray, count: int) -> Components:
+    """Faces joined across edges: a fan's faces are joined across its edges, so the shells
+    are the components of the fans, each face joining its three."""
+    faces = fan.reshape(-1, 3)
+    step = CHUNK
+
+    def arcs():
+        for lo in range(0, len(faces), step):
+            part = faces[lo:lo + step].astype(np.int64)
+            yield part[:, 0], part[:, 1]
+            yield part[:, 1], part[:, 2]
+
+    # Fans are numbered by first corner, so the smallest fan of a shell is one of its first
+    # face's: the fans' components, numbered by smallest fan, are numbered by first face.
+    of_fan = _numbered(chunked_roots(count, arcs))
+    return Components(of_fan.labels[faces[:, 0]], of_fan.count)
