@@ -23,9 +23,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.closed import _lex_less, column_edge_keys, sides_of_edges
+from p3d_cli.mesh.closed import _lex_less, column_edge_keys, key_groups, sides_of_edges
 
-_ONE = np.uint64(1)
 
 #: Above this many net boundary sides the exact terms would cost more than the float sums
 #: about the world origin (a soup of disconnected faces is all boundary); the caller falls
@@ -46,13 +45,8 @@ def unbalanced_edges(keys: np.ndarray) -> np.ndarray:
     Equal exact edges have equal keys, so an edge whose key group is balanced cancels unless
     two different edges' 64-bit keys collided (the risk ``closed`` already takes for its pairs).
     """
-    if keys.size == 0:
-        return keys[:0]
-    edge = keys >> _ONE
-    starts = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
-    counts = np.diff(np.append(starts, keys.size))
-    forward = np.add.reduceat((keys & _ONE).astype(np.int64), starts)
-    return edge[starts[2 * forward != counts]]
+    found = [edge[2 * forward != counts] for edge, counts, forward in key_groups(keys)]
+    return np.concatenate(found) if found else keys[:0]
 
 
 def net_boundary(source_blocks, unbalanced: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -156,10 +156,30 @@ def doubtful_edges(keys: np.ndarray) -> np.ndarray:
     closed edges whose 64-bit keys collided; those need the exact test.
     """
     found = []
+    for edge, counts, forward in key_groups(keys):
+        bad = ~((counts == 2) & (forward == 1))
+        if ((counts[bad] < 4) | (2 * forward[bad] != counts[bad])).any():
+            return keys[:0]                 # proven open: the usual case, found early
+        found.append(edge[bad])
+    return np.concatenate(found) if found else keys[:0]
+
+
+def key_groups(keys: np.ndarray):
+    """The key groups of sorted side ``keys`` (a group: the keys ``2e`` and ``2e + 1`` of one
+    edge key ``e``), a slice of whole groups at a time, so that the temporaries stay small
+    beside the keys (peak memory, and page faults: this is on every open mesh's road).
+
+    Yields
+    ------
+    edge : (g,) uint64
+        Each group's edge key.
+    counts : (g,) int64
+        Its number of sides.
+    forward : (g,) int32
+        How many of them run in direction 1.
+    """
     step, start = 1 << 18, 0
     while start < keys.size:
-        # A slice of whole key groups (a group is the keys 2e and 2e + 1), so that the
-        # temporaries stay small beside the keys.
         stop = min(start + step, keys.size)
         last = keys[stop - 1] | _ONE
         if stop < keys.size and last != _MAX:
@@ -171,12 +191,8 @@ def doubtful_edges(keys: np.ndarray) -> np.ndarray:
         starts = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
         counts = np.diff(np.append(starts, part.size))
         forward = np.add.reduceat((part & _ONE).astype(np.int32), starts)
-        bad = ~((counts == 2) & (forward == 1))
-        if ((counts[bad] < 4) | (2 * forward[bad] != counts[bad])).any():
-            return keys[:0]                 # proven open: the usual case, found early
-        found.append(edge[starts[bad]])
+        yield edge[starts], counts, forward
         start = stop
-    return np.concatenate(found) if found else keys[:0]
 
 
 def sides_pair_up_exactly(source_blocks, doubtful: np.ndarray) -> bool:
