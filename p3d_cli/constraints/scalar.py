@@ -92,82 +92,143 @@ def hinge_frame(za, zb):
     a0, a1, a2 = abs(z[0]), abs(z[1]), abs(z[2])
     pick = 0 if (a0 <= a1 and a0 <= a2) else (1 if a1 <= a2 else 2)
     zp = z[pick]
-    x = [-zp * z[0], -zp * z[1], -zp * z[2]]
-    x[pick] = 1.0 - zp * z[pick]
-    norm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-    x = (x[0] / norm, x[1] / norm, x[2] / norm)
+    seed = [-zp * z[0], -zp * z[1], -zp * z[2]]
+    seed[pick] = 1.0 - zp * z[pick]
+    norm = math.sqrt(seed[0] * seed[0] + seed[1] * seed[1] + seed[2] * seed[2])
+    x = (seed[0] / norm, seed[1] / norm, seed[2] / norm)
     return x, cross(z, x), s
 
 
+def turn(q, rx: float, ry: float, rz: float):
+    """``(rotate(q, θ), matrix(rotate(q, θ)))``: the two are always wanted together."""
+    q = rotate(q, rx, ry, rz)
+    return q, matrix(q)
+
+
 class Joint:
-    """One constraint's constants and its per-configuration evaluation.
+    """One constraint's constants and its per-configuration evaluation (a subclass per type).
 
     ``evaluate`` returns the position errors (``rows.RowSet.errors`` for this constraint) and
-    keeps what ``entries`` (the variable entries of its rows) needs.
+    keeps what ``entries`` (the variable entries of its rows) needs. A fixed side's attachment
+    point (and hinge axis) is computed once: its body never moves.
     """
 
-    __slots__ = ("kind", "a", "b", "off_a", "off_b", "axis_a", "axis_b", "length", "where", "_state")
+    __slots__ = ("a", "b", "off_a", "off_b", "free_a", "free_b", "const_a", "const_b", "where", "_state")
+    kind = ""
+    rows = 0
 
-    def __init__(self, kind, a, b, off_a, off_b, axis_a, axis_b, length, where) -> None:
-        self.kind, self.a, self.b = kind, a, b
-        self.off_a, self.off_b, self.axis_a, self.axis_b = off_a, off_b, axis_a, axis_b
-        self.length, self.where = length, where
+    def __init__(self, a, b, off_a, off_b, free_a: bool, free_b: bool, com, rot, where) -> None:
+        self.a, self.b, self.off_a, self.off_b = a, b, off_a, off_b
+        self.free_a, self.free_b, self.where = free_a, free_b, where
+        self.const_a = None if free_a else _point(com, rot, a, off_a)
+        self.const_b = None if free_b else _point(com, rot, b, off_b)
         self._state: tuple = ()
 
-    def evaluate(self, com, rot) -> list[float]:
-        """Position errors at centres of mass ``com`` (flat, 3 per body) and rotations ``rot``."""
-        a, b = self.a, self.b
-        ra, rb = apply(rot[a], self.off_a), apply(rot[b], self.off_b)
-        gap = ((com[3 * b] + rb[0]) - (com[3 * a] + ra[0]), (com[3 * b + 1] + rb[1]) - (com[3 * a + 1] + ra[1]),
-               (com[3 * b + 2] + rb[2]) - (com[3 * a + 2] + ra[2]))
-        if self.kind == "ball":
-            self._state = (ra, rb)
-            return list(gap)
-        if self.kind == "bar":
-            norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
-            self._state = (ra, rb, gap, norm)
-            return [norm - self.length]
-        za, zb = apply(rot[a], self.axis_a), apply(rot[b], self.axis_b)
-        x, y, s = hinge_frame(za, zb)
-        tilt = cross(za, (s * zb[0], s * zb[1], s * zb[2]))
-        self._state = (ra, rb, x, y)
-        return [gap[0], gap[1], gap[2], tilt[0] * x[0] + tilt[1] * x[1] + tilt[2] * x[2],
-                tilt[0] * y[0] + tilt[1] * y[1] + tilt[2] * y[2]]
-
-    def entries(self, free_a: bool, free_b: bool) -> list[float]:
-        """The entries of its rows that depend on the pose, side a's then side b's (free sides
-        only), in the order ``small_step`` scatters them (the ``±E`` entries are constant)."""
-        out: list[float] = []
-        if self.kind == "bar":
-            ra, rb, gap, norm = self._state
-            if norm == 0.0:
-                raise bar_met_error(self.where)
-            d = (gap[0] / norm, gap[1] / norm, gap[2] / norm)
-            if free_a:
-                ca = cross(ra, d)
-                out += [-d[0], -d[1], -d[2], -ca[0], -ca[1], -ca[2]]
-            if free_b:
-                out += [*d, *cross(rb, d)]
-            return out
-        ra, rb = self._state[0], self._state[1]
-        # Ball rows (a hinge's first three): [-E, [r_a]ₓ] and [E, -[r_b]ₓ]; a hinge's axis rows
-        # [0, -x], [0, -y] and [0, x], [0, y].
-        if free_a:
-            out += [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0]
-            if self.kind == "hinge":
-                x, y = self._state[2], self._state[3]
-                out += [-x[0], -x[1], -x[2], -y[0], -y[1], -y[2]]
-        if free_b:
-            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0]
-            if self.kind == "hinge":
-                out += [*self._state[2], *self._state[3]]
-        return out
+    def points(self, com, rot):
+        """``(r_a, r_b, gap)``: offsets of the attachment points from the centres of mass, world
+        frame, and ``p_b - p_a`` (``rows.RowSet.geometry``)."""
+        if self.const_a is None:
+            ra, pa = _point(com, rot, self.a, self.off_a)
+        else:
+            ra, pa = self.const_a
+        if self.const_b is None:
+            rb, pb = _point(com, rot, self.b, self.off_b)
+        else:
+            rb, pb = self.const_b
+        return ra, rb, (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
 
     def columns(self) -> list[tuple[int, int]]:
-        """(local row, column within a side's 6) of ``entries``' values for one side, in order."""
-        if self.kind == "bar":
-            return [(0, j) for j in range(6)]
-        out = [(i, 3 + j) for i in range(3) for j in range(3)]
-        if self.kind == "hinge":
-            out += [(3 + i, 3 + j) for i in range(2) for j in range(3)]
+        """(row, column within a side's 6) of one side's ``entries``, in order."""
+        return [(i, 3 + j) for i in range(3) for j in range(3)]
+
+    def entries(self) -> list[float]:
+        """The entries of its rows that depend on the pose, side a's then side b's (free sides
+        only), in the order ``small_step`` scatters them (the ``±E`` entries are constant).
+        Ball rows (a hinge's first three): ``[-E, [r_a]ₓ]`` and ``[E, -[r_b]ₓ]``."""
+        ra, rb = self._state[0], self._state[1]
+        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0] if self.free_a else []
+        if self.free_b:
+            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0]
         return out
+
+
+def _point(com, rot, i: int, off):
+    """``(R off, com + R off)`` of body ``i``."""
+    r, k = rot[i], 3 * i
+    o0, o1, o2 = off
+    v0, v1, v2 = r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2, r[6] * o0 + r[7] * o1 + r[8] * o2
+    return (v0, v1, v2), (com[k] + v0, com[k + 1] + v1, com[k + 2] + v2)
+
+
+class Ball(Joint):
+    __slots__ = ()
+    kind, rows = "ball", 3
+
+    def evaluate(self, com, rot) -> list[float]:
+        ra, rb, gap = self.points(com, rot)
+        self._state = (ra, rb)
+        return list(gap)
+
+
+class Bar(Joint):
+    __slots__ = ("length",)
+    kind, rows = "bar", 1
+
+    def evaluate(self, com, rot) -> list[float]:
+        ra, rb, gap = self.points(com, rot)
+        norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
+        self._state = (ra, rb, gap, norm)
+        return [norm - self.length]
+
+    def columns(self) -> list[tuple[int, int]]:
+        return [(0, j) for j in range(6)]
+
+    def entries(self) -> list[float]:
+        """``[-d, -(r_a × d)]`` and ``[d, r_b × d]``, ``d`` the unit vector from ``p_a`` to ``p_b``."""
+        ra, rb, gap, norm = self._state
+        if norm == 0.0:
+            raise bar_met_error(self.where)
+        d = (gap[0] / norm, gap[1] / norm, gap[2] / norm)
+        out: list[float] = []
+        if self.free_a:
+            ca = cross(ra, d)
+            out += [-d[0], -d[1], -d[2], -ca[0], -ca[1], -ca[2]]
+        if self.free_b:
+            out += [*d, *cross(rb, d)]
+        return out
+
+
+class Hinge(Joint):
+    __slots__ = ("axis_a", "axis_b", "z_a", "z_b")
+    kind, rows = "hinge", 5
+
+    def set_axes(self, axis_a, axis_b, rot) -> None:
+        self.axis_a, self.axis_b = axis_a, axis_b
+        self.z_a = None if self.free_a else apply(rot[self.a], axis_a)
+        self.z_b = None if self.free_b else apply(rot[self.b], axis_b)
+
+    def evaluate(self, com, rot) -> list[float]:
+        ra, rb, gap = self.points(com, rot)
+        za = apply(rot[self.a], self.axis_a) if self.z_a is None else self.z_a
+        zb = apply(rot[self.b], self.axis_b) if self.z_b is None else self.z_b
+        x, y, s = hinge_frame(za, zb)
+        sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
+        # tilt = z_a × s z_b, along x and y.
+        t0, t1, t2 = za[1] * sz2 - za[2] * sz1, za[2] * sz0 - za[0] * sz2, za[0] * sz1 - za[1] * sz0
+        self._state = (ra, rb, x, y)
+        return [gap[0], gap[1], gap[2], t0 * x[0] + t1 * x[1] + t2 * x[2], t0 * y[0] + t1 * y[1] + t2 * y[2]]
+
+    def columns(self) -> list[tuple[int, int]]:
+        return super().columns() + [(3 + i, 3 + j) for i in range(2) for j in range(3)]
+
+    def entries(self) -> list[float]:
+        """The ball rows, then the axis rows ``[0, -x], [0, -y]`` and ``[0, x], [0, y]``."""
+        ra, rb, x, y = self._state
+        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0,
+               -x[0], -x[1], -x[2], -y[0], -y[1], -y[2]] if self.free_a else []
+        if self.free_b:
+            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0, *x, *y]
+        return out
+
+
+JOINTS = {"ball": Ball, "hinge": Hinge, "bar": Bar}

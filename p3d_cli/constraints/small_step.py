@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.scalar import Joint, apply, apply_t, conjugate, matrix, rotate
+from p3d_cli.constraints.scalar import JOINTS, apply, apply_t, conjugate, turn
 from p3d_cli.constraints.solver import RANK_RTOL, ImpulseSolution
 
 #: Scenes with at most this many rows, and this many free bodies, take this path.
@@ -34,38 +34,47 @@ def fits(world) -> bool:
 
 
 class _Factor:
-    """One island's factorised system: ``K`` the pseudo-inverse of ``A = J W Jᵀ`` and ``W Jᵀ``."""
+    """One island's factorised system: ``K`` the pseudo-inverse of ``A = J W Jᵀ``, and ``W Jᵀ``."""
 
-    __slots__ = ("wjt", "system", "pinv", "rank")
+    __slots__ = ("jac", "wjt", "system", "pinv", "rank")
 
-    def __init__(self, wjt, system, pinv, rank) -> None:
-        self.wjt, self.system, self.pinv, self.rank = wjt, system, pinv, rank
+    def __init__(self, jac, wjt, system, pinv, rank) -> None:
+        self.jac, self.wjt, self.system, self.pinv, self.rank = jac, wjt, system, pinv, rank
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """Minimum-norm ``λ`` of ``A λ = b`` with one step of iterative refinement, which recovers
-        the digits the eigendecomposition's rounding loses on an ill-conditioned island (so an
-        explicit pseudo-inverse is as accurate here as applying the eigenvectors)."""
+        the digits the factorisation's rounding loses on an ill-conditioned island (so an
+        explicit (pseudo-)inverse is as accurate here as applying the factors)."""
         pinv = self.pinv
         lam = pinv @ b
         return lam + pinv @ (b - self.system @ lam)
+
+    def correction(self, errors: list) -> list:
+        """``W Jᵀ λ`` for ``A λ = -C``: the motion (6 per island body) that closes ``errors``."""
+        return (self.wjt @ self.solve(-np.array(errors))).tolist()
+
+    def velocity(self, u: list):
+        """``(λ, W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
+        island is factorised again: the next step's correction needs ``W Jᵀ`` and ``A`` only)."""
+        lam = self.solve(-(self.jac @ np.array(u)))
+        return lam, (self.wjt @ lam).tolist()
 
 
 class _Island:
     """One island's rows as a dense ``(m, 6 nb)`` matrix whose variable entries are scattered in
     from the joints' ``entries`` each step (the ``±E`` of gap rows are set once)."""
 
-    def __init__(self, island, joints, offsets, active, inv_mass) -> None:
+    def __init__(self, island, joints, offsets, inv_mass) -> None:
         self.bodies = list(island.bodies)
         self.joints = [joints[k] for k in island.constraints]
-        self.sides = [(j, bool(active[j.a]), bool(active[j.b])) for j in self.joints]
         self.rows = np.concatenate([np.arange(offsets[k], offsets[k + 1]) for k in island.constraints])
         m, width = len(self.rows), 6 * len(self.bodies)
         self.m = m
         column = {b: 6 * c for c, b in enumerate(self.bodies)}
         self.jac = np.zeros((m, width))
         index, first = [], 0
-        for joint, free_a, free_b in self.sides:
-            for body, free, sign in ((joint.a, free_a, -1.0), (joint.b, free_b, 1.0)):
+        for joint in self.joints:
+            for body, free, sign in ((joint.a, joint.free_a, -1.0), (joint.b, joint.free_b, 1.0)):
                 if not free:
                     continue
                 c0 = column[body]
@@ -73,7 +82,7 @@ class _Island:
                 if joint.kind != "bar":
                     for i in range(3):
                         self.jac[first + i, c0 + i] = sign
-            first += {"ball": 3, "hinge": 5, "bar": 1}[joint.kind]
+            first += joint.rows
         self.index = np.array(index, dtype=np.intp)
         self.weights = np.zeros((width, width))
         for c, body in enumerate(self.bodies):
@@ -81,6 +90,7 @@ class _Island:
                 self.weights[6 * c + i, 6 * c + i] = inv_mass[body]
         self.weight_index = np.array([(6 * c + 3 + i) * width + 6 * c + 3 + j for c in range(len(self.bodies))
                                       for i in range(3) for j in range(3)], dtype=np.intp)
+        self.redundant = False
 
     def errors(self, com, rot) -> list[float]:
         out: list[float] = []
@@ -89,23 +99,97 @@ class _Island:
         return out
 
     def factorise(self, inv_inertia) -> _Factor:
-        """``J W Jᵀ`` at the configuration of the joints' last ``evaluate``, factorised as
-        ``solver._DenseStack`` does (eigendecomposition, relative rank tolerance)."""
+        """``J W Jᵀ`` at the configuration of the joints' last ``evaluate``, and its inverse or
+        pseudo-inverse (``_pseudo_inverse``)."""
         values: list[float] = []
-        for joint, free_a, free_b in self.sides:
-            values += joint.entries(free_a, free_b)
-        self.jac.flat[self.index] = values
+        for joint in self.joints:
+            values += joint.entries()
+        self.jac.reshape(-1)[self.index] = values
         weights: list[float] = []
         for body in self.bodies:
             weights += inv_inertia[body]
-        self.weights.flat[self.weight_index] = weights
+        self.weights.reshape(-1)[self.weight_index] = weights
         wjt = self.weights @ self.jac.T
         system = self.jac @ wjt
         system = 0.5 * (system + system.T)
+        pinv, rank = self._pseudo_inverse(system)
+        return _Factor(self.jac, wjt, system, pinv, rank)
+
+    def _pseudo_inverse(self, system):
+        """``(A⁺, rank)`` with the rank rule of ``solver._DenseStack``: eigenvalues below
+        ``RANK_RTOL ×`` the largest diagonal entry count as zero.
+
+        The eigendecomposition costs 2-3 times an inverse, so an island is first inverted:
+        ``‖A⁻¹‖_F >= ‖A⁻¹‖₂ = 1/λ_min``, so ``‖A⁻¹‖_F RANK_RTOL d < 1/2`` proves every
+        eigenvalue is above twice the threshold (its rounding is far smaller), and the inverse
+        is the pseudo-inverse. Otherwise (a redundant island, which stays so: it is not tried
+        again), the eigendecomposition decides.
+        """
+        threshold = RANK_RTOL * max(float(system.diagonal().max()), 0.0)
+        if not self.redundant:
+            try:
+                inverse = np.linalg.inv(system)
+            except np.linalg.LinAlgError:
+                inverse = None
+            if inverse is not None and threshold > 0 and math.sqrt(float(np.vdot(inverse, inverse))) * threshold < 0.5:
+                return inverse, self.m
+            self.redundant = True
         eig, vectors = np.linalg.eigh(system)
-        keep = eig > RANK_RTOL * max(float(system.diagonal().max()), 0.0)
+        keep = eig > threshold
         inv = np.divide(1.0, eig, out=np.zeros_like(eig), where=keep)
-        return _Factor(wjt, system, (vectors * inv) @ vectors.T, int(keep.sum()))
+        return (vectors * inv) @ vectors.T, int(keep.sum())
+
+
+class _Single:
+    """An island of one row (a bar) in floats: its system is the number ``a = J W Jᵀ``.
+
+    Same rules as ``_Island``: rank 1 when ``a > RANK_RTOL a``, one refinement step.
+    """
+
+    def __init__(self, island, joints, offsets, inv_mass) -> None:
+        self.joint = joints[island.constraints[0]]
+        self.bodies = list(island.bodies)
+        self.rows = np.array([offsets[island.constraints[0]]])
+        self.m = 1
+        self.inv_mass = [inv_mass[b] for b in self.bodies]
+
+    def errors(self, com, rot) -> list[float]:
+        return self.joint.evaluate(com, rot)
+
+    def factorise(self, inv_inertia) -> "_SingleFactor":
+        row = self.joint.entries()          # 6 per free side, the free sides in body order
+        if self.joint.free_a and self.joint.free_b and self.joint.a > self.joint.b:
+            row = row[6:] + row[:6]
+        wjt: list[float] = []
+        for c, body in enumerate(self.bodies):
+            j0, j1, j2, j3, j4, j5 = row[6 * c:6 * c + 6]
+            im, w = self.inv_mass[c], inv_inertia[body]
+            wjt += [im * j0, im * j1, im * j2, w[0] * j3 + w[1] * j4 + w[2] * j5,
+                    w[3] * j3 + w[4] * j4 + w[5] * j5, w[6] * j3 + w[7] * j4 + w[8] * j5]
+        a = math.fsum(j * w for j, w in zip(row, wjt))
+        keep = a > RANK_RTOL * max(a, 0.0)
+        if not math.isfinite(a):
+            raise np.linalg.LinAlgError("the constraint system is not finite")
+        return _SingleFactor(row, wjt, a, 1.0 / a if keep else 0.0, int(keep))
+
+
+class _SingleFactor:
+    __slots__ = ("row", "wjt", "system", "pinv", "rank")
+
+    def __init__(self, row, wjt, system, pinv, rank) -> None:
+        self.row, self.wjt, self.system, self.pinv, self.rank = row, wjt, system, pinv, rank
+
+    def _solve(self, b: float) -> float:
+        lam = self.pinv * b
+        return lam + self.pinv * (b - self.system * lam)
+
+    def correction(self, errors: list) -> list:
+        lam = self._solve(-errors[0])
+        return [w * lam for w in self.wjt]
+
+    def velocity(self, u: list):
+        lam = self._solve(-math.fsum(j * v for j, v in zip(self.row, u)))
+        return np.array([lam]), [w * lam for w in self.wjt]
 
 
 class SmallStep:
@@ -118,22 +202,29 @@ class SmallStep:
         self.inv_mass = world.inv_mass.tolist()
         self.inertia = world.inertia_body.reshape(-1, 9).tolist()
         self.inv_inertia_body = world.inv_inertia_body.reshape(-1, 9).tolist()
-        hinge = {k: h for h, k in enumerate(rs.hinges.tolist())}
-        joints = []
-        for k, spec in enumerate(world.scene.constraints):
-            h = hinge.get(k)
-            axes = (rs.axis_a[h].tolist(), rs.axis_b[h].tolist()) if h is not None else (None, None)
-            joints.append(Joint(spec.type, int(rs.a[k]), int(rs.b[k]), rs.off_a[k].tolist(), rs.off_b[k].tolist(),
-                                *axes, spec.length, spec.where))
-        self.islands = [_Island(isl, joints, rs.offsets, world.active, self.inv_mass) for isl in world.islands]
         self.com, self.vel = world.com.ravel().tolist(), world.vel.ravel().tolist()
         self.omega = world.omega.ravel().tolist()
         self.quat = [tuple(q) for q in world.quat.tolist()]
         self.rot = world.rot.reshape(-1, 9).tolist()
+        active = world.active.tolist()
+        hinge = {k: h for h, k in enumerate(rs.hinges.tolist())}
+        joints = []
+        for k, spec in enumerate(world.scene.constraints):
+            a, b = int(rs.a[k]), int(rs.b[k])
+            joint = JOINTS[spec.type](a, b, rs.off_a[k].tolist(), rs.off_b[k].tolist(), active[a], active[b],
+                                      self.com, self.rot, spec.where)
+            if spec.type == "hinge":
+                joint.set_axes(rs.axis_a[hinge[k]].tolist(), rs.axis_b[hinge[k]].tolist(), self.rot)
+            elif spec.type == "bar":
+                joint.length = float(spec.length)
+            joints.append(joint)
+        self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].rows == 1 else _Island)
+                        (isl, joints, rs.offsets, self.inv_mass) for isl in world.islands]
         self.lam = np.zeros(self.m)
         for island in self.islands:
             island.errors(self.com, self.rot)
-        self.factors = [island.factorise(self._inv_inertia()) for island in self.islands]
+        inv_inertia = self._inv_inertia()
+        self.factors = [island.factorise(inv_inertia) for island in self.islands]
 
     def _inv_inertia(self) -> list:
         """World inverse inertia ``R I⁻¹ Rᵀ`` of every body (9 floats; None for bodies not moving)."""
@@ -161,8 +252,8 @@ class SmallStep:
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
-            q = self.quat[i] = rotate(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
-            r = self.rot[i] = matrix(q)
+            self.quat[i], r = turn(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
+            self.rot[i] = r
             omega[k], omega[k + 1], omega[k + 2] = apply(r, apply(self.inv_inertia_body[i], apply_t(r, spin)))
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:
@@ -170,29 +261,38 @@ class SmallStep:
         the displacement to the velocities (``/ dt``); returns the largest remaining error."""
         com, rot, quat = self.com, self.rot, self.quat
         total = [0.0] * (6 * self.n)
-        for _ in range(iterations + 1):
+        for iteration in range(iterations + 1):
             errors = [island.errors(com, rot) for island in self.islands]
-            worst = max((abs(e) for part in errors for e in part), default=0.0)
-            if worst <= tolerance or _ == iterations:
+            worst = max((max(max(part), -min(part)) for part in errors), default=0.0)
+            if worst <= tolerance or iteration == iterations:
                 break
             for island, factor, part in zip(self.islands, self.factors, errors):
-                change = (factor.wjt @ factor.solve(-np.array(part))).tolist()
+                change = factor.correction(part)
                 for c, i in enumerate(island.bodies):
-                    d = change[6 * c:6 * c + 6]
+                    d0, d1, d2, d3, d4, d5 = change[6 * c:6 * c + 6]
                     k = 3 * i
-                    com[k] += d[0]
-                    com[k + 1] += d[1]
-                    com[k + 2] += d[2]
-                    if d[3] or d[4] or d[5]:
-                        quat[i] = rotate(quat[i], d[3], d[4], d[5])
-                        rot[i] = matrix(quat[i])
-                    for j in range(6):
-                        total[6 * i + j] += d[j]
+                    com[k] += d0
+                    com[k + 1] += d1
+                    com[k + 2] += d2
+                    if d3 or d4 or d5:
+                        # Rows through the centre of mass only (a bob on a bar) turn nothing.
+                        quat[i], rot[i] = turn(quat[i], d3, d4, d5)
+                    k = 6 * i
+                    total[k] += d0
+                    total[k + 1] += d1
+                    total[k + 2] += d2
+                    total[k + 3] += d3
+                    total[k + 4] += d4
+                    total[k + 5] += d5
         vel, omega = self.vel, self.omega
         for i in self.moving:
-            for j in range(3):
-                vel[3 * i + j] += total[6 * i + j] / dt
-                omega[3 * i + j] += total[6 * i + 3 + j] / dt
+            k, t = 3 * i, 6 * i
+            vel[k] += total[t] / dt
+            vel[k + 1] += total[t + 1] / dt
+            vel[k + 2] += total[t + 2] / dt
+            omega[k] += total[t + 3] / dt
+            omega[k + 1] += total[t + 4] / dt
+            omega[k + 2] += total[t + 5] / dt
         return worst
 
     def solve_velocities(self) -> None:
@@ -204,17 +304,20 @@ class SmallStep:
         for island in self.islands:
             factor = island.factorise(inv_inertia)
             self.factors.append(factor)
-            u = []
+            u: list[float] = []
             for i in island.bodies:
                 u += vel[3 * i:3 * i + 3]
                 u += omega[3 * i:3 * i + 3]
-            lam = factor.solve(-(island.jac @ np.array(u)))
+            lam, change = factor.velocity(u)
             self.lam[island.rows] = lam
-            change = (factor.wjt @ lam).tolist()
             for c, i in enumerate(island.bodies):
-                for j in range(3):
-                    vel[3 * i + j] += change[6 * c + j]
-                    omega[3 * i + j] += change[6 * c + 3 + j]
+                k, t = 3 * i, 6 * c
+                vel[k] += change[t]
+                vel[k + 1] += change[t + 1]
+                vel[k + 2] += change[t + 2]
+                omega[k] += change[t + 3]
+                omega[k + 1] += change[t + 4]
+                omega[k + 2] += change[t + 5]
 
     def finite(self) -> bool:
         """One scalar test that the state is finite (``simulation._check_state``'s first test)."""
