@@ -60,6 +60,13 @@ def apply_t(r, v) -> tuple[float, float, float]:
             r[2] * v0 + r[5] * v1 + r[8] * v2)
 
 
+def carry_spin(r, turned, inertia, inv_inertia, w) -> tuple[float, float, float]:
+    """``R' I⁻¹ R'ᵀ (R I Rᵀ ω)``: the angular velocity that keeps the angular momentum
+    ``I_world ω`` through a turn from ``R`` to ``R'`` (``World.drift``), as six products."""
+    s0, s1, s2 = apply(r, apply(inertia, apply_t(r, w)))
+    return apply(turned, apply(inv_inertia, apply_t(turned, (s0, s1, s2))))
+
+
 def conjugate(r, m) -> list[float]:
     """``R M Rᵀ`` for a symmetric ``M`` (a world inverse inertia), symmetric by construction."""
     a = [r[0] * m[0] + r[1] * m[3] + r[2] * m[6], r[0] * m[1] + r[1] * m[4] + r[2] * m[7],
@@ -212,8 +219,8 @@ class Hinge(Joint):
         za = apply(rot[self.a], self.axis_a) if self.z_a is None else self.z_a
         zb = apply(rot[self.b], self.axis_b) if self.z_b is None else self.z_b
         x, y, s = hinge_frame(za, zb)
-        sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
         # tilt = z_a × s z_b, along x and y.
+        sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
         t0, t1, t2 = za[1] * sz2 - za[2] * sz1, za[2] * sz0 - za[0] * sz2, za[0] * sz1 - za[1] * sz0
         self._state = (ra, rb, x, y)
         return [gap[0], gap[1], gap[2], t0 * x[0] + t1 * x[1] + t2 * x[2], t0 * y[0] + t1 * y[1] + t2 * y[2]]

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.scalar import JOINTS, apply, apply_t, conjugate, turn
+from p3d_cli.constraints.scalar import JOINTS, carry_spin, conjugate, turn
 from p3d_cli.constraints.solver import RANK_RTOL, ImpulseSolution
 
 #: Scenes with at most this many rows, and this many free bodies, take this path.
@@ -49,14 +49,17 @@ class _Factor:
         lam = pinv @ b
         return lam + pinv @ (b - self.system @ lam)
 
+    # Both right-hand sides carry a minus sign (``-C``, ``-J u``); every operation of the solve is
+    # linear and rounds symmetrically, so solving for ``+C`` and subtracting the result is exact
+    # negation, and saves a numpy call per solve.
     def correction(self, errors: list) -> list:
-        """``W Jᵀ λ`` for ``A λ = -C``: the motion (6 per island body) that closes ``errors``."""
-        return (self.wjt @ self.solve(-np.array(errors))).tolist()
+        """``-W Jᵀ λ`` for ``A λ = -C``: minus the motion (6 per island body) that closes ``errors``."""
+        return (self.wjt @ self.solve(np.array(errors))).tolist()
 
     def velocity(self, u: list):
-        """``(λ, W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
+        """``(-λ, -W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
         island is factorised again: the next step's correction needs ``W Jᵀ`` and ``A`` only)."""
-        lam = self.solve(-(self.jac @ np.array(u)))
+        lam = self.solve(self.jac @ np.array(u))
         return lam, (self.wjt @ lam).tolist()
 
 
@@ -110,8 +113,9 @@ class _Island:
             weights += inv_inertia[body]
         self.weights.reshape(-1)[self.weight_index] = weights
         wjt = self.weights @ self.jac.T
+        # J (W Jᵀ) is symmetric but for rounding, which the refinement step absorbs (the
+        # eigendecomposition reads one triangle).
         system = self.jac @ wjt
-        system = 0.5 * (system + system.T)
         pinv, rank = self._pseudo_inverse(system)
         return _Factor(self.jac, wjt, system, pinv, rank)
 
@@ -184,11 +188,11 @@ class _SingleFactor:
         return lam + self.pinv * (b - self.system * lam)
 
     def correction(self, errors: list) -> list:
-        lam = self._solve(-errors[0])
+        lam = self._solve(errors[0])
         return [w * lam for w in self.wjt]
 
     def velocity(self, u: list):
-        lam = self._solve(-math.fsum(j * v for j, v in zip(self.row, u)))
+        lam = self._solve(math.fsum(j * v for j, v in zip(self.row, u)))
         return np.array([lam]), [w * lam for w in self.wjt]
 
 
@@ -248,13 +252,12 @@ class SmallStep:
         for i in self.moving:
             r, k = self.rot[i], 3 * i
             w = (omega[k], omega[k + 1], omega[k + 2])
-            spin = apply(r, apply(self.inertia[i], apply_t(r, w)))
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
-            self.quat[i], r = turn(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
-            self.rot[i] = r
-            omega[k], omega[k + 1], omega[k + 2] = apply(r, apply(self.inv_inertia_body[i], apply_t(r, spin)))
+            self.quat[i], turned = turn(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
+            self.rot[i] = turned
+            omega[k], omega[k + 1], omega[k + 2] = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:
         """``World.correct_positions`` along the frozen system of the step's start, crediting
@@ -267,23 +270,23 @@ class SmallStep:
             if worst <= tolerance or iteration == iterations:
                 break
             for island, factor, part in zip(self.islands, self.factors, errors):
-                change = factor.correction(part)
+                change = factor.correction(part)          # minus the motion
                 for c, i in enumerate(island.bodies):
                     d0, d1, d2, d3, d4, d5 = change[6 * c:6 * c + 6]
                     k = 3 * i
-                    com[k] += d0
-                    com[k + 1] += d1
-                    com[k + 2] += d2
+                    com[k] -= d0
+                    com[k + 1] -= d1
+                    com[k + 2] -= d2
                     if d3 or d4 or d5:
                         # Rows through the centre of mass only (a bob on a bar) turn nothing.
-                        quat[i], rot[i] = turn(quat[i], d3, d4, d5)
+                        quat[i], rot[i] = turn(quat[i], -d3, -d4, -d5)
                     k = 6 * i
-                    total[k] += d0
-                    total[k + 1] += d1
-                    total[k + 2] += d2
-                    total[k + 3] += d3
-                    total[k + 4] += d4
-                    total[k + 5] += d5
+                    total[k] -= d0
+                    total[k + 1] -= d1
+                    total[k + 2] -= d2
+                    total[k + 3] -= d3
+                    total[k + 4] -= d4
+                    total[k + 5] -= d5
         vel, omega = self.vel, self.omega
         for i in self.moving:
             k, t = 3 * i, 6 * i
@@ -308,16 +311,16 @@ class SmallStep:
             for i in island.bodies:
                 u += vel[3 * i:3 * i + 3]
                 u += omega[3 * i:3 * i + 3]
-            lam, change = factor.velocity(u)
+            lam, change = factor.velocity(u)             # minus the multipliers and the motion
             self.lam[island.rows] = lam
             for c, i in enumerate(island.bodies):
                 k, t = 3 * i, 6 * c
-                vel[k] += change[t]
-                vel[k + 1] += change[t + 1]
-                vel[k + 2] += change[t + 2]
-                omega[k] += change[t + 3]
-                omega[k + 1] += change[t + 4]
-                omega[k + 2] += change[t + 5]
+                vel[k] -= change[t]
+                vel[k + 1] -= change[t + 1]
+                vel[k + 2] -= change[t + 2]
+                omega[k] -= change[t + 3]
+                omega[k + 1] -= change[t + 4]
+                omega[k + 2] -= change[t + 5]
 
     def finite(self) -> bool:
         """One scalar test that the state is finite (``simulation._check_state``'s first test)."""
@@ -336,5 +339,5 @@ class SmallStep:
     def solution(self) -> ImpulseSolution:
         """The last velocity solve's multipliers, rank and equations, as ``World``'s would be."""
         ranks = tuple((f.rank, island.m) for f, island in zip(self.factors, self.islands))
-        return ImpulseSolution(self.lam.copy(), self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
+        return ImpulseSolution(-self.lam, self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
                                ranks)
