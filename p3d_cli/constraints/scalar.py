@@ -60,11 +60,19 @@ def apply_t(r, v) -> tuple[float, float, float]:
             r[2] * v0 + r[5] * v1 + r[8] * v2)
 
 
-def carry_spin(r, turned, inertia, inv_inertia, w) -> tuple[float, float, float]:
-    """``R' I⁻¹ R'ᵀ (R I Rᵀ ω)``: the angular velocity that keeps the angular momentum
-    ``I_world ω`` through a turn from ``R`` to ``R'`` (``World.drift``), as six products."""
-    s0, s1, s2 = apply(r, apply(inertia, apply_t(r, w)))
-    return apply(turned, apply(inv_inertia, apply_t(turned, (s0, s1, s2))))
+def carry_spin(r, t, inertia, inv_inertia, w) -> tuple[float, float, float]:
+    """``T I⁻¹ Tᵀ (R I Rᵀ ω)``: the angular velocity that keeps the angular momentum
+    ``I_world ω`` through a turn from ``R`` to ``T`` (``World.drift``), as six matrix-vector
+    products written out (one call instead of six)."""
+    w0, w1, w2 = w
+    a0, a1, a2 = r[0] * w0 + r[3] * w1 + r[6] * w2, r[1] * w0 + r[4] * w1 + r[7] * w2, r[2] * w0 + r[5] * w1 + r[8] * w2
+    m = inertia
+    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
+    s0, s1, s2 = r[0] * b0 + r[1] * b1 + r[2] * b2, r[3] * b0 + r[4] * b1 + r[5] * b2, r[6] * b0 + r[7] * b1 + r[8] * b2
+    a0, a1, a2 = t[0] * s0 + t[3] * s1 + t[6] * s2, t[1] * s0 + t[4] * s1 + t[7] * s2, t[2] * s0 + t[5] * s1 + t[8] * s2
+    m = inv_inertia
+    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
+    return (t[0] * b0 + t[1] * b1 + t[2] * b2, t[3] * b0 + t[4] * b1 + t[5] * b2, t[6] * b0 + t[7] * b1 + t[8] * b2)
 
 
 def conjugate(r, m) -> list[float]:
@@ -107,9 +115,25 @@ def hinge_frame(za, zb):
 
 
 def turn(q, rx: float, ry: float, rz: float):
-    """``(rotate(q, θ), matrix(rotate(q, θ)))``: the two are always wanted together."""
-    q = rotate(q, rx, ry, rz)
-    return q, matrix(q)
+    """``(rotate(q, θ), matrix(rotate(q, θ)))``, the two always wanted together, in one call
+    (a stepped body turns 3-6 times a step: the call overhead of the two is a fifth of it)."""
+    angle = math.sqrt(rx * rx + ry * ry + rz * rz)
+    half = 0.5 * angle
+    factor = math.sin(half) / angle if angle >= 1e-8 else 0.5 - angle * angle / 48.0
+    pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
+    qw, qx, qy, qz = q
+    w = pw * qw - px * qx - py * qy - pz * qz
+    x = pw * qx + px * qw + py * qz - pz * qy
+    y = pw * qy - px * qz + py * qw + pz * qx
+    z = pw * qz + px * qy - py * qx + pz * qw
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    n = ww + xx + yy + zz
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    return (w, x, y, z), [(ww + xx - yy - zz) / n, (2 * xy - 2 * wz) / n, (2 * xz + 2 * wy) / n,
+                          (2 * xy + 2 * wz) / n, (ww - xx + yy - zz) / n, (2 * yz - 2 * wx) / n,
+                          (2 * xz - 2 * wy) / n, (2 * yz + 2 * wx) / n, (ww - xx - yy + zz) / n]
 
 
 class Joint:
@@ -134,12 +158,21 @@ class Joint:
     def points(self, com, rot):
         """``(r_a, r_b, gap)``: offsets of the attachment points from the centres of mass, world
         frame, and ``p_b - p_a`` (``rows.RowSet.geometry``)."""
+        # _point written out twice: this runs for every constraint 3-6 times a step.
         if self.const_a is None:
-            ra, pa = _point(com, rot, self.a, self.off_a)
+            r, k = rot[self.a], 3 * self.a
+            o0, o1, o2 = self.off_a
+            ra = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                  r[6] * o0 + r[7] * o1 + r[8] * o2)
+            pa = (com[k] + ra[0], com[k + 1] + ra[1], com[k + 2] + ra[2])
         else:
             ra, pa = self.const_a
         if self.const_b is None:
-            rb, pb = _point(com, rot, self.b, self.off_b)
+            r, k = rot[self.b], 3 * self.b
+            o0, o1, o2 = self.off_b
+            rb = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                  r[6] * o0 + r[7] * o1 + r[8] * o2)
+            pb = (com[k] + rb[0], com[k + 1] + rb[1], com[k + 2] + rb[2])
         else:
             rb, pb = self.const_b
         return ra, rb, (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
@@ -180,6 +213,7 @@ class Ball(Joint):
 class Bar(Joint):
     __slots__ = ("length",)
     kind, rows = "bar", 1
+    length: float
 
     def evaluate(self, com, rot) -> list[float]:
         ra, rb, gap = self.points(com, rot)
@@ -208,6 +242,10 @@ class Bar(Joint):
 class Hinge(Joint):
     __slots__ = ("axis_a", "axis_b", "z_a", "z_b")
     kind, rows = "hinge", 5
+    axis_a: list
+    axis_b: list
+    z_a: tuple | None
+    z_b: tuple | None
 
     def set_axes(self, axis_a, axis_b, rot) -> None:
         self.axis_a, self.axis_b = axis_a, axis_b
@@ -218,9 +256,23 @@ class Hinge(Joint):
         ra, rb, gap = self.points(com, rot)
         za = apply(rot[self.a], self.axis_a) if self.z_a is None else self.z_a
         zb = apply(rot[self.b], self.axis_b) if self.z_b is None else self.z_b
-        x, y, s = hinge_frame(za, zb)
-        # tilt = z_a × s z_b, along x and y.
+        # hinge_frame written out (it runs for every hinge 3-6 times a step).
+        s = 1.0 if za[0] * zb[0] + za[1] * zb[1] + za[2] * zb[2] >= 0 else -1.0
         sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
+        z0, z1, z2 = za[0] + sz0, za[1] + sz1, za[2] + sz2
+        norm = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
+        z0, z1, z2 = z0 / norm, z1 / norm, z2 / norm
+        a0, a1, a2 = abs(z0), abs(z1), abs(z2)
+        if a0 <= a1 and a0 <= a2:
+            x0, x1, x2 = 1.0 - z0 * z0, -(z0 * z1), -(z0 * z2)
+        elif a1 <= a2:
+            x0, x1, x2 = -(z1 * z0), 1.0 - z1 * z1, -(z1 * z2)
+        else:
+            x0, x1, x2 = -(z2 * z0), -(z2 * z1), 1.0 - z2 * z2
+        norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        x = (x0 / norm, x1 / norm, x2 / norm)
+        y = (z1 * x[2] - z2 * x[1], z2 * x[0] - z0 * x[2], z0 * x[1] - z1 * x[0])
+        # tilt = z_a × s z_b, along x and y.
         t0, t1, t2 = za[1] * sz2 - za[2] * sz1, za[2] * sz0 - za[0] * sz2, za[0] * sz1 - za[1] * sz0
         self._state = (ra, rb, x, y)
         return [gap[0], gap[1], gap[2], t0 * x[0] + t1 * x[1] + t2 * x[2], t0 * y[0] + t1 * y[1] + t2 * y[2]]
@@ -238,4 +290,15 @@ class Hinge(Joint):
         return out
 
 
-JOINTS = {"ball": Ball, "hinge": Hinge, "bar": Bar}
+def make_joint(kind: str, a: int, b: int, off_a, off_b, free_a: bool, free_b: bool, com, rot, where: str,
+               axes=None, length: float = 0.0) -> Joint:
+    """The ``Ball``, ``Hinge`` (body-frame unit ``axes``) or ``Bar`` (``length``) of a constraint."""
+    if kind == "ball":
+        return Ball(a, b, off_a, off_b, free_a, free_b, com, rot, where)
+    if kind == "hinge":
+        hinge = Hinge(a, b, off_a, off_b, free_a, free_b, com, rot, where)
+        hinge.set_axes(axes[0], axes[1], rot)
+        return hinge
+    bar = Bar(a, b, off_a, off_b, free_a, free_b, com, rot, where)
+    bar.length = length
+    return bar
