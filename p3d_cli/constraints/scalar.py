@@ -75,6 +75,34 @@ def carry_spin(r, t, inertia, inv_inertia, w) -> tuple[float, float, float]:
     return (t[0] * b0 + t[1] * b1 + t[2] * b2, t[3] * b0 + t[4] * b1 + t[5] * b2, t[6] * b0 + t[7] * b1 + t[8] * b2)
 
 
+def carry_spin_diagonal(r, t, d, e, w) -> tuple[float, float, float]:
+    """``carry_spin`` for a diagonal inertia ``diag(d)`` (inverse ``diag(e)``): the same numbers
+    (the general form's products with its zero entries add exact zeros), in 60% of the work."""
+    w0, w1, w2 = w
+    a0 = d[0] * (r[0] * w0 + r[3] * w1 + r[6] * w2)
+    a1 = d[1] * (r[1] * w0 + r[4] * w1 + r[7] * w2)
+    a2 = d[2] * (r[2] * w0 + r[5] * w1 + r[8] * w2)
+    s0, s1, s2 = r[0] * a0 + r[1] * a1 + r[2] * a2, r[3] * a0 + r[4] * a1 + r[5] * a2, r[6] * a0 + r[7] * a1 + r[8] * a2
+    a0 = e[0] * (t[0] * s0 + t[3] * s1 + t[6] * s2)
+    a1 = e[1] * (t[1] * s0 + t[4] * s1 + t[7] * s2)
+    a2 = e[2] * (t[2] * s0 + t[5] * s1 + t[8] * s2)
+    return (t[0] * a0 + t[1] * a1 + t[2] * a2, t[3] * a0 + t[4] * a1 + t[5] * a2, t[6] * a0 + t[7] * a1 + t[8] * a2)
+
+
+def conjugate_diagonal(r, e) -> list[float]:
+    """``conjugate(r, diag(e))``, the same numbers in half the work."""
+    a0, a1, a2 = r[0] * e[0], r[1] * e[1], r[2] * e[2]
+    b0, b1, b2 = r[3] * e[0], r[4] * e[1], r[5] * e[2]
+    c0, c1, c2 = r[6] * e[0], r[7] * e[1], r[8] * e[2]
+    xx = a0 * r[0] + a1 * r[1] + a2 * r[2]
+    xy = a0 * r[3] + a1 * r[4] + a2 * r[5]
+    xz = a0 * r[6] + a1 * r[7] + a2 * r[8]
+    yy = b0 * r[3] + b1 * r[4] + b2 * r[5]
+    yz = b0 * r[6] + b1 * r[7] + b2 * r[8]
+    zz = c0 * r[6] + c1 * r[7] + c2 * r[8]
+    return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
+
+
 def conjugate(r, m) -> list[float]:
     """``R M Rᵀ`` for a symmetric ``M`` (a world inverse inertia), symmetric by construction."""
     a = [r[0] * m[0] + r[1] * m[3] + r[2] * m[6], r[0] * m[1] + r[1] * m[4] + r[2] * m[7],
@@ -205,9 +233,9 @@ class Ball(Joint):
     kind, rows = "ball", 3
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
+        ra, rb, (g0, g1, g2) = self.points(com, rot)
         self._state = (ra, rb)
-        return list(gap)
+        return [g0, g1, g2]
 
 
 class Bar(Joint):

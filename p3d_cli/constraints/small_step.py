@@ -19,7 +19,8 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.scalar import carry_spin, conjugate, make_joint, turn
+from p3d_cli.constraints.scalar import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal, make_joint,
+                                        turn)
 from p3d_cli.constraints.solver import RANK_RTOL, ImpulseSolution
 
 try:
@@ -231,6 +232,11 @@ class SmallStep:
         self.inv_mass = world.inv_mass.tolist()
         self.inertia = world.inertia_body.reshape(-1, 9).tolist()
         self.inv_inertia_body = world.inv_inertia_body.reshape(-1, 9).tolist()
+        # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms.
+        self.diagonal = [None] * self.n
+        for i, (m, e) in enumerate(zip(self.inertia, self.inv_inertia_body)):
+            if not any(m[j] or e[j] for j in (1, 2, 3, 5, 6, 7)):
+                self.diagonal[i] = ((m[0], m[4], m[8]), (e[0], e[4], e[8]))
         self.com, self.vel = world.com.ravel().tolist(), world.vel.ravel().tolist()
         self.omega = world.omega.ravel().tolist()
         self.quat = [tuple(q) for q in world.quat.tolist()]
@@ -257,7 +263,9 @@ class SmallStep:
         """World inverse inertia ``R I⁻¹ Rᵀ`` of every body (9 floats; None for bodies not moving)."""
         out: list = [None] * self.n
         for i in self.moving:
-            out[i] = conjugate(self.rot[i], self.inv_inertia_body[i])
+            diagonal = self.diagonal[i]
+            out[i] = (conjugate(self.rot[i], self.inv_inertia_body[i]) if diagonal is None
+                      else conjugate_diagonal(self.rot[i], diagonal[1]))
         return out
 
     # -- one step ---------------------------------------------------------------------------------
@@ -280,7 +288,12 @@ class SmallStep:
             com[k + 2] += vel[k + 2] * dt
             self.quat[i], turned = turn(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
             self.rot[i] = turned
-            omega[k], omega[k + 1], omega[k + 2] = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
+            diagonal = self.diagonal[i]
+            if diagonal is None:
+                spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
+            else:
+                spin = carry_spin_diagonal(r, turned, diagonal[0], diagonal[1], w)
+            omega[k], omega[k + 1], omega[k + 2] = spin
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:
         """``World.correct_positions`` along the frozen system of the step's start, crediting
