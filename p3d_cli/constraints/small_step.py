@@ -233,7 +233,7 @@ class SmallStep:
         self.inertia = world.inertia_body.reshape(-1, 9).tolist()
         self.inv_inertia_body = world.inv_inertia_body.reshape(-1, 9).tolist()
         # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms.
-        self.diagonal = [None] * self.n
+        self.diagonal: list = [None] * self.n
         for i, (m, e) in enumerate(zip(self.inertia, self.inv_inertia_body)):
             if not any(m[j] or e[j] for j in (1, 2, 3, 5, 6, 7)):
                 self.diagonal[i] = ((m[0], m[4], m[8]), (e[0], e[4], e[8]))
