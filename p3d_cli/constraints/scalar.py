@@ -144,8 +144,13 @@ def hinge_frame(za, zb):
 
 def turn(q, rx: float, ry: float, rz: float):
     """``(rotate(q, θ), matrix(rotate(q, θ)))``, the two always wanted together, in one call
-    (a stepped body turns 3-6 times a step: the call overhead of the two is a fifth of it)."""
+    (a stepped body turns 3-6 times a step: the call overhead of the two is a fifth of it).
+
+    A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
+    reports: ``math.sin`` of an infinite angle would raise instead."""
     angle = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if angle == math.inf:
+        return (math.nan,) * 4, [math.nan] * 9
     half = 0.5 * angle
     factor = math.sin(half) / angle if angle >= 1e-8 else 0.5 - angle * angle / 48.0
     pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz

@@ -131,6 +131,25 @@ def test_an_overflowing_step_is_the_same_range_error_on_both_paths(monkeypatch):
     assert "bob" in messages[0] and "step 1" in messages[0]
 
 
+def test_an_overflowing_spin_is_a_range_error_not_a_math_error(monkeypatch):
+    # ω dt = 1e300 × 1e10 overflows: math.sin(inf) raises ValueError, numpy gives nan.
+    scene = parse_scene({"gravity": [0, 0, -9.81], "bodies": {
+        "pivot": {"fixed": True},
+        "bob": {"mass": 1.0, "inertia": [1.0, 1.0, 1.0], "position": [1, 0, 0], "angular_velocity": [1e150, 0, 0]}},
+        "constraints": [{"type": "ball", "a": "pivot", "b": "bob", "attach_a": [0, 0, 0], "attach_b": [-1, 0, 0]}]},
+        "spin.yaml", ".")
+    messages = []
+    for small in (True, False):
+        with monkeypatch.context() as m:
+            if not small:
+                m.setattr(small_step, "fits", lambda world: False)
+            with pytest.raises(RangeError) as info:
+                solve_scene(scene, steps=3, dt=1e200)
+        messages.append(str(info.value))
+    assert messages[0] == messages[1]
+    assert "bob" in messages[0] and "overflows" in messages[0]
+
+
 def test_a_large_scene_takes_the_array_step():
     links = 30
     bodies = {"anchor": {"fixed": True}}
