@@ -196,7 +196,8 @@ class _Single:
             im, w = self.inv_mass[c], inv_inertia[body]
             wjt += [im * j0, im * j1, im * j2, w[0] * j3 + w[1] * j4 + w[2] * j5,
                     w[3] * j3 + w[4] * j4 + w[5] * j5, w[6] * j3 + w[7] * j4 + w[8] * j5]
-        a = math.fsum(j * w for j, w in zip(row, wjt))
+        # Plain sums, not math.fsum, which raises on an overflow that must reach the checks as inf.
+        a = sum([j * w for j, w in zip(row, wjt)])
         keep = a > RANK_RTOL * max(a, 0.0)
         if not math.isfinite(a):
             raise np.linalg.LinAlgError("the constraint system is not finite")
@@ -218,7 +219,7 @@ class _SingleFactor:
         return [w * lam for w in self.wjt]
 
     def velocity(self, u: list):
-        lam = self._solve(math.fsum(j * v for j, v in zip(self.row, u)))
+        lam = self._solve(sum([j * v for j, v in zip(self.row, u)]))
         return np.array([lam]), [w * lam for w in self.wjt]
 
 
