@@ -254,7 +254,7 @@ class SmallStep:
             joints.append(joint)
         self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].rows == 1 else _Island)
                         (isl, joints, rs.offsets, self.inv_mass) for isl in world.islands]
-        self.lam = np.zeros(self.m)
+        self.lam: list = [np.zeros(island.m) for island in self.islands]   # minus the last multipliers
         for island in self.islands:
             island.errors(self.com, self.rot)
         inv_inertia = self._inv_inertia()
@@ -341,7 +341,7 @@ class SmallStep:
         inv_inertia = self._inv_inertia()
         vel, omega = self.vel, self.omega
         self.factors = []
-        for island in self.islands:
+        for n, island in enumerate(self.islands):
             factor = island.factorise(inv_inertia)
             self.factors.append(factor)
             u: list[float] = []
@@ -349,7 +349,7 @@ class SmallStep:
                 u += vel[3 * i:3 * i + 3]
                 u += omega[3 * i:3 * i + 3]
             lam, change = factor.velocity(u)             # minus the multipliers and the motion
-            self.lam[island.rows] = lam
+            self.lam[n] = lam
             for c, i in enumerate(island.bodies):
                 k, t = 3 * i, 6 * c
                 vel[k] -= change[t]
@@ -376,5 +376,8 @@ class SmallStep:
     def solution(self) -> ImpulseSolution:
         """The last velocity solve's multipliers, rank and equations, as ``World``'s would be."""
         ranks = tuple((f.rank, island.m) for f, island in zip(self.factors, self.islands))
-        return ImpulseSolution(-self.lam, self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
+        lam = np.zeros(self.m)
+        for island, part in zip(self.islands, self.lam):
+            lam[island.rows] = -part
+        return ImpulseSolution(lam, self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
                                ranks)
