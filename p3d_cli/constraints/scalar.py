@@ -18,46 +18,11 @@ import math
 from p3d_cli.constraints.rows import bar_met_error
 
 
-def rotate(q, rx: float, ry: float, rz: float) -> tuple[float, float, float, float]:
-    """``exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one body)."""
-    angle = math.sqrt(rx * rx + ry * ry + rz * rz)
-    half = 0.5 * angle
-    # sin(|θ|/2)/|θ|, through its series below 1e-8 so that tiny rotations stay exact.
-    factor = math.sin(half) / angle if angle >= 1e-8 else 0.5 - angle * angle / 48.0
-    pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
-    qw, qx, qy, qz = q
-    w = pw * qw - px * qx - py * qy - pz * qz
-    x = pw * qx + px * qw + py * qz - pz * qy
-    y = pw * qy - px * qz + py * qw + pz * qx
-    z = pw * qz + px * qy - py * qx + pz * qw
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    return w / norm, x / norm, y / norm, z / norm
-
-
-def matrix(q) -> list[float]:
-    """Rotation matrix of ``q`` in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
-    (exact at quarter turns, no unit length needed)."""
-    w, x, y, z = q
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    n = ww + xx + yy + zz
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return [(ww + xx - yy - zz) / n, (2 * xy - 2 * wz) / n, (2 * xz + 2 * wy) / n,
-            (2 * xy + 2 * wz) / n, (ww - xx + yy - zz) / n, (2 * yz - 2 * wx) / n,
-            (2 * xz - 2 * wy) / n, (2 * yz + 2 * wx) / n, (ww - xx - yy + zz) / n]
-
-
 def apply(r, v) -> tuple[float, float, float]:
     """``R v`` for a row-major 3×3 ``r``."""
     v0, v1, v2 = v
     return (r[0] * v0 + r[1] * v1 + r[2] * v2, r[3] * v0 + r[4] * v1 + r[5] * v2,
             r[6] * v0 + r[7] * v1 + r[8] * v2)
-
-
-def apply_t(r, v) -> tuple[float, float, float]:
-    """``Rᵀ v``."""
-    v0, v1, v2 = v
-    return (r[0] * v0 + r[3] * v1 + r[6] * v2, r[1] * v0 + r[4] * v1 + r[7] * v2,
-            r[2] * v0 + r[5] * v1 + r[8] * v2)
 
 
 def carry_spin(r, t, inertia, inv_inertia, w) -> tuple[float, float, float]:
@@ -124,27 +89,10 @@ def cross(a, b) -> tuple[float, float, float]:
     return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
 
 
-def hinge_frame(za, zb):
-    """``(x, y, s)`` of ``rows.hinge_frames`` for one hinge: ``z`` the bisector of the world axes
-    (``zb`` flipped by ``s`` when it points away), ``x`` the world axis least aligned with ``z``
-    (the first on a tie, as ``numpy.argmin``) made perpendicular, ``y = z × x``."""
-    s = 1.0 if za[0] * zb[0] + za[1] * zb[1] + za[2] * zb[2] >= 0 else -1.0
-    z0, z1, z2 = za[0] + s * zb[0], za[1] + s * zb[1], za[2] + s * zb[2]
-    norm = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
-    z = (z0 / norm, z1 / norm, z2 / norm)
-    a0, a1, a2 = abs(z[0]), abs(z[1]), abs(z[2])
-    pick = 0 if (a0 <= a1 and a0 <= a2) else (1 if a1 <= a2 else 2)
-    zp = z[pick]
-    seed = [-zp * z[0], -zp * z[1], -zp * z[2]]
-    seed[pick] = 1.0 - zp * z[pick]
-    norm = math.sqrt(seed[0] * seed[0] + seed[1] * seed[1] + seed[2] * seed[2])
-    x = (seed[0] / norm, seed[1] / norm, seed[2] / norm)
-    return x, cross(z, x), s
-
-
 def turn(q, rx: float, ry: float, rz: float):
-    """``(rotate(q, θ), matrix(rotate(q, θ)))``, the two always wanted together, in one call
-    (a stepped body turns 3-6 times a step: the call overhead of the two is a fifth of it).
+    """``(q', R(q'))`` with ``q' = exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one
+    body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
+    (exact at quarter turns), the two always wanted together, in one call.
 
     A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
     reports: ``math.sin`` of an infinite angle would raise instead."""
@@ -289,7 +237,9 @@ class Hinge(Joint):
         ra, rb, gap = self.points(com, rot)
         za = apply(rot[self.a], self.axis_a) if self.z_a is None else self.z_a
         zb = apply(rot[self.b], self.axis_b) if self.z_b is None else self.z_b
-        # hinge_frame written out (it runs for every hinge 3-6 times a step).
+        # rows.hinge_frames for one hinge: z the bisector of the world axes (zb flipped by s when it
+        # points away), x the world axis least aligned with z (the first on a tie, as numpy.argmin)
+        # made perpendicular, y = z × x.
         s = 1.0 if za[0] * zb[0] + za[1] * zb[1] + za[2] * zb[2] >= 0 else -1.0
         sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
         z0, z1, z2 = za[0] + sz0, za[1] + sz1, za[2] + sz2

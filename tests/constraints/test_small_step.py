@@ -194,10 +194,15 @@ def test_hinge_frames_agree(axis, tilt, flip):
     zb = za + np.array(tilt)
     zb /= (-1 if flip else 1) * np.linalg.norm(zb)
     x, y, _, s = hinge_frames(za[None], zb[None])
-    fx, fy, fs = scalar.hinge_frame(tuple(za), tuple(zb))
-    assert fs == s[0]
+    identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    hinge = scalar.make_joint("hinge", 0, 1, [0.0] * 3, [0.0] * 3, True, True, [0.0] * 6, [identity, identity], "",
+                              (za.tolist(), zb.tolist()))
+    errors = hinge.evaluate([0.0] * 6, [identity, identity])
+    _, _, fx, fy = hinge._state
     np.testing.assert_allclose(fx, x[0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(fy, y[0], rtol=0, atol=1e-15)
+    tilt = np.cross(za, s[0] * zb)
+    np.testing.assert_allclose(errors, [0.0, 0.0, 0.0, tilt @ x[0], tilt @ y[0]], rtol=0, atol=1e-16)
 
 
 @settings(max_examples=100, deadline=None)
