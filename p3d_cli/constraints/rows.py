@@ -187,7 +187,11 @@ def bar_directions(gap: np.ndarray, where) -> np.ndarray:
     """Unit vectors along (b, 3) bar gaps; a bar whose points met is one ``SceneError``."""
     norm = np.sqrt((gap * gap).sum(axis=1))
     if not norm.all():
-        k = int(np.flatnonzero(norm == 0.0)[0])
-        raise SceneError(where[k] or "bar", "the attachment points have come together, so the bar has "
-                         "no direction", "use a ball joint to join two points, or a smaller --dt")
+        raise bar_met_error(where[int(np.flatnonzero(norm == 0.0)[0])])
     return gap / norm[:, None]
+
+
+def bar_met_error(where: str) -> SceneError:
+    """The error of a bar whose attachment points have met (it has no direction)."""
+    return SceneError(where or "bar", "the attachment points have come together, so the bar has "
+                      "no direction", "use a ball joint to join two points, or a smaller --dt")

@@ -11,6 +11,7 @@ import os
 
 import numpy as np
 
+from p3d_cli.constraints import small_step
 from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.constraints.outcome import BodyState, ConstraintOutcome, SolveResult
 from p3d_cli.constraints.solver import DENSE_LIMIT
@@ -155,6 +156,8 @@ def _solve(scene, inertials, steps, dt, on_step, dense_limit) -> SolveResult:
     worst, _, _ = world.correct_positions(tolerance)
     solution = world.solve_velocities()
     _check_state(world, "after assembling the scene")
+    if small_step.fits(world):
+        return _step_small(world, before, steps, dt, half_kick, tolerance, worst, on_step)
     for step in range(1, steps + 1):
         frozen = world.frozen_rows()
         world.vel[world.active] += half_kick
@@ -170,6 +173,30 @@ def _solve(scene, inertials, steps, dt, on_step, dense_limit) -> SolveResult:
         if on_step is not None:
             on_step(step * dt, _bodies(world))
     return _result(world, solution, before, steps, steps * dt, worst)
+
+
+def _step_small(world: World, before, steps: int, dt: float, half_kick, tolerance: float, worst: float,
+                on_step) -> SolveResult:
+    """The steps of ``_solve`` for a small scene, on ``small_step.SmallStep``'s float state."""
+    state = small_step.SmallStep(world)
+    kick = half_kick.tolist()
+    for step in range(1, steps + 1):
+        state.kick(kick)
+        state.drift(dt)
+        if not state.finite():
+            state.store(world)
+            _check_state(world, step, dt)
+        worst = max(worst, state.correct(tolerance, dt))
+        state.kick(kick)
+        state.solve_velocities()
+        if not state.finite():
+            state.store(world)
+            _check_state(world, step, dt)   # the correction's kick
+        if on_step is not None:
+            state.store(world)
+            on_step(step * dt, _bodies(world))
+    state.store(world)
+    return _result(world, state.solution(), before, steps, steps * dt, worst)
 
 
 def _overflow(where: str, what: str, hint: str = "") -> RangeError:
