@@ -50,7 +50,7 @@ def needed_bodies(scene, stepping: bool, centers: bool) -> list:
 
 def _known_without_integration(body) -> bool:
     # Reporting these costs nothing, so their centre of mass is reported too.
-    if body.shape is None:
+    if body.shape is None and body.parts is None:
         return True
     if body.center_of_mass is None:
         return False

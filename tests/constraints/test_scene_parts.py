@@ -240,3 +240,21 @@ def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
     scene.write_text("bodies:\n  b: {mass: 1e400, inertia: [1, 1, 1]}\n")
     with pytest.raises(SceneError, match="not finite"):
         load_scene(str(scene))
+
+
+def test_parts_bodies_are_measured_only_when_the_solve_needs_them(monkeypatch):
+    from p3d_cli import assemble
+
+    calls = []
+    real = assemble.assembly_props
+    monkeypatch.setattr(assemble, "assembly_props", lambda *a, **k: calls.append(a[0].source) or real(*a, **k))
+    scene = parse_scene(__import__("yaml").safe_load("""
+bodies:
+  ground: {fixed: true, parts: [{shape: box}]}
+  resting: {parts: [{shape: box}], position: [9, 9, 9]}
+  arm: {parts: [{shape: 'box:1,0.1,0.1', translate: [1, 0, 0]}], angular_velocity: [0, 0, 1]}
+constraints:
+  - {type: ball, a: ground, b: arm, attach_a: [0, 0, 0], attach_b: [0, 0, 0]}
+"""), "s", ".")
+    solve_scene(scene)
+    assert calls == ["s: bodies.arm"]
