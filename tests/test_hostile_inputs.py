@@ -45,7 +45,7 @@ def one_error_line(result, *parts):
      ["constraints[0].a", "expected a body name, got a list of 3"]),
     (BASE + "constraints:\n  - {type: ball, a: a, b: {x: 1}, attach_a: [0, 0, 0]}\n",
      ["constraints[0].b", "expected a body name, got a mapping"]),
-    ("bodies:\n  a: {mass: 1e300, inertia: [1, 1, 1]}\n", ["bodies.a.mass", "write it with a dot"]),
+    ("bodies:\n  a: {mass: '1e300', inertia: [1, 1, 1]}\n", ["bodies.a.mass", "remove the quotes"]),
     ("bodies:\n  a: {mass: 1, mass: 2, inertia: [1, 1, 1]}\n", ["key 'mass' appears twice"]),
 ])
 def test_hostile_scenes_are_one_error_line(tmp_path, text, parts):

@@ -61,14 +61,14 @@ def number(value, where: str, *, positive: bool = False) -> float:
 
 
 def _number_hint(value) -> str:
-    """YAML 1.1 (PyYAML) reads ``1e300`` as text: a float needs a dot, ``1.0e+300``."""
+    """A quoted number (``'1e3'``) is text in YAML; say so."""
     if isinstance(value, str):
         try:
             float(value)
         except ValueError:
             pass
         else:
-            return f"YAML reads {value!r} as text; write it with a dot and a signed exponent, e.g. 1.0e+300"
+            return f"{value!r} is quoted, so YAML reads it as text; remove the quotes"
     return "write a plain number such as 2.5"
 
 
