@@ -11,10 +11,11 @@ import dataclasses
 
 import numpy as np
 
-from p3d_cli.errors import RangeError, UsageError
+from p3d_cli.errors import UsageError
 from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import MeshAnalysis, analyze
 from p3d_cli.mesh.integrals import triangle_moments
+from p3d_cli.moments import check_range, shape_moments
 from p3d_cli.placement import IDENTITY, Placement, watch_bounds
 from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
@@ -69,7 +70,7 @@ def _exact_props(solid: Solid, placement: Placement, tessellate, density, mass, 
         facts = MeshFacts(solid.source, "tessellated", len(triangles), True, placement.triangles_bounds(triangles))
         result = PropsResult(facts, props, "exact", solid.warnings, exact_uncertainty(moments, props))
     else:
-        unplaced = shape_moments(solid)
+        unplaced = shape_moments(solid.shape, solid.source)
         moments = placement.moments(unplaced)
         check_range(solid.source, unplaced, moments)
         props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
@@ -109,51 +110,8 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
 def solid_moments(solid: Solid) -> Moments:
     """The unplaced volume moments of a shape (closed forms) or a mesh (one analysis pass)."""
     if solid.shape is not None:
-        return shape_moments(solid)
+        return shape_moments(solid.shape, solid.source)
     return analyze(solid.mesh, solid.mesh.where).moments
-
-
-def shape_moments(solid: Solid) -> Moments:
-    """A shape's closed-form moments, range-checked (math's ``**`` raises where numpy gives inf).
-
-    Raises
-    ------
-    RangeError
-    """
-    try:
-        moments = solid.shape.moments()
-    except OverflowError:
-        raise RangeError(solid.source, "the volume or its moments overflow float64",
-                         "measure in a larger unit (e.g. km instead of mm)") from None
-    check_range(solid.source, None, moments)
-    return moments
-
-
-def check_range(where: str, before: Moments | None, after: Moments) -> None:
-    """Refuse moments that a shape's size or a placement pushed out of float64's range.
-
-    A volume or second moment that was non-zero ``before`` (``before=None`` for a shape, whose
-    are never zero) and is zero ``after`` underflowed; an infinite or NaN one overflowed. Either
-    would print a silently wrong number.
-
-    Raises
-    ------
-    RangeError
-    """
-    with np.errstate(all="ignore"):
-        values = [after.volume] + ([] if after.is_empty else [after.center, after.central])
-        if not all(np.isfinite(v).all() for v in values):
-            raise RangeError(where, "the volume or its moments overflow float64",
-                             "measure in a larger unit (e.g. km instead of mm)")
-        if before is None:  # a shape
-            lost = after.volume == 0 or after.is_empty or bool(np.any(np.diag(after.central) == 0))
-        else:
-            lost = before.volume != 0 and after.volume == 0
-            if not before.is_empty and not after.is_empty:
-                lost = lost or bool(np.any((np.diag(before.central) != 0) & (np.diag(after.central) == 0)))
-    if lost:
-        raise RangeError(where, "the volume or its second moments underflow float64 (the part is too small)",
-                         "measure in a smaller unit (e.g. mm instead of m)")
 
 
 def mesh_facts(solid: Solid, found: MeshAnalysis) -> MeshFacts:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.errors import RangeError
 from p3d_cli.results import MomentErrors, Moments
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -91,3 +92,52 @@ def translate_moments(moments: Moments, offset) -> Moments:
         errors = MomentErrors(errors.volume, errors.center + np.spacing(np.abs(moments.center))
                               + np.spacing(np.abs(center)), errors.central)
     return Moments(moments.volume, center, moments.central, errors)
+
+
+def shape_moments(shape, source: str) -> Moments:
+    """A shape's closed-form moments, range-checked (math's ``**`` raises where numpy gives inf).
+
+    Parameters
+    ----------
+    shape : Shape
+    source : str
+        What to name in an error.
+
+    Raises
+    ------
+    RangeError
+    """
+    try:
+        moments = shape.moments()
+    except OverflowError:
+        raise RangeError(source, "the volume or its moments overflow float64",
+                         "measure in a larger unit (e.g. km instead of mm)") from None
+    check_range(source, None, moments)
+    return moments
+
+
+def check_range(where: str, before: Moments | None, after: Moments) -> None:
+    """Refuse moments that a shape's size or a placement pushed out of float64's range.
+
+    A volume or second moment that was non-zero ``before`` (``before=None`` for a shape, whose
+    are never zero) and is zero ``after`` underflowed; an infinite or NaN one overflowed. Either
+    would print a silently wrong number.
+
+    Raises
+    ------
+    RangeError
+    """
+    with np.errstate(all="ignore"):
+        values = [after.volume] + ([] if after.is_empty else [after.center, after.central])
+        if not all(np.isfinite(v).all() for v in values):
+            raise RangeError(where, "the volume or its moments overflow float64",
+                             "measure in a larger unit (e.g. km instead of mm)")
+        if before is None:  # a shape
+            lost = after.volume == 0 or after.is_empty or bool(np.any(np.diag(after.central) == 0))
+        else:
+            lost = before.volume != 0 and after.volume == 0
+            if not before.is_empty and not after.is_empty:
+                lost = lost or bool(np.any((np.diag(before.central) != 0) & (np.diag(after.central) == 0)))
+    if lost:
+        raise RangeError(where, "the volume or its second moments underflow float64 (the part is too small)",
+                         "measure in a smaller unit (e.g. mm instead of m)")

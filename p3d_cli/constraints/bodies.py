@@ -66,20 +66,22 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     SceneError
         Unreadable or corrupt mesh, or a solid with no positive volume.
     """
-    from p3d_cli.exact import solid_moments
-    from p3d_cli.solid import Solid, as_solid
+    from p3d_cli.moments import shape_moments as closed_form
 
     shape = parse_shape_spec(spec_or_path, where)
     # Out-of-range moments end in one RangeError (checked where they are made), as for p3d props:
     # numpy's overflow warnings on the way would only repeat it.
     with np.errstate(all="ignore"):
         if shape is not None:
-            try:
-                moments = solid_moments(Solid(spec_or_path, shape=shape))
+            try:   # closed forms: p3d_cli.exact (and the mesh readers it imports) is not needed
+                moments = closed_form(shape, spec_or_path)
             except RangeError as exc:      # named by the body that gives the shape
                 raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
         else:
             path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
+            from p3d_cli.exact import solid_moments
+            from p3d_cli.solid import as_solid
+
             try:
                 moments = solid_moments(as_solid(path))
             except P3DError as exc:
