@@ -34,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from batch_jobs import icosphere, p3d_command, write_binary_stl  # noqa: E402
+from installed import cache_bytecode  # noqa: E402
 
 
 def _dask_cli() -> tuple[list[str], list[str]]:
@@ -118,6 +119,7 @@ def check_output(out: bytes, paths: list[str]) -> None:
 
 
 def main() -> None:
+    cache_bytecode()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=1000)
     parser.add_argument("--subdivisions", type=int, default=4, help="icosphere subdivisions (4: 5,120 faces)")

@@ -26,6 +26,7 @@ import tempfile
 import time
 
 import numpy as np
+from installed import cache_bytecode
 
 
 def icosphere(subdivisions: int) -> np.ndarray:
@@ -152,6 +153,7 @@ def bench(command: str, files: int, subdivisions: int, runs: int) -> None:
 
 
 def main() -> None:
+    cache_bytecode()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=300)
     parser.add_argument("--subdivisions", type=int, nargs="+", default=[4, 5],

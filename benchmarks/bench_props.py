@@ -47,6 +47,7 @@ import sys
 import tempfile
 import time
 from dataclasses import dataclass, field
+from installed import cache_bytecode
 
 #: Triangle counts and the torus grid (u, v) giving 2·u·v triangles.
 SIZES = {10_000: (100, 50), 100_000: (250, 200), 1_000_000: (1000, 500), 4_000_000: (2000, 1000)}
@@ -197,16 +198,9 @@ class Runs:
 
 
 def child_env(workdir: str) -> dict:
-    """The environment of every timed process.
-
-    Bytecode is cached (in the work directory, for every tool alike), as it is for any
-    installed package: a development shell with PYTHONDONTWRITEBYTECODE=1 would otherwise
-    recompile an editable p3d from source on every run but load trimesh's cached bytecode.
-    """
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    env["PYTHONPYCACHEPREFIX"] = os.path.join(workdir, "pycache")
-    return env
+    """The environment of every timed process: bytecode cached, as for an installed package
+    (``installed.cache_bytecode``), in the work directory, for every tool alike."""
+    return cache_bytecode(os.path.join(workdir, "pycache"))
 
 
 ENV: dict | None = None

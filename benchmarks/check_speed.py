@@ -39,6 +39,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from installed import cache_bytecode
 
 #: name -> (u, v) of a grid torus with 2·u·v triangles, and whether to remove two faces.
 MESHES = {"closed-1m": (1000, 500, False), "open-1m": (1000, 500, True),
@@ -160,8 +161,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     workdir = args.workdir or tempfile.mkdtemp(prefix="p3d-check-bench-")
     os.makedirs(workdir, exist_ok=True)
-    env = dict(os.environ, PYTHONPYCACHEPREFIX=os.path.join(workdir, "pycache"))
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env = cache_bytecode(os.path.join(workdir, "pycache"))
     paths = {}
     for name, (u, v, open_) in MESHES.items():
         paths[name] = os.path.join(workdir, f"torus-{name}.stl")

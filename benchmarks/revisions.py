@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from installed import cache_bytecode
 
 HERE = Path(__file__).resolve().parent.parent
 
@@ -66,6 +67,7 @@ def timed(tree: Path, args: list[str]) -> tuple[float, float]:
 
 
 def main() -> None:
+    cache_bytecode()
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", required=True, type=Path, help="source tree of the 'before' revision")
     parser.add_argument("--runs", type=int, default=15, help="runs per tree and case (default 15)")
