@@ -71,22 +71,22 @@ class _Factor:
         """Minimum-norm ``λ`` of ``A λ = b`` with one step of iterative refinement, which recovers
         the digits the factorisation's rounding loses on an ill-conditioned island (so an
         explicit (pseudo-)inverse is as accurate here as applying the factors)."""
-        pinv = self.pinv
-        lam = pinv @ b
-        return lam + pinv @ (b - self.system @ lam)
+        dot = self.pinv.dot
+        lam = dot(b)
+        return lam + dot(b - self.system.dot(lam))
 
     # Both right-hand sides carry a minus sign (``-C``, ``-J u``); every operation of the solve is
     # linear and rounds symmetrically, so solving for ``+C`` and subtracting the result is exact
     # negation, and saves a numpy call per solve.
     def correction(self, errors: list) -> list:
         """``-W Jᵀ λ`` for ``A λ = -C``: minus the motion (6 per island body) that closes ``errors``."""
-        return (self.wjt @ self.solve(np.array(errors))).tolist()
+        return self.wjt.dot(self.solve(np.array(errors))).tolist()
 
     def velocity(self, u: list):
         """``(-λ, -W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
         island is factorised again: the next step's correction needs ``W Jᵀ`` and ``A`` only)."""
-        lam = self.solve(self.jac @ np.array(u))
-        return lam, (self.wjt @ lam).tolist()
+        lam = self.solve(self.jac.dot(np.array(u)))
+        return lam, self.wjt.dot(lam).tolist()
 
 
 class _Island:
@@ -138,10 +138,10 @@ class _Island:
         for body in self.bodies:
             weights += inv_inertia[body]
         self.weights.reshape(-1)[self.weight_index] = weights
-        wjt = self.weights @ self.jac.T
+        wjt = self.weights.dot(self.jac.T)
         # J (W Jᵀ) is symmetric but for rounding, which the refinement step absorbs (the
         # eigendecomposition reads one triangle).
-        system = self.jac @ wjt
+        system = self.jac.dot(wjt)
         pinv, rank = self._pseudo_inverse(system)
         return _Factor(self.jac, wjt, system, pinv, rank)
 
@@ -167,7 +167,7 @@ class _Island:
         eig, vectors = _eigh(system)
         keep = eig > threshold
         inv = np.divide(1.0, eig, out=np.zeros_like(eig), where=keep)
-        return (vectors * inv) @ vectors.T, int(keep.sum())
+        return (vectors * inv).dot(vectors.T), int(keep.sum())
 
 
 class _Single:
