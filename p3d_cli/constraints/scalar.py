@@ -224,9 +224,9 @@ class Ball(Joint):
     kind, rows = "ball", 3
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, (g0, g1, g2) = self.points(com, rot)
+        ra, rb, gap = self.points(com, rot)
         self._state = (ra, rb)
-        return [g0, g1, g2]
+        return list(gap)
 
 
 class Bar(Joint):

@@ -96,6 +96,7 @@ class _Island:
     def __init__(self, island, joints, offsets, inv_mass) -> None:
         self.bodies = list(island.bodies)
         self.joints = [joints[k] for k in island.constraints]
+        self.evaluators = [joint.evaluate for joint in self.joints]     # bound once
         self.rows = np.concatenate([np.arange(offsets[k], offsets[k + 1]) for k in island.constraints])
         m, width = len(self.rows), 6 * len(self.bodies)
         self.m = m
@@ -124,8 +125,9 @@ class _Island:
 
     def errors(self, com, rot) -> list[float]:
         out: list[float] = []
-        for joint in self.joints:
-            out += joint.evaluate(com, rot)
+        extend = out.extend
+        for evaluate in self.evaluators:
+            extend(evaluate(com, rot))
         return out
 
     def factorise(self, inv_inertia) -> _Factor:
@@ -306,7 +308,9 @@ class SmallStep:
         moved: list = [None] * len(islands)
         for iteration in range(iterations + 1):
             errors = [island.errors(com, rot) for island in islands]
-            worst = max((max(max(part), -min(part)) for part in errors), default=0.0)
+            worst = 0.0
+            for part in errors:
+                worst = max(worst, max(part), -min(part))
             if worst <= tolerance or iteration == iterations:
                 break
             for n, island in enumerate(islands):
