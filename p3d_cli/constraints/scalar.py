@@ -97,24 +97,39 @@ def turn(q, rx: float, ry: float, rz: float):
     A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
     reports: ``math.sin`` of an infinite angle would raise instead."""
     angle = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if angle == math.inf:
-        return (math.nan,) * 4, [math.nan] * 9
-    half = 0.5 * angle
-    factor = math.sin(half) / angle if angle >= 1e-8 else 0.5 - angle * angle / 48.0
-    pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
     qw, qx, qy, qz = q
-    w = pw * qw - px * qx - py * qy - pz * qz
-    x = pw * qx + px * qw + py * qz - pz * qy
-    y = pw * qy - px * qz + py * qw + pz * qx
-    z = pw * qz + px * qy - py * qx + pz * qw
+    if angle >= 1e-8:
+        if angle == math.inf:
+            return (math.nan,) * 4, [math.nan] * 9
+        half = 0.5 * angle
+        factor = math.sin(half) / angle
+        pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
+        w = pw * qw - px * qx - py * qy - pz * qz
+        x = pw * qx + px * qw + py * qz - pz * qy
+        y = pw * qy - px * qz + py * qw + pz * qx
+        z = pw * qz + px * qy - py * qx + pz * qw
+    else:
+        # The small turns of the position correction: below 1e-8, cos(angle / 2) is 1 - (at
+        # most) 1.25e-17, which rounds to 1.0, and products with 1.0 are exact: the same numbers.
+        factor = 0.5 - angle * angle / 48.0
+        px, py, pz = factor * rx, factor * ry, factor * rz
+        w = qw - px * qx - py * qy - pz * qz
+        x = qx + px * qw + py * qz - pz * qy
+        y = qy - px * qz + py * qw + pz * qx
+        z = qz + px * qy - py * qx + pz * qw
     norm = math.sqrt(w * w + x * x + y * y + z * z)
     w, x, y, z = w / norm, x / norm, y / norm, z / norm
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
     n = ww + xx + yy + zz
     xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return (w, x, y, z), [(ww + xx - yy - zz) / n, (2 * xy - 2 * wz) / n, (2 * xz + 2 * wy) / n,
-                          (2 * xy + 2 * wz) / n, (ww - xx + yy - zz) / n, (2 * yz - 2 * wx) / n,
-                          (2 * xz - 2 * wy) / n, (2 * yz + 2 * wx) / n, (ww - xx - yy + zz) / n]
+    # 2 a ± 2 b written 2 (a ± b): doubling is exact, so these are the same numbers in fewer
+    # operations; and a division by an n of exactly 1 (often, after the normalisation) is skipped.
+    if n == 1.0:
+        return (w, x, y, z), [ww + xx - yy - zz, 2 * (xy - wz), 2 * (xz + wy), 2 * (xy + wz), ww - xx + yy - zz,
+                              2 * (yz - wx), 2 * (xz - wy), 2 * (yz + wx), ww - xx - yy + zz]
+    return (w, x, y, z), [(ww + xx - yy - zz) / n, 2 * (xy - wz) / n, 2 * (xz + wy) / n,
+                          2 * (xy + wz) / n, (ww - xx + yy - zz) / n, 2 * (yz - wx) / n,
+                          2 * (xz - wy) / n, 2 * (yz + wx) / n, (ww - xx - yy + zz) / n]
 
 
 class Joint:
@@ -125,7 +140,8 @@ class Joint:
     point (and hinge axis) is computed once: its body never moves.
     """
 
-    __slots__ = ("a", "b", "off_a", "off_b", "free_a", "free_b", "const_a", "const_b", "where", "_state")
+    __slots__ = ("a", "b", "off_a", "off_b", "free_a", "free_b", "const_a", "const_b", "where", "_state",
+                 "axial_a", "axial_b")
     kind = ""
     rows = 0
 
@@ -134,25 +150,39 @@ class Joint:
         self.free_a, self.free_b, self.where = free_a, free_b, where
         self.const_a = None if free_a else _point(com, rot, a, off_a)
         self.const_b = None if free_b else _point(com, rot, b, off_b)
+        self.axial_a, self.axial_b = _axial(off_a), _axial(off_b)
         self._state: tuple = ()
 
     def points(self, com, rot):
         """``(r_a, r_b, gap)``: offsets of the attachment points from the centres of mass, world
         frame, and ``p_b - p_a`` (``rows.RowSet.geometry``)."""
-        # _point written out twice: this runs for every constraint 3-6 times a step.
+        # _point written out twice: this runs for every constraint 3-6 times a step. An offset
+        # along one body axis (a link's end) takes that column of R only: the products with its
+        # zero components are exact zeros, so the sums are the same numbers (up to the sign of a
+        # zero), in a third of the work.
         if self.const_a is None:
             r, k = rot[self.a], 3 * self.a
-            o0, o1, o2 = self.off_a
-            ra = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
-                  r[6] * o0 + r[7] * o1 + r[8] * o2)
+            axial = self.axial_a
+            if axial is not None:
+                j, o = axial
+                ra = (r[j] * o, r[j + 3] * o, r[j + 6] * o)
+            else:
+                o0, o1, o2 = self.off_a
+                ra = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                      r[6] * o0 + r[7] * o1 + r[8] * o2)
             pa = (com[k] + ra[0], com[k + 1] + ra[1], com[k + 2] + ra[2])
         else:
             ra, pa = self.const_a
         if self.const_b is None:
             r, k = rot[self.b], 3 * self.b
-            o0, o1, o2 = self.off_b
-            rb = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
-                  r[6] * o0 + r[7] * o1 + r[8] * o2)
+            axial = self.axial_b
+            if axial is not None:
+                j, o = axial
+                rb = (r[j] * o, r[j + 3] * o, r[j + 6] * o)
+            else:
+                o0, o1, o2 = self.off_b
+                rb = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                      r[6] * o0 + r[7] * o1 + r[8] * o2)
             pb = (com[k] + rb[0], com[k + 1] + rb[1], com[k + 2] + rb[2])
         else:
             rb, pb = self.const_b
@@ -173,6 +203,14 @@ class Joint:
         return out
 
 
+def _axial(off):
+    """``(j, o)`` when ``off`` is ``o`` times the ``j``-th unit vector (``o`` finite, non-zero), else None."""
+    nonzero = [j for j in range(3) if off[j] != 0.0]
+    if len(nonzero) == 1 and math.isfinite(off[nonzero[0]]):
+        return nonzero[0], off[nonzero[0]]
+    return None
+
+
 def _point(com, rot, i: int, off):
     """``(R off, com + R off)`` of body ``i``."""
     r, k = rot[i], 3 * i
@@ -186,9 +224,9 @@ class Ball(Joint):
     kind, rows = "ball", 3
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, (g0, g1, g2) = self.points(com, rot)
+        ra, rb, gap = self.points(com, rot)
         self._state = (ra, rb)
-        return [g0, g1, g2]
+        return list(gap)
 
 
 class Bar(Joint):
@@ -221,44 +259,71 @@ class Bar(Joint):
 
 
 class Hinge(Joint):
-    __slots__ = ("axis_a", "axis_b", "z_a", "z_b")
+    __slots__ = ("axis_a", "axis_b", "z_a", "z_b", "along_a", "along_b")
     kind, rows = "hinge", 5
     axis_a: list
     axis_b: list
     z_a: tuple | None
     z_b: tuple | None
+    along_a: tuple | None
+    along_b: tuple | None
 
     def set_axes(self, axis_a, axis_b, rot) -> None:
         self.axis_a, self.axis_b = axis_a, axis_b
         self.z_a = None if self.free_a else apply(rot[self.a], axis_a)
         self.z_b = None if self.free_b else apply(rot[self.b], axis_b)
+        # An axis along a body axis (the usual case) is a column of R: see Joint.points.
+        self.along_a, self.along_b = _axial(axis_a), _axial(axis_b)
+
+    def _axes(self, rot):
+        """World axes ``(z_a, z_b)`` (``apply`` written out: this runs 3-6 times a step)."""
+        za = self.z_a
+        if za is None:
+            r = rot[self.a]
+            if self.along_a is not None:
+                j, o = self.along_a
+                za = (r[j] * o, r[j + 3] * o, r[j + 6] * o)
+            else:
+                o0, o1, o2 = self.axis_a
+                za = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                      r[6] * o0 + r[7] * o1 + r[8] * o2)
+        zb = self.z_b
+        if zb is None:
+            r = rot[self.b]
+            if self.along_b is not None:
+                j, o = self.along_b
+                zb = (r[j] * o, r[j + 3] * o, r[j + 6] * o)
+            else:
+                o0, o1, o2 = self.axis_b
+                zb = (r[0] * o0 + r[1] * o1 + r[2] * o2, r[3] * o0 + r[4] * o1 + r[5] * o2,
+                      r[6] * o0 + r[7] * o1 + r[8] * o2)
+        return za, zb
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
-        za = apply(rot[self.a], self.axis_a) if self.z_a is None else self.z_a
-        zb = apply(rot[self.b], self.axis_b) if self.z_b is None else self.z_b
-        # rows.hinge_frames for one hinge: z the bisector of the world axes (zb flipped by s when it
-        # points away), x the world axis least aligned with z (the first on a tie, as numpy.argmin)
-        # made perpendicular, y = z × x.
-        s = 1.0 if za[0] * zb[0] + za[1] * zb[1] + za[2] * zb[2] >= 0 else -1.0
-        sz0, sz1, sz2 = s * zb[0], s * zb[1], s * zb[2]
-        z0, z1, z2 = za[0] + sz0, za[1] + sz1, za[2] + sz2
+        ra, rb, (g0, g1, g2) = self.points(com, rot)
+        (a0, a1, a2), (b0, b1, b2) = self._axes(rot)
+        # rows.hinge_frames for one hinge: z the bisector of the world axes (zb flipped when it
+        # points away; multiplying by s = 1 is exact, so it is skipped), x the world axis least
+        # aligned with z (the first on a tie, as numpy.argmin) made perpendicular, y = z × x.
+        if a0 * b0 + a1 * b1 + a2 * b2 < 0:
+            b0, b1, b2 = -b0, -b1, -b2
+        z0, z1, z2 = a0 + b0, a1 + b1, a2 + b2
         norm = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
         z0, z1, z2 = z0 / norm, z1 / norm, z2 / norm
-        a0, a1, a2 = abs(z0), abs(z1), abs(z2)
-        if a0 <= a1 and a0 <= a2:
+        m0, m1, m2 = abs(z0), abs(z1), abs(z2)
+        if m0 <= m1 and m0 <= m2:
             x0, x1, x2 = 1.0 - z0 * z0, -(z0 * z1), -(z0 * z2)
-        elif a1 <= a2:
+        elif m1 <= m2:
             x0, x1, x2 = -(z1 * z0), 1.0 - z1 * z1, -(z1 * z2)
         else:
             x0, x1, x2 = -(z2 * z0), -(z2 * z1), 1.0 - z2 * z2
         norm = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-        x = (x0 / norm, x1 / norm, x2 / norm)
-        y = (z1 * x[2] - z2 * x[1], z2 * x[0] - z0 * x[2], z0 * x[1] - z1 * x[0])
+        x0, x1, x2 = x0 / norm, x1 / norm, x2 / norm
+        y0, y1, y2 = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
         # tilt = z_a × s z_b, along x and y.
-        t0, t1, t2 = za[1] * sz2 - za[2] * sz1, za[2] * sz0 - za[0] * sz2, za[0] * sz1 - za[1] * sz0
-        self._state = (ra, rb, x, y)
-        return [gap[0], gap[1], gap[2], t0 * x[0] + t1 * x[1] + t2 * x[2], t0 * y[0] + t1 * y[1] + t2 * y[2]]
+        t0, t1, t2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+        self._state = (ra, rb, (x0, x1, x2), (y0, y1, y2))
+        return [g0, g1, g2, t0 * x0 + t1 * x1 + t2 * x2, t0 * y0 + t1 * y1 + t2 * y2]
 
     def columns(self) -> list[tuple[int, int]]:
         return super().columns() + [(3 + i, 3 + j) for i in range(2) for j in range(3)]

@@ -71,22 +71,22 @@ class _Factor:
         """Minimum-norm ``λ`` of ``A λ = b`` with one step of iterative refinement, which recovers
         the digits the factorisation's rounding loses on an ill-conditioned island (so an
         explicit (pseudo-)inverse is as accurate here as applying the factors)."""
-        pinv = self.pinv
-        lam = pinv @ b
-        return lam + pinv @ (b - self.system @ lam)
+        dot = self.pinv.dot
+        lam = dot(b)
+        return lam + dot(b - self.system.dot(lam))
 
     # Both right-hand sides carry a minus sign (``-C``, ``-J u``); every operation of the solve is
     # linear and rounds symmetrically, so solving for ``+C`` and subtracting the result is exact
     # negation, and saves a numpy call per solve.
-    def correction(self, errors: list) -> list:
+    def correction(self, errors: list) -> np.ndarray:
         """``-W Jᵀ λ`` for ``A λ = -C``: minus the motion (6 per island body) that closes ``errors``."""
-        return (self.wjt @ self.solve(np.array(errors))).tolist()
+        return self.wjt.dot(self.solve(np.array(errors)))
 
     def velocity(self, u: list):
         """``(-λ, -W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
         island is factorised again: the next step's correction needs ``W Jᵀ`` and ``A`` only)."""
-        lam = self.solve(self.jac @ np.array(u))
-        return lam, (self.wjt @ lam).tolist()
+        lam = self.solve(self.jac.dot(np.array(u)))
+        return lam, self.wjt.dot(lam).tolist()
 
 
 class _Island:
@@ -96,6 +96,7 @@ class _Island:
     def __init__(self, island, joints, offsets, inv_mass) -> None:
         self.bodies = list(island.bodies)
         self.joints = [joints[k] for k in island.constraints]
+        self.evaluators = [joint.evaluate for joint in self.joints]     # bound once
         self.rows = np.concatenate([np.arange(offsets[k], offsets[k + 1]) for k in island.constraints])
         m, width = len(self.rows), 6 * len(self.bodies)
         self.m = m
@@ -120,11 +121,13 @@ class _Island:
         self.weight_index = np.array([(6 * c + 3 + i) * width + 6 * c + 3 + j for c in range(len(self.bodies))
                                       for i in range(3) for j in range(3)], dtype=np.intp)
         self.redundant = False
+        self.flat_jac, self.flat_weights = self.jac.reshape(-1), self.weights.reshape(-1)   # views
 
     def errors(self, com, rot) -> list[float]:
         out: list[float] = []
-        for joint in self.joints:
-            out += joint.evaluate(com, rot)
+        extend = out.extend
+        for evaluate in self.evaluators:
+            extend(evaluate(com, rot))
         return out
 
     def factorise(self, inv_inertia) -> _Factor:
@@ -133,15 +136,15 @@ class _Island:
         values: list[float] = []
         for joint in self.joints:
             values += joint.entries()
-        self.jac.reshape(-1)[self.index] = values
+        self.flat_jac[self.index] = values
         weights: list[float] = []
         for body in self.bodies:
             weights += inv_inertia[body]
-        self.weights.reshape(-1)[self.weight_index] = weights
-        wjt = self.weights @ self.jac.T
+        self.flat_weights[self.weight_index] = weights
+        wjt = self.weights.dot(self.jac.T)
         # J (W Jᵀ) is symmetric but for rounding, which the refinement step absorbs (the
         # eigendecomposition reads one triangle).
-        system = self.jac @ wjt
+        system = self.jac.dot(wjt)
         pinv, rank = self._pseudo_inverse(system)
         return _Factor(self.jac, wjt, system, pinv, rank)
 
@@ -167,7 +170,7 @@ class _Island:
         eig, vectors = _eigh(system)
         keep = eig > threshold
         inv = np.divide(1.0, eig, out=np.zeros_like(eig), where=keep)
-        return (vectors * inv) @ vectors.T, int(keep.sum())
+        return (vectors * inv).dot(vectors.T), int(keep.sum())
 
 
 class _Single:
@@ -214,9 +217,9 @@ class _SingleFactor:
         lam = self.pinv * b
         return lam + self.pinv * (b - self.system * lam)
 
-    def correction(self, errors: list) -> list:
+    def correction(self, errors: list) -> tuple:
         lam = self._solve(errors[0])
-        return [w * lam for w in self.wjt]
+        return tuple([w * lam for w in self.wjt])
 
     def velocity(self, u: list):
         lam = self._solve(sum([j * v for j, v in zip(self.row, u)]))
@@ -280,36 +283,47 @@ class SmallStep:
 
     def drift(self, dt: float) -> None:
         """``World.drift``: centres by ``v dt``, orientations by ``exp(ω dt)``, keeping ``I_world ω``."""
-        com, vel, omega = self.com, self.vel, self.omega
+        com, vel, omega, rot, quat, diagonal = self.com, self.vel, self.omega, self.rot, self.quat, self.diagonal
         for i in self.moving:
-            r, k = self.rot[i], 3 * i
+            r, k = rot[i], 3 * i
             w = (omega[k], omega[k + 1], omega[k + 2])
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
-            self.quat[i], turned = turn(self.quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
-            self.rot[i] = turned
-            diagonal = self.diagonal[i]
-            if diagonal is None:
+            quat[i], turned = turn(quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
+            rot[i] = turned
+            d = diagonal[i]
+            if d is None:
                 spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
             else:
-                spin = carry_spin_diagonal(r, turned, diagonal[0], diagonal[1], w)
+                spin = carry_spin_diagonal(r, turned, d[0], d[1], w)
             omega[k], omega[k + 1], omega[k + 2] = spin
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:
         """``World.correct_positions`` along the frozen system of the step's start, crediting
         the displacement to the velocities (``/ dt``); returns the largest remaining error."""
-        com, rot, quat = self.com, self.rot, self.quat
-        total = [0.0] * (6 * self.n)
+        com, rot, quat, islands, factors = self.com, self.rot, self.quat, self.islands, self.factors
+        # Minus each island's motion so far: an array (or a _Single's tuple), summed in the order
+        # the per-body totals were, so the same numbers.
+        moved: list = [None] * len(islands)
         for iteration in range(iterations + 1):
-            errors = [island.errors(com, rot) for island in self.islands]
-            worst = max((max(max(part), -min(part)) for part in errors), default=0.0)
+            errors = [island.errors(com, rot) for island in islands]
+            worst = 0.0
+            for part in errors:
+                worst = max(worst, max(part), -min(part))
             if worst <= tolerance or iteration == iterations:
                 break
-            for island, factor, part in zip(self.islands, self.factors, errors):
-                change = factor.correction(part)          # minus the motion
-                for c, i in enumerate(island.bodies):
-                    d0, d1, d2, d3, d4, d5 = change[6 * c:6 * c + 6]
+            for n, island in enumerate(islands):
+                change = factors[n].correction(errors[n])          # minus the motion
+                total = moved[n]
+                if isinstance(change, tuple):
+                    moved[n] = change if total is None else tuple([t + c for t, c in zip(total, change)])
+                    values = change
+                else:
+                    moved[n] = change if total is None else total + change
+                    values = change.tolist()
+                chunks = iter(values)
+                for i, d0, d1, d2, d3, d4, d5 in zip(island.bodies, *[chunks] * 6):
                     k = 3 * i
                     com[k] -= d0
                     com[k + 1] -= d1
@@ -317,22 +331,21 @@ class SmallStep:
                     if d3 or d4 or d5:
                         # Rows through the centre of mass only (a bob on a bar) turn nothing.
                         quat[i], rot[i] = turn(quat[i], -d3, -d4, -d5)
-                    k = 6 * i
-                    total[k] -= d0
-                    total[k + 1] -= d1
-                    total[k + 2] -= d2
-                    total[k + 3] -= d3
-                    total[k + 4] -= d4
-                    total[k + 5] -= d5
         vel, omega = self.vel, self.omega
-        for i in self.moving:
-            k, t = 3 * i, 6 * i
-            vel[k] += total[t] / dt
-            vel[k + 1] += total[t + 1] / dt
-            vel[k + 2] += total[t + 2] / dt
-            omega[k] += total[t + 3] / dt
-            omega[k + 1] += total[t + 4] / dt
-            omega[k + 2] += total[t + 5] / dt
+        for n, island in enumerate(islands):
+            total = moved[n]
+            if total is None:
+                continue
+            chunks = iter(total if isinstance(total, tuple) else total.tolist())
+            # v + (-s)/dt is v - s/dt exactly: the credit of World.correct_positions.
+            for i, d0, d1, d2, d3, d4, d5 in zip(island.bodies, *[chunks] * 6):
+                k = 3 * i
+                vel[k] -= d0 / dt
+                vel[k + 1] -= d1 / dt
+                vel[k + 2] -= d2 / dt
+                omega[k] -= d3 / dt
+                omega[k + 1] -= d4 / dt
+                omega[k + 2] -= d5 / dt
         return worst
 
     def solve_velocities(self) -> None:
@@ -350,14 +363,15 @@ class SmallStep:
                 u += omega[3 * i:3 * i + 3]
             lam, change = factor.velocity(u)             # minus the multipliers and the motion
             self.lam[n] = lam
-            for c, i in enumerate(island.bodies):
-                k, t = 3 * i, 6 * c
-                vel[k] -= change[t]
-                vel[k + 1] -= change[t + 1]
-                vel[k + 2] -= change[t + 2]
-                omega[k] -= change[t + 3]
-                omega[k + 1] -= change[t + 4]
-                omega[k + 2] -= change[t + 5]
+            chunks = iter(change)
+            for i, d0, d1, d2, d3, d4, d5 in zip(island.bodies, *[chunks] * 6):
+                k = 3 * i
+                vel[k] -= d0
+                vel[k + 1] -= d1
+                vel[k + 2] -= d2
+                omega[k] -= d3
+                omega[k + 1] -= d4
+                omega[k + 2] -= d5
 
     def finite(self) -> bool:
         """One scalar test that the state is finite (``simulation._check_state``'s first test)."""
