@@ -108,6 +108,11 @@ def read_yaml(path: str, where: str, error: type[InputError] = SceneError):
     except RecursionError:
         raise error(where, "nests lists or mappings too deeply to read",
                     "a scene needs a few levels of nesting; check the brackets") from None
+    except (ValueError, OverflowError) as exc:
+        # PyYAML's YAML 1.1 resolvers take some plain scalars for numbers or dates that its
+        # constructors then cannot build (``0b_``, ``2001-13-45``) and let the Python error out.
+        raise error(where, f"holds a value YAML takes for a number or a date but cannot read ({exc})",
+                    "quote it if it is text, or write the number or date in full") from None
     except DuplicateKeyError as exc:
         raise error(f"{where}:{exc.line}", f"key {exc.key!r} appears twice in one mapping",
                     "YAML would silently keep only the last one; rename or remove one") from None

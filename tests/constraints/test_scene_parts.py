@@ -258,3 +258,20 @@ constraints:
 """), "s", ".")
     solve_scene(scene)
     assert calls == ["s: bodies.arm"]
+
+
+@pytest.mark.parametrize("value", ["0b_", "2001-13-45", "0x_"])
+def test_plain_scalars_yaml_cannot_build_are_one_scene_error(tmp_path, value):
+    """PyYAML takes these for a binary int or a date, then fails to build them with a bare
+    ValueError (found by fuzzing the scene loader)."""
+    from p3d_cli.constraints.yaml_loader import read_yaml
+
+    path = tmp_path / "s.yaml"
+    path.write_text(f"bodies:\n  a: {{fixed: true, position: [{value}, 0, 0]}}\n")
+    try:
+        read_yaml(str(path), "s.yaml")
+    except SceneError as exc:
+        assert exc.where == "s.yaml" and "quote it" in exc.hint
+    else:   # a PyYAML that reads it as text: the scene then refuses it as no number
+        with pytest.raises(SceneError):
+            load_scene(str(path))
