@@ -242,23 +242,23 @@ def whole_uncertainty(results, whole: MassProperties) -> dict | None:
     parts = [r.properties for r in results]
     c = whole.center_of_mass
     total = abs(whole.mass)
-    volume = sum(u["volume"] for u in bounds) + rounding * sum(abs(p.volume) for p in parts)
-    mass = sum(u["mass"] for u in bounds) + rounding * sum(abs(p.mass) for p in parts)
+    d_volume = sum(u["volume"] for u in bounds) + rounding * sum(abs(p.volume) for p in parts)
+    d_mass = sum(u["mass"] for u in bounds) + rounding * sum(abs(p.mass) for p in parts)
     moved = sum(abs(p.mass) * u["center_of_mass"] + u["mass"] * np.abs(p.center_of_mass - c)
                 for p, u in zip(parts, bounds))
-    center = (moved + rounding * sum(abs(p.mass) * np.abs(p.center_of_mass) for p in parts)) / total
-    center = center + np.spacing(np.abs(c))
+    d_center = (moved + rounding * sum(abs(p.mass) * np.abs(p.center_of_mass) for p in parts)) / total
+    d_center = d_center + np.spacing(np.abs(c))
     # A shift e of the whole's centre changes Σ mᵢ dᵢ dᵢᵀ by M e eᵀ only (Σ mᵢ dᵢ = 0): second
     # order. The parts' own centre errors enter at first order.
-    inertia = total * (2 * (center @ center) * np.eye(3) + 2 * np.outer(center, center))
+    d_inertia = total * (2 * (d_center @ d_center) * np.eye(3) + 2 * np.outer(d_center, d_center))
     for p, u in zip(parts, bounds):
         d = np.abs(p.center_of_mass - c)
         dd = u["center_of_mass"]
         m, dm = abs(p.mass), u["mass"]
         size = d @ d * np.eye(3) + np.outer(d, d)
-        inertia += (u["inertia"] + dm * size + m * (2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
-                    + rounding * (np.abs(p.inertia) + m * size))
-    return {"volume": volume, "mass": mass, "center_of_mass": center, "inertia": inertia}
+        d_inertia += (u["inertia"] + dm * size + m * (2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
+                      + rounding * (np.abs(p.inertia) + m * size))
+    return {"volume": d_volume, "mass": d_mass, "center_of_mass": d_center, "inertia": d_inertia}
 
 
 def _closed(results) -> bool | None:

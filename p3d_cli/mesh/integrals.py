@@ -255,16 +255,16 @@ class MomentSums:
         # term, each at most 2^-1075 off. Negligible for any part of ordinary size.
         bound = rounding * abs_total + 40 * self.count * _SMALLEST
         if extra is not None:
-            try:
-                if not np.isfinite(total).all():
-                    raise OverflowError
-                return _exact_finish(self.origin, [Fraction(float(t)) + e for t, e in zip(total, extra)], bound)
-            except OverflowError:
-                # Sums (or an exact result) beyond float64: infinite moments, which the caller's
-                # range check turns into one RangeError, as for a closed mesh that overflows.
-                inf = math.inf
-                return Moments(inf, np.full(3, inf), np.full((3, 3), inf),
-                               MomentErrors(inf, np.full(3, inf), np.full((3, 3), inf)))
+            if np.isfinite(total).all():
+                try:
+                    return _exact_finish(self.origin, [Fraction(float(t)) + e for t, e in zip(total, extra)], bound)
+                except OverflowError:   # an exact result beyond float64
+                    pass
+            # Sums or a result beyond float64: infinite moments, which the caller's range check
+            # turns into one RangeError, as for a closed mesh that overflows.
+            inf = math.inf
+            return Moments(inf, np.full(3, inf), np.full((3, 3), inf),
+                           MomentErrors(inf, np.full(3, inf), np.full((3, 3), inf)))
         volume = volume_from(total[0], bound[0])
         volume_error = bound[0] / 6.0
         if self.count == 0 or volume == 0.0:
