@@ -15,13 +15,11 @@ import numpy as np
 from p3d_cli.constraints import values
 from p3d_cli.constraints.rotation import quat_to_matrix
 from p3d_cli.constraints.yaml_loader import read_yaml
-from p3d_cli.errors import SceneError
+from p3d_cli.errors import InputError, SceneError
 
 TOP_KEYS = ("gravity", "bodies", "constraints")
 BODY_KEYS = ("shape", "parts", "density", "mass", "inertia", "center_of_mass", "fixed", "position",
-             "rotation", "translate", "rotate", "quat", "rpy", "velocity", "angular_velocity")
-#: The placement vocabulary of assembly parts and the command line, also taken for a body's pose.
-POSE_KEYS = ("translate", "rotate", "quat", "rpy")
+             "rotation", *values.POSE_KEYS, "velocity", "angular_velocity")
 #: Constraint type -> the keys it takes besides ``type``, ``a`` and ``b``.
 CONSTRAINT_KEYS = {
     "ball": ("attach_a", "attach_b"),
@@ -241,7 +239,7 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
         if inertia is None and not solid:
             raise SceneError(place, "has no inertia",
                              "give inertia: (about the centre of mass, body axes), or a shape:")
-    position, rotation = _pose(get, place)
+    position, rotation = values.pose(get, place)
     velocity = values.vector(get["velocity"], f"{place}.velocity") if "velocity" in get else np.zeros(3)
     omega = (values.vector(get["angular_velocity"], f"{place}.angular_velocity")
              if "angular_velocity" in get else np.zeros(3))
@@ -253,41 +251,9 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
                     rotation, velocity, omega, parts)
 
 
-def _pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
-    """The body frame's world position and orientation quaternion.
-
-    ``position:`` and ``rotation:`` are the scene's own keys; ``translate:``, ``rotate:``,
-    ``quat:`` and ``rpy:`` are the placement vocabulary of assembly parts and the command line,
-    read by the same parser (``placement_from_mapping``) and taken as the body's pose.
-    """
-    given = [k for k in POSE_KEYS if k in get]
-    for own, others in (("position", ["translate"]), ("rotation", ["rotate", "quat", "rpy"])):
-        clash = [k for k in others if k in given]
-        if own in get and clash:
-            raise SceneError(f"{place}.{clash[0]}", f"given with {own}:", f"give the body's {own} once")
-    position = values.vector(get["position"], f"{place}.position") if "position" in get else np.zeros(3)
-    rotation = values.rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
-    if not given:
-        return position, rotation
-    from p3d_cli.errors import InputError
-    from p3d_cli.placement_text import placement_from_mapping
-    from p3d_cli.rotation import matrix_quaternion
-
-    try:
-        placement = placement_from_mapping({k: get[k] for k in given}, place)
-    except InputError as exc:
-        raise SceneError(exc.where, exc.what, exc.hint) from None
-    if placement.translation is not None:
-        position = placement.translation
-    if placement.rotation is not None:
-        rotation = np.asarray(matrix_quaternion(placement.rotation), dtype=np.float64)
-    return position, rotation
-
-
 def _parts(value, place: str, directory: str):
     """A body made of parts: the assembly-file syntax, in the body's frame."""
     from p3d_cli.assembly import parts_assembly
-    from p3d_cli.errors import InputError
 
     try:
         parts = parts_assembly(value, place, f"{place}.parts", directory)

@@ -12,7 +12,7 @@ import numpy as np
 
 from p3d_cli.constraints.rotation import quat_from_axis_angle
 from p3d_cli.rotation import quaternion_from_axis_degrees
-from p3d_cli.errors import SceneError
+from p3d_cli.errors import InputError, SceneError
 from p3d_cli.inertia import breaks_triangle_inequality
 
 
@@ -176,3 +176,45 @@ def rotation(value, where: str) -> np.ndarray:
 
 def _join(values) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
+
+
+#: The placement vocabulary of assembly parts and the command line, also taken for a body's pose:
+#: scene key -> the key of the same thing it clashes with.
+POSE_KEYS = {"translate": "position", "rotate": "rotation", "quat": "rotation", "rpy": "rotation"}
+
+
+def pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
+    """The body frame's world position and orientation quaternion.
+
+    ``position:`` and ``rotation:`` are the scene's own keys; ``translate:``, ``rotate:``,
+    ``quat:`` and ``rpy:`` are the placement vocabulary of assembly parts and the command line,
+    read by the same parser (``placement_from_mapping``) and taken as the body's pose.
+
+    Parameters
+    ----------
+    get : dict
+        The body's keys and values.
+    place : str
+        The body's place, for messages.
+    """
+    given = [k for k in POSE_KEYS if k in get]
+    for key in given:
+        own = POSE_KEYS[key]
+        if own in get:
+            raise SceneError(f"{place}.{key}", f"given with {own}:", f"give the body's {own} once")
+    position = vector(get["position"], f"{place}.position") if "position" in get else np.zeros(3)
+    orientation = rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
+    if not given:
+        return position, orientation
+    from p3d_cli.placement_text import placement_from_mapping
+    from p3d_cli.rotation import matrix_quaternion
+
+    try:
+        placement = placement_from_mapping({k: get[k] for k in given}, place)
+    except InputError as exc:
+        raise SceneError(exc.where, exc.what, exc.hint) from None
+    if placement.translation is not None:
+        position = placement.translation
+    if placement.rotation is not None:
+        orientation = np.asarray(matrix_quaternion(placement.rotation), dtype=np.float64)
+    return position, orientation
