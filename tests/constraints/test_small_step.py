@@ -112,6 +112,20 @@ def test_the_trajectory_callback_sees_the_same_states(monkeypatch):
             np.testing.assert_allclose(a.velocity, b.velocity, rtol=0, atol=1e-10)
 
 
+def range_errors_of_both_paths(monkeypatch, scene, steps: int) -> tuple[str, str]:
+    """The RangeError messages of ``steps`` steps of dt = 1e200 on the small path, then on the
+    general path (``small_step.fits`` forced false)."""
+    messages = []
+    for small in (True, False):
+        with monkeypatch.context() as m:
+            if not small:
+                m.setattr(small_step, "fits", lambda world: False)
+            with pytest.raises(RangeError) as info:
+                solve_scene(scene, steps=steps, dt=1e200)
+        messages.append(str(info.value))
+    return messages[0], messages[1]
+
+
 def test_an_overflowing_step_is_the_same_range_error_on_both_paths(monkeypatch):
     scene = parse_scene({"gravity": [0, 0, -9.81], "bodies": {
         "pivot": {"fixed": True},
@@ -119,16 +133,9 @@ def test_an_overflowing_step_is_the_same_range_error_on_both_paths(monkeypatch):
         "constraints": [{"type": "bar", "a": "pivot", "b": "bob", "attach_a": [0, 0, 0], "attach_b": [0, 0, 0],
                          "length": 1.0}]},
         "big.yaml", ".")
-    messages = []
-    for small in (True, False):
-        with monkeypatch.context() as m:
-            if not small:
-                m.setattr(small_step, "fits", lambda world: False)
-            with pytest.raises(RangeError) as info:
-                solve_scene(scene, steps=10, dt=1e200)
-        messages.append(str(info.value))
-    assert messages[0] == messages[1]
-    assert "bob" in messages[0] and "step 1" in messages[0]
+    small, general = range_errors_of_both_paths(monkeypatch, scene, steps=10)
+    assert small == general
+    assert "bob" in small and "step 1" in small
 
 
 def test_an_overflowing_spin_is_a_range_error_not_a_math_error(monkeypatch):
@@ -138,16 +145,9 @@ def test_an_overflowing_spin_is_a_range_error_not_a_math_error(monkeypatch):
         "bob": {"mass": 1.0, "inertia": [1.0, 1.0, 1.0], "position": [1, 0, 0], "angular_velocity": [1e150, 0, 0]}},
         "constraints": [{"type": "ball", "a": "pivot", "b": "bob", "attach_a": [0, 0, 0], "attach_b": [-1, 0, 0]}]},
         "spin.yaml", ".")
-    messages = []
-    for small in (True, False):
-        with monkeypatch.context() as m:
-            if not small:
-                m.setattr(small_step, "fits", lambda world: False)
-            with pytest.raises(RangeError) as info:
-                solve_scene(scene, steps=3, dt=1e200)
-        messages.append(str(info.value))
-    assert messages[0] == messages[1]
-    assert "bob" in messages[0] and "overflows" in messages[0]
+    small, general = range_errors_of_both_paths(monkeypatch, scene, steps=3)
+    assert small == general
+    assert "bob" in small and "overflows" in small
 
 
 def test_a_large_scene_takes_the_array_step():
