@@ -78,15 +78,21 @@ def load(raw: RawInput) -> MeshSource:
     else:
         vertices, faces = fast
         warnings = ()
-    if len(faces) == 0:
+    source = indexed_source("obj", vertices, faces, "float64", warnings)
+    if source.face_count == 0:
         raise InputError(raw.where, f"no faces (the file defines {len(vertices)} vertices and no 'f' lines)",
                          "export the mesh with its faces, not as a point cloud")
-    return indexed_source("obj", vertices, faces, "float64", warnings)
+    return source
 
 
 def _parse_fast(data: bytes):
-    """The fast path on one text (CR line ends allowed): ``(vertices, faces)`` or None."""
-    return parse_fast(chunks_of(_Bytes(data)))
+    """The fast path on one text (CR line ends allowed): ``(vertices, faces)`` or None, the
+    faces joined into one ``(n, 3)`` int64 array, as the careful parser gives them."""
+    fast = parse_fast(chunks_of(_Bytes(data)))
+    if fast is None:
+        return None
+    vertices, blocks = fast
+    return vertices, (np.concatenate(blocks) if blocks else np.zeros((0, 3))).astype(np.int64)
 
 
 def _parse_lines(where: str, data: bytes):

@@ -24,20 +24,23 @@ def fan_triangles(corners: np.ndarray, sizes: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (sum(sizes - 2), 3) int64
-        Triangles ``(v0, vi, vi+1)`` for ``i = 1 .. k-2`` of each polygon, in order.
+    (sum(sizes - 2), 3) int32 or int64
+        Triangles ``(v0, vi, vi+1)`` for ``i = 1 .. k-2`` of each polygon, in order: int32
+        when ``corners`` is int32 (half the memory of a large mesh's faces), else int64.
     """
-    corners = np.asarray(corners, dtype=np.int64)
+    corners = np.asarray(corners)
+    if corners.dtype != np.int32:
+        corners = corners.astype(np.int64, copy=False)
     sizes = np.asarray(sizes, dtype=np.int64)
     if len(sizes) == 0:
-        return np.zeros((0, 3), dtype=np.int64)
+        return np.zeros((0, 3), dtype=corners.dtype)
     k = int(sizes[0])
     if (sizes == k).all():
         # All polygons the same size (the common case: all triangles or all quads).
         polygons = corners.reshape(len(sizes), k)
         if k == 3:
             return polygons
-        tris = np.empty((len(sizes), k - 2, 3), dtype=np.int64)
+        tris = np.empty((len(sizes), k - 2, 3), dtype=corners.dtype)
         tris[:, :, 0] = polygons[:, :1]
         tris[:, :, 1] = polygons[:, 1:-1]
         tris[:, :, 2] = polygons[:, 2:]

@@ -94,21 +94,45 @@ def nonfinite_error(where: str, index: int, cell: str = "face") -> InputError:
     return InputError(where, f"{cell} {index} has a NaN or infinite coordinate", "repair or re-export the mesh")
 
 
-def indexed_source(fmt: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,
-                   warnings=()) -> MeshSource:
+def indexed_source(fmt: str, vertices: np.ndarray, faces, dtype: str, warnings=()) -> MeshSource:
     """A ``MeshSource`` over an indexed mesh, yielding ``vertices[faces]`` block by block.
 
     Parameters
     ----------
     vertices : (m, 3) float32 or float64
-    faces : (n, 3) integer, already validated to lie in ``[0, m)``
+    faces : (n, 3) integer array, or a list of such arrays (one face list in pieces, as a
+        chunked reader makes them: the blocks are the same as for the pieces joined)
+        Already validated to lie in ``[0, m)``.
     """
+    pieces = list(faces) if isinstance(faces, list) else [faces]
 
     def read_blocks() -> Iterator[np.ndarray]:
-        for start in range(0, len(faces), BLOCK):
-            yield vertices[faces[start:start + BLOCK]]
+        for block in _blocks_of(pieces, BLOCK):
+            yield vertices[block]
 
-    return MeshSource(fmt, int(len(faces)), dtype, read_blocks, None, tuple(warnings))
+    return MeshSource(fmt, sum(len(piece) for piece in pieces), dtype, read_blocks, None, tuple(warnings))
+
+
+def _blocks_of(pieces: list[np.ndarray], size: int) -> Iterator[np.ndarray]:
+    """Consecutive runs of ``size`` rows (the last may be shorter) across ``pieces`` in order:
+    a piece's end joins the next piece's start, so the runs do not depend on the cutting."""
+    carry: np.ndarray | None = None
+    for piece in pieces:
+        start = 0
+        if carry is not None:
+            start = min(size - len(carry), len(piece))
+            carry = np.concatenate([carry, piece[:start]])
+            if len(carry) < size:
+                continue
+            yield carry
+            carry = None
+        stop = start + (len(piece) - start) // size * size
+        for first in range(start, stop, size):
+            yield piece[first:first + size]
+        if stop < len(piece):
+            carry = piece[stop:]
+    if carry is not None and len(carry):
+        yield carry
 
 
 def array_source(fmt: str, triangles: np.ndarray, dtype: str, warnings=()) -> MeshSource:

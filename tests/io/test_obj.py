@@ -252,3 +252,43 @@ def test_real_obj_matches_reference(real_meshes, reference):
     mesh = load_mesh(path)
     assert mesh.format == "obj" and mesh.face_count == reference[name]["faces"]
     check_reference(p3d.props(path).properties, reference[name])
+
+
+def test_a_file_of_many_chunks_reads_as_the_careful_parser_reads_it(tmp_path):
+    # More than obj_fast.CHUNK of text: faces (triangles, quads and relative indices) in many
+    # chunks, kept as per-chunk int32 pieces, give the careful parser's triangles, in order.
+    from p3d_cli.io.obj_fast import CHUNK, chunks_of, parse_fast
+
+    rng = np.random.default_rng(11)
+    v = rng.normal(size=(30_000, 3))
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
+    for k in range(40_000):
+        corners = rng.choice(30_000, size=3 + (k % 7 == 0), replace=False) + 1
+        lines.append("f " + " ".join(str(c - 30_001) if k % 5 == 0 else str(c) for c in corners))
+    text = "\n".join(lines) + "\n"
+    assert len(text) > 2 * CHUNK
+    path = write(tmp_path, text)
+    with open(path, "rb") as stream:
+        vertices, pieces = parse_fast(chunks_of(stream))
+    assert len(pieces) > 1 and all(piece.dtype == np.int32 for piece in pieces)
+    raw = open_input(path)
+    careful_vertices, careful_faces, _ = obj.parse_lines(raw.where, [raw.read_all()])
+    np.testing.assert_array_equal(vertices, careful_vertices)
+    np.testing.assert_array_equal(np.concatenate(pieces), careful_faces)
+    mesh = load_mesh(path)
+    assert mesh.face_count == len(careful_faces)
+    np.testing.assert_array_equal(mesh.triangles(), careful_vertices[careful_faces])
+
+
+@pytest.mark.parametrize("cuts", [[], [5], [1, 2, 3], [16383, 16384, 16385], [40000], [0, 0, 7, 50000]])
+def test_pieces_of_a_face_list_give_the_blocks_of_the_whole(cuts):
+    from p3d_cli.io.source import BLOCK, _blocks_of
+
+    whole = np.arange(3 * 60_000).reshape(-1, 3)
+    bounds = [0, *sorted(cuts), len(whole)]
+    pieces = [whole[a:b] for a, b in zip(bounds, bounds[1:])]
+    got = list(_blocks_of(pieces, BLOCK))
+    expected = [whole[i:i + BLOCK] for i in range(0, len(whole), BLOCK)]
+    assert len(got) == len(expected)
+    for a, b in zip(got, expected):
+        np.testing.assert_array_equal(a, b)
