@@ -11,12 +11,12 @@ rounded once), and nothing is merged or repaired.
 Statements with other keywords (``vt``, ``usemtl``, free-form ``cstype`` ...) are skipped, the
 unknown ones with a warning. A line that is no statement at all (a bare ``1/617/894`` is seen
 in real models) is skipped with a warning naming the first such line, as long as such lines are
-rare (at most one statement in a hundred): a file made mostly of them is not an OBJ file and is
-refused, at its first such line.
+at most half of the statements: a file made mostly of them is not an OBJ file and is refused,
+at its first such line.
 
-Two parsers, one grammar: ``p3d_cli.io.obj_fast`` reads what exporters write at C speed and
-answers None for anything else; the careful line-by-line parser here then reads the file and
-names the line of any error.
+Two parsers, one grammar: ``p3d_cli.io.obj_fast`` reads what exporters write at C speed, a
+chunk of lines at a time, and answers None for a chunk holding anything else; the careful
+line-by-line parser here then reads that chunk, and names the line of any error.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.numbers import to_float, to_int
-from p3d_cli.io.obj_fast import IGNORED, chunks_of, parse_fast
+from p3d_cli.io.obj_fast import CONTINUATION, IGNORED, chunks_of, parse_chunk
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
@@ -71,13 +71,12 @@ def load(raw: RawInput) -> MeshSource:
         No faces.
     """
     with raw.open() as stream:
-        fast = parse_fast(chunks_of(stream))
-    if fast is None:
+        read = read_chunks(raw.where, chunks_of(stream))
+    if read is None:
         with raw.open() as stream:
             vertices, faces, warnings = parse_lines(raw.where, chunks_of(stream))
     else:
-        vertices, faces = fast
-        warnings = ()
+        vertices, faces, warnings, _ = read
     source = indexed_source("obj", vertices, faces, "float64", warnings)
     if source.face_count == 0:
         raise InputError(raw.where, f"no faces (the file defines {len(vertices)} vertices and no 'f' lines)",
@@ -85,13 +84,65 @@ def load(raw: RawInput) -> MeshSource:
     return source
 
 
+def read_chunks(where: str, chunks):
+    """The file chunk by chunk: each by the fast path (``obj_fast.parse_chunk``), or, when it
+    holds anything else (an unknown statement, a stray line, an error), by the careful parser,
+    with the file's line numbers. So a real model with a few odd lines is read at the fast
+    path's speed but for the chunks that hold them.
+
+    Returns
+    -------
+    (vertices, faces, warnings, careful) or None
+        ``faces``: the chunks' ``(k, 3)`` index arrays, not joined (``indexed_source`` reads
+        them as one: the largest array an OBJ holds is never held twice); ``careful``: the
+        number of chunks the careful parser read. None when the file must be read by the
+        careful parser as a whole: ``\\`` continuation lines (which may span two chunks), or a
+        face index out of range (whose message needs the face's line).
+
+    Raises
+    ------
+    FormatError
+        A malformed statement (the first in the file), or a file made mostly of stray lines.
+    """
+    skipped = _Skipped()
+    vertex_blocks, face_blocks = [], []
+    defined = lines = careful = 0
+    for chunk in chunks:
+        if b"\\" in chunk and CONTINUATION.search(chunk):
+            return None
+        fast = None if b"\0" in chunk else parse_chunk(chunk, defined)
+        if fast is None:
+            careful += 1
+            vertices, triangles = _careful_chunk(where, chunk, lines, defined, skipped)
+        else:
+            vertices, triangles, statements = fast
+            skipped.statements += statements
+        lines += chunk.count(b"\n") + (not chunk.endswith(b"\n"))
+        defined += len(vertices)
+        vertex_blocks.append(vertices)
+        if len(triangles):
+            face_blocks.append(triangles)
+        del fast, vertices, triangles
+    _refuse_garbled(where, skipped)
+    vertices = np.concatenate(vertex_blocks) if vertex_blocks else np.zeros((0, 3))
+    del vertex_blocks
+    for block in face_blocks:
+        if block.min() < 0 or block.max() >= len(vertices):
+            return None
+    return vertices, face_blocks, _warnings(skipped), careful
+
+
 def _parse_fast(data: bytes):
-    """The fast path on one text (CR line ends allowed): ``(vertices, faces)`` or None, the
-    faces joined into one ``(n, 3)`` int64 array, as the careful parser gives them."""
-    fast = parse_fast(chunks_of(_Bytes(data)))
-    if fast is None:
+    """The fast path on one text (CR line ends allowed): ``(vertices, faces)``, the faces joined
+    into one ``(n, 3)`` int64 array as the careful parser gives them, or None unless every
+    chunk took the fast path."""
+    try:
+        read = read_chunks("<text>", chunks_of(_Bytes(data)))
+    except FormatError:  # found by the careful parser, in a chunk the fast path did not take
         return None
-    vertices, blocks = fast
+    if read is None or read[3]:
+        return None
+    vertices, blocks = read[0], read[1]
     return vertices, (np.concatenate(blocks) if blocks else np.zeros((0, 3))).astype(np.int64)
 
 
@@ -114,15 +165,14 @@ class _Bytes:
 
 # --- careful path ------------------------------------------------------------------------
 
-def _lines(where: str, chunks):
-    """``(line number, line)`` over chunks of whole lines.
+def _lines(where: str, chunks, number: int = 0):
+    """``(line number, line)`` over chunks of whole lines, numbered after ``number``.
 
     Raises
     ------
     FormatError
         A NUL byte: binary data, not text.
     """
-    number = 0
     for chunk in chunks:
         lines = chunk.split(b"\n")
         if b"\0" in chunk:
@@ -136,11 +186,12 @@ def _lines(where: str, chunks):
             yield number, line
 
 
-def _statements(where: str, chunks):
-    """``(line number, words)`` per statement, joining ``\\`` continuations, dropping comments."""
+def _statements(where: str, chunks, before: int = 0):
+    """``(line number, words)`` per statement, joining ``\\`` continuations, dropping comments;
+    lines numbered after the ``before`` lines of earlier chunks."""
     pending: list[bytes] = []
     start = 0
-    for number, line in _lines(where, chunks):
+    for number, line in _lines(where, chunks, before):
         if b"#" in line:
             line = line[:line.index(b"#")]
         if line.rstrip().endswith(b"\\"):
@@ -166,48 +217,80 @@ def _text(words: list[bytes]) -> str:
     return b" ".join(words).decode("utf-8", "replace")[:60]
 
 
-class _Mesh:
-    """What the careful parser collects, in compact arrays (8 bytes per number)."""
+class _Skipped:
+    """The statements a file holds and those skipped, over all its chunks."""
 
     def __init__(self) -> None:
-        self.vertices = array("d")
-        self.corners = array("q")
-        self.sizes = array("q")
-        self.face_line = array("q")
+        self.statements = 0
         self.unknown: Counter = Counter()
         self.first_unknown = 0
         self.garbled = 0
         self.first_garbled: tuple[int, list[bytes]] | None = None
-        self.statements = 0
+
+
+class _Mesh:
+    """What the careful parser collects, in compact arrays (8 bytes per number)."""
+
+    def __init__(self, skipped: _Skipped, base: int = 0) -> None:
+        self.vertices = array("d")
+        self.corners = array("q")
+        self.sizes = array("q")
+        self.face_line = array("q")
+        self.skipped = skipped
+        self.base = base            # vertices defined before (in earlier chunks)
 
 
 def parse_lines(where: str, chunks):
     """Line by line, with line numbers in every error. Returns vertices, faces, warnings."""
-    mesh = _Mesh()
+    skipped = _Skipped()
+    mesh = _Mesh(skipped)
     for number, words in _statements(where, chunks):
-        mesh.statements += 1
-        key = words[0]
-        if key == b"v":
-            _vertex(where, number, words, mesh)
-        elif key == b"f":
-            _face(where, number, words, mesh)
-        elif key in _IGNORED:
-            continue
-        elif key[:1].isalpha():
-            mesh.unknown[key.decode("utf-8", "replace")] += 1
-            mesh.first_unknown = mesh.first_unknown or number
-        else:
-            mesh.garbled += 1
-            mesh.first_garbled = mesh.first_garbled or (number, words)
-    if mesh.garbled and mesh.garbled * _GARBLED_RATIO > mesh.statements:
-        number, words = mesh.first_garbled
-        raise FormatError(f"{where}: line {number}", f"unexpected {_text(words)!r} in an OBJ file",
-                          "the file is corrupt or not an OBJ")
+        _statement(where, number, words, mesh)
+    _refuse_garbled(where, skipped)
     vertices = np.frombuffer(mesh.vertices, dtype=np.float64).reshape(-1, 3)
     corners = np.frombuffer(mesh.corners, dtype=np.int64)
     sizes = np.frombuffer(mesh.sizes, dtype=np.int64)
     _check_range(where, corners, sizes, mesh.face_line, len(vertices))
-    return vertices.copy(), fan_triangles(corners, sizes), _warnings(mesh)
+    return vertices.copy(), fan_triangles(corners, sizes), _warnings(skipped)
+
+
+def _careful_chunk(where: str, chunk: bytes, lines: int, defined: int, skipped: _Skipped):
+    """``(vertices, triangles)`` of one chunk by the careful parser: its lines numbered after
+    the ``lines`` before it, its relative indices counted from the ``defined`` vertices before
+    it (indices are checked against the vertex count by the caller, at the end)."""
+    mesh = _Mesh(skipped, defined)
+    for number, words in _statements(where, [chunk], lines):
+        _statement(where, number, words, mesh)
+    vertices = np.frombuffer(mesh.vertices, dtype=np.float64).reshape(-1, 3).copy()
+    corners = np.frombuffer(mesh.corners, dtype=np.int64)
+    return vertices, fan_triangles(corners, np.frombuffer(mesh.sizes, dtype=np.int64))
+
+
+def _statement(where: str, number: int, words: list[bytes], mesh: _Mesh) -> None:
+    skipped = mesh.skipped
+    skipped.statements += 1
+    key = words[0]
+    if key == b"v":
+        _vertex(where, number, words, mesh)
+    elif key == b"f":
+        _face(where, number, words, mesh)
+    elif key in _IGNORED:
+        return
+    elif key[:1].isalpha():
+        skipped.unknown[key.decode("utf-8", "replace")] += 1
+        skipped.first_unknown = skipped.first_unknown or number
+    else:
+        skipped.garbled += 1
+        skipped.first_garbled = skipped.first_garbled or (number, words)
+
+
+def _refuse_garbled(where: str, skipped: _Skipped) -> None:
+    """A file made mostly of lines that are no statement is not an OBJ: refused at the first."""
+    if skipped.garbled and skipped.garbled * _GARBLED_RATIO > skipped.statements:
+        assert skipped.first_garbled is not None
+        number, words = skipped.first_garbled
+        raise FormatError(f"{where}: line {number}", f"unexpected {_text(words)!r} in an OBJ file",
+                          "the file is corrupt or not an OBJ")
 
 
 def _vertex(where: str, number: int, words: list[bytes], mesh: _Mesh) -> None:
@@ -225,7 +308,7 @@ def _face(where: str, number: int, words: list[bytes], mesh: _Mesh) -> None:
     if len(words) < 4:
         raise FormatError(f"{where}: line {number}",
                           f"a face needs at least 3 vertices, found {_text(words)!r}", _HINT)
-    defined = len(mesh.vertices) // 3
+    defined = mesh.base + len(mesh.vertices) // 3
     for word in words[1:]:
         index = _corner(where, number, word)
         if index < 0:
@@ -272,16 +355,17 @@ def _check_range(where: str, corners: np.ndarray, sizes: np.ndarray, face_line, 
                           f"{vertex_count} vertices", "fix the face or export the mesh again")
 
 
-def _warnings(mesh: _Mesh) -> tuple[str, ...]:
+def _warnings(skipped: _Skipped) -> tuple[str, ...]:
     warnings = []
-    if mesh.unknown:
-        names = ", ".join(sorted(mesh.unknown))
-        warnings.append(f"ignored {sum(mesh.unknown.values())} OBJ statements p3d does not read ({names}; "
-                        f"the first on line {mesh.first_unknown}); free-form curves and surfaces are not part "
-                        "of the mass properties")
-    if mesh.garbled:
-        number, words = mesh.first_garbled
-        many = mesh.garbled > 1
-        warnings.append(f"skipped {mesh.garbled} line{'s that are' if many else ' that is'} no OBJ "
+    if skipped.unknown:
+        names = ", ".join(sorted(skipped.unknown))
+        warnings.append(f"ignored {sum(skipped.unknown.values())} OBJ statements p3d does not read ({names}; "
+                        f"the first on line {skipped.first_unknown}); free-form curves and surfaces are not "
+                        "part of the mass properties")
+    if skipped.garbled:
+        assert skipped.first_garbled is not None
+        number, words = skipped.first_garbled
+        many = skipped.garbled > 1
+        warnings.append(f"skipped {skipped.garbled} line{'s that are' if many else ' that is'} no OBJ "
                         f"statement ({'the first is ' if many else ''}line {number}: {_text(words)!r})")
     return tuple(warnings)

@@ -5,9 +5,9 @@ per line, with no Python object per line: numpy classifies every line by its fir
 ``v`` and ``f`` lines are cut out as runs, a sentinel is put after each line and all numbers are
 parsed with one ``np.fromstring``; the sentinels give every line's count, so a malformed line
 is detected, never silently shifted into its neighbour. numpy's number reading is held to the
-grammar of ``p3d_cli.io.numbers`` (see there). Whenever the text is anything else, the answer
-is None and the careful parser in ``p3d_cli.io.obj`` reads the file and names the line: both
-accept the same inputs and give the same triangles.
+grammar of ``p3d_cli.io.numbers`` (see there). Whenever a chunk's text is anything else, the
+answer is None and the careful parser in ``p3d_cli.io.obj`` reads that chunk (and names the
+line of an error): both accept the same inputs and give the same triangles.
 
 The file is read in chunks of whole lines, so the peak memory is the arrays read (about 0.6
 times the text: float64 vertices, and int32 vertex indices while they fit, kept chunk by
@@ -17,7 +17,7 @@ chunk) plus one chunk's temporaries, not several copies of the file.
 from __future__ import annotations
 
 import re
-from typing import Iterable, Iterator
+from typing import Iterator
 
 import numpy as np
 
@@ -37,7 +37,7 @@ _ENDS = (32, 9, 10)
 _DIGITS_AND_SIGNS = b"0123456789+-"
 _NL, _SPACE = 10, 32
 #: A line continued on the next (the careful parser joins it, whitespace after the '\\' allowed).
-_CONTINUATION = re.compile(rb"\\[ \t\x0b\x0c]*\n")
+CONTINUATION = re.compile(rb"\\[ \t\x0b\x0c]*\n")
 
 
 def chunks_of(stream, size: int = CHUNK) -> Iterator[bytes]:
@@ -65,40 +65,28 @@ def _normalise(chunk: bytes) -> bytes:
     return chunk
 
 
-def parse_fast(chunks: Iterable[bytes]):
-    """``(vertices, faces)`` for a plain, well-formed file, else None (use the careful parser).
+def parse_chunk(data: bytes, defined: int):
+    """``(vertices, triangles, statements)`` of one chunk of whole lines, or None when some line
+    is not of the plain forms handled here (the careful parser then reads this chunk).
 
-    ``faces`` is a list of ``(k, 3)`` index arrays, one per chunk, in file order: they are not
-    joined (``p3d_cli.io.source.indexed_source`` reads them as one), so the largest array an
-    OBJ holds is never held twice.
+    Parameters
+    ----------
+    data : bytes
+        Whole lines (``chunks_of``), with no NUL byte and no ``\\`` continuation.
+    defined : int
+        Vertices defined before the chunk (relative indices count back from them).
+
+    Returns
+    -------
+    vertices : (v, 3) float64
+    triangles : (t, 3) int32 or int64
+        0-based vertex indices, not yet checked against the vertex count (a relative index
+        reaching before the first vertex comes out negative).
+    statements : int
+        Lines holding a statement (not blank, not only a comment), for the careful parser's
+        count of stray lines.
     """
-    vertex_blocks, face_blocks = [], []
-    defined = 0
-    for chunk in chunks:
-        if b"\0" in chunk or (b"\\" in chunk and _CONTINUATION.search(chunk)):
-            return None   # binary data, continuation lines: the careful parser's business
-        parsed = _chunk(chunk, defined)
-        if parsed is None:
-            return None
-        vertices, corners, sizes = parsed
-        defined += len(vertices)
-        vertex_blocks.append(vertices)
-        if len(sizes):
-            face_blocks.append(corners.reshape(-1, 3) if (sizes == 3).all() else fan_triangles(corners, sizes))
-        del parsed, vertices, corners, sizes
-    vertices = np.concatenate(vertex_blocks) if vertex_blocks else np.zeros((0, 3))
-    del vertex_blocks
-    for block in face_blocks:
-        if block.min() < 0 or block.max() >= len(vertices):
-            return None  # the careful parser names the line and the index
-    return vertices, face_blocks
-
-
-def _chunk(data: bytes, defined: int):
-    """``(vertices, corners as 0-based indices, sizes)`` of one chunk of whole lines, or None."""
     size = len(data)
-    if size == 0:
-        return np.zeros((0, 3)), np.zeros(0, dtype=np.int32), np.zeros(0, dtype=np.int64)
     array = np.frombuffer(data, dtype=np.uint8)
     breaks = np.flatnonzero(array == _NL)
     starts = np.concatenate(([0], breaks + 1))
@@ -114,12 +102,13 @@ def _chunk(data: bytes, defined: int):
     other = ~(is_vertex | is_face)
     if other.any() and not _ignorable(padded, starts[other], first[other], second[other]):
         return None
+    statements = len(starts) - int(np.count_nonzero(other & ((first == _NL) | (first == ord("#")))))
     vertices = _vertices(_cut(data, starts, stops, is_vertex), int(is_vertex.sum()))
     if vertices is None:
         return None
     face_count = int(is_face.sum())
     if not face_count:
-        return vertices, np.zeros(0, dtype=np.int32), np.zeros(0, dtype=np.int64)
+        return vertices, np.zeros((0, 3), dtype=np.int32), statements
     parsed = faces(_cut(data, starts, stops, is_face), face_count)
     if parsed is None:
         return None
@@ -129,9 +118,12 @@ def _chunk(data: bytes, defined: int):
     if (corners < 0).any():
         # Relative indices count back from the vertices defined before each face line.
         before = defined + np.repeat(np.cumsum(is_vertex)[is_face], sizes)
-        return vertices, _narrow(np.where(corners < 0, before + corners, corners - 1)), sizes
-    corners -= 1
-    return vertices, _narrow(corners), sizes
+        corners = np.where(corners < 0, before + corners, corners - 1)
+    else:
+        corners -= 1
+    corners = _narrow(corners)
+    # A chunk of triangles only (the usual file) needs no fan splitting.
+    return vertices, (corners.reshape(-1, 3) if (sizes == 3).all() else fan_triangles(corners, sizes)), statements
 
 
 def _narrow(corners: np.ndarray) -> np.ndarray:

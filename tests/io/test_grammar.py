@@ -199,6 +199,43 @@ def test_obj_fast_careful_and_reference_agree(text):
         np.testing.assert_array_equal(fast[1], careful[1])
 
 
+def outcome(read):
+    """``(vertices, faces, warnings)`` or the error line of a reading."""
+    try:
+        vertices, faces, warnings = read()
+    except FormatError as exc:
+        return str(exc)
+    return vertices, np.asarray(faces, dtype=np.int64).reshape(-1, 3), warnings
+
+
+@SETTINGS
+@given(obj_texts(), st.lists(st.sampled_from(["cstype bspline", "deg 3", "1/617/894", "  ", "\t# c", "f"]),
+                             max_size=3), st.integers(1, 40), st.randoms(use_true_random=False))
+def test_obj_chunks_read_by_either_parser_agree_with_the_careful_parser(text, odd, size, random):
+    """Cut into chunks of a few lines, each read by the fast path or, when it holds anything
+    else, by the careful parser: the same vertices, faces, warnings (line numbers in the file)
+    and errors as the careful parser reading the whole text."""
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    for line in odd:
+        lines.insert(random.randint(0, len(lines)), line)
+    data = "\n".join(lines).encode()
+
+    def mixed():
+        read = obj.read_chunks("t.obj", obj.chunks_of(obj._Bytes(data), size))
+        if read is None:   # continuation lines or an index out of range: the whole file, carefully
+            return obj._parse_lines("t.obj", data)
+        vertices, pieces, warnings, _ = read
+        return vertices, (np.concatenate(pieces) if pieces else np.zeros((0, 3))), warnings
+
+    expected, got = outcome(lambda: obj._parse_lines("t.obj", data)), outcome(mixed)
+    if isinstance(expected, str) or isinstance(got, str):
+        assert got == expected
+    else:
+        np.testing.assert_array_equal(got[0], expected[0])
+        np.testing.assert_array_equal(got[1], expected[1])
+        assert got[2] == expected[2]
+
+
 @pytest.mark.parametrize("form", ["{a}", "{a}/1", "{a}//1", "{a}/1/1", "{a}/1/", "{a}/-1/-1"])
 def test_obj_fast_path_is_taken_for_exporter_output(form):
     """Exporters write one corner form per file: each takes the fast path, with every size."""

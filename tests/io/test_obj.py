@@ -254,30 +254,78 @@ def test_real_obj_matches_reference(real_meshes, reference):
     check_reference(p3d.props(path).properties, reference[name])
 
 
-def test_a_file_of_many_chunks_reads_as_the_careful_parser_reads_it(tmp_path):
-    # More than obj_fast.CHUNK of text: faces (triangles, quads and relative indices) in many
-    # chunks, kept as per-chunk int32 pieces, give the careful parser's triangles, in order.
-    from p3d_cli.io.obj_fast import CHUNK, chunks_of, parse_fast
-
+def many_chunk_text(extra: dict[int, str] | None = None) -> str:
+    """More than two obj_fast.CHUNKs of text: 30,000 vertices, then 40,000 faces (triangles,
+    quads, relative indices); ``extra`` inserts lines before the given line indices."""
     rng = np.random.default_rng(11)
     v = rng.normal(size=(30_000, 3))
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
     for k in range(40_000):
         corners = rng.choice(30_000, size=3 + (k % 7 == 0), replace=False) + 1
         lines.append("f " + " ".join(str(c - 30_001) if k % 5 == 0 else str(c) for c in corners))
-    text = "\n".join(lines) + "\n"
+    for at, line in sorted((extra or {}).items(), reverse=True):
+        lines.insert(at, line)
+    return "\n".join(lines) + "\n"
+
+
+def careful_reading(path: str):
+    raw = open_input(path)
+    return obj.parse_lines(raw.where, [raw.read_all()])
+
+
+def test_a_file_of_many_chunks_reads_as_the_careful_parser_reads_it(tmp_path):
+    # Faces in many chunks, kept as per-chunk int32 pieces, give the careful parser's
+    # triangles, in order, and the mesh source reads the pieces as one.
+    from p3d_cli.io.obj_fast import CHUNK, chunks_of
+
+    text = many_chunk_text()
     assert len(text) > 2 * CHUNK
     path = write(tmp_path, text)
     with open(path, "rb") as stream:
-        vertices, pieces = parse_fast(chunks_of(stream))
+        vertices, pieces, warnings, careful = obj.read_chunks(path, chunks_of(stream))
+    assert careful == 0 and warnings == ()
     assert len(pieces) > 1 and all(piece.dtype == np.int32 for piece in pieces)
-    raw = open_input(path)
-    careful_vertices, careful_faces, _ = obj.parse_lines(raw.where, [raw.read_all()])
+    careful_vertices, careful_faces, _ = careful_reading(path)
     np.testing.assert_array_equal(vertices, careful_vertices)
     np.testing.assert_array_equal(np.concatenate(pieces), careful_faces)
     mesh = load_mesh(path)
     assert mesh.face_count == len(careful_faces)
     np.testing.assert_array_equal(mesh.triangles(), careful_vertices[careful_faces])
+
+
+def test_odd_lines_send_only_their_chunks_to_the_careful_parser(tmp_path):
+    # An unknown statement among the vertices and a stray corner line among the faces: two
+    # chunks read carefully, the rest fast; the same triangles and the same warnings (with the
+    # file's line numbers) as the careful parser reading the whole file.
+    from p3d_cli.io.obj_fast import chunks_of
+
+    text = many_chunk_text({20_000: "cstype bspline", 50_000: "1/617/894", 50_001: "deg 3"})
+    path = write(tmp_path, text)
+    with open(path, "rb") as stream:
+        vertices, pieces, warnings, careful = obj.read_chunks(path, chunks_of(stream))
+    assert careful == 2
+    careful_vertices, careful_faces, careful_warnings = careful_reading(path)
+    assert warnings == careful_warnings
+    assert "line 20001" in warnings[0] and "cstype, deg" in warnings[0]
+    assert "line 50002: '1/617/894'" in warnings[1]
+    np.testing.assert_array_equal(vertices, careful_vertices)
+    np.testing.assert_array_equal(np.concatenate(pieces), careful_faces)
+
+
+@pytest.mark.parametrize("bad, message", [("v 1 2 x", "line 45001: expected 'v X Y Z"),
+                                          ("f 1 2", "line 45001: a face needs at least 3 vertices")])
+def test_an_error_in_a_later_chunk_names_its_line_in_the_file(tmp_path, bad, message):
+    path = write(tmp_path, many_chunk_text({45_000: bad}))
+    with pytest.raises(FormatError) as info:
+        load_mesh(path)
+    assert message in str(info.value)
+
+
+def test_an_index_out_of_range_in_a_later_chunk_names_its_line(tmp_path):
+    path = write(tmp_path, many_chunk_text({60_000: "f 1 2 30001"}))
+    with pytest.raises(FormatError) as info:
+        load_mesh(path)
+    assert "line 60001" in info.value.where and "30001 is out of range" in str(info.value)
 
 
 @pytest.mark.parametrize("cuts", [[], [5], [1, 2, 3], [16383, 16384, 16385], [40000], [0, 0, 7, 50000]])
