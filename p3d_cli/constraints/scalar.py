@@ -153,9 +153,12 @@ class Joint:
         self.axial_a, self.axial_b = _axial(off_a), _axial(off_b)
         self._state: tuple = ()
 
-    def points(self, com, rot):
-        """``(r_a, r_b, gap)``: offsets of the attachment points from the centres of mass, world
-        frame, and ``p_b - p_a`` (``rows.RowSet.geometry``)."""
+    def points(self, com, rot) -> list[float]:
+        """``gap = p_b - p_a`` as a list (``rows.RowSet.geometry``), keeping ``(r_a, r_b)``, the
+        offsets of the attachment points from the centres of mass (world frame), as ``_state``.
+
+        The gap is a ball joint's errors, so that ``Ball.evaluate`` is this function (one call
+        less for the commonest joint: this runs for every constraint 3-6 times a step)."""
         # _point written out twice: this runs for every constraint 3-6 times a step. An offset
         # along one body axis (a link's end) takes that column of R only: the products with its
         # zero components are exact zeros, so the sums are the same numbers (up to the sign of a
@@ -186,7 +189,8 @@ class Joint:
             pb = (com[k] + rb[0], com[k + 1] + rb[1], com[k + 2] + rb[2])
         else:
             rb, pb = self.const_b
-        return ra, rb, (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        self._state = (ra, rb)
+        return [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]]
 
     def columns(self) -> list[tuple[int, int]]:
         """(row, column within a side's 6) of one side's ``entries``, in order."""
@@ -222,11 +226,7 @@ def _point(com, rot, i: int, off):
 class Ball(Joint):
     __slots__ = ()
     kind, rows = "ball", 3
-
-    def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
-        self._state = (ra, rb)
-        return list(gap)
+    evaluate = Joint.points
 
 
 class Bar(Joint):
@@ -235,7 +235,8 @@ class Bar(Joint):
     length: float
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
+        gap = self.points(com, rot)
+        ra, rb = self._state
         norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
         self._state = (ra, rb, gap, norm)
         return [norm - self.length]
@@ -300,7 +301,8 @@ class Hinge(Joint):
         return za, zb
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, (g0, g1, g2) = self.points(com, rot)
+        g0, g1, g2 = self.points(com, rot)
+        ra, rb = self._state
         (a0, a1, a2), (b0, b1, b2) = self._axes(rot)
         # rows.hinge_frames for one hinge: z the bisector of the world axes (zb flipped when it
         # points away; multiplying by s = 1 is exact, so it is skipped), x the world axis least

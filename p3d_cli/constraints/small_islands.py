@@ -156,7 +156,10 @@ class _Island:
         is the pseudo-inverse. Otherwise (a redundant island, which stays so: it is not tried
         again), the eigendecomposition decides.
         """
-        threshold = RANK_RTOL * max(float(system.diagonal().max()), 0.0)
+        # Python's max of the diagonal as a list is numpy's max (a third of the time) when the
+        # entries are finite; with a nan either gives a certificate that fails (the inverse is not
+        # finite then), and the eigendecomposition raises.
+        threshold = RANK_RTOL * max(max(system.diagonal().tolist()), 0.0)
         if not self.redundant:
             try:
                 inverse = _inverse(system)

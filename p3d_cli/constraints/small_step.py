@@ -67,6 +67,9 @@ class SmallStep:
         self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].rows == 1 else _Island)
                         (isl, joints, rs.offsets, self.inv_mass) for isl in world.islands]
         self.lam: list = [np.zeros(island.m) for island in self.islands]   # minus the last multipliers
+        # Moving bodies in no island (no joint to a free body): kicked on their own.
+        joined = {i for island in self.islands for i in island.bodies}
+        self.loose = [i for i in self.moving if i not in joined]
         for island in self.islands:
             island.errors(self.com, self.rot)
         inv_inertia = self._inv_inertia()
@@ -82,24 +85,22 @@ class SmallStep:
         return out
 
     # -- one step ---------------------------------------------------------------------------------
-    def kick(self, half_kick) -> None:
-        vel = self.vel
+    def drift(self, dt: float, half_kick) -> None:
+        """The step's first half kick, then ``World.drift``: centres by ``v dt``, orientations by
+        ``exp(ω dt)``, keeping ``I_world ω``. (One loop for the two, in the same order of
+        operations as two: each body's velocity is kicked before it moves the body.)"""
+        com, vel, omega, rot, quat, diagonal = self.com, self.vel, self.omega, self.rot, self.quat, self.diagonal
         g0, g1, g2 = half_kick
         for i in self.moving:
-            vel[3 * i] += g0
-            vel[3 * i + 1] += g1
-            vel[3 * i + 2] += g2
-
-    def drift(self, dt: float) -> None:
-        """``World.drift``: centres by ``v dt``, orientations by ``exp(ω dt)``, keeping ``I_world ω``."""
-        com, vel, omega, rot, quat, diagonal = self.com, self.vel, self.omega, self.rot, self.quat, self.diagonal
-        for i in self.moving:
             r, k = rot[i], 3 * i
-            w = (omega[k], omega[k + 1], omega[k + 2])
+            w0, w1, w2 = w = (omega[k], omega[k + 1], omega[k + 2])
+            vel[k] += g0
+            vel[k + 1] += g1
+            vel[k + 2] += g2
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
-            quat[i], turned = turn(quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
+            quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt)
             rot[i] = turned
             d = diagonal[i]
             if d is None:
@@ -157,19 +158,27 @@ class SmallStep:
                 omega[k + 2] -= d5 / dt
         return worst
 
-    def solve_velocities(self) -> None:
-        """``World.solve_velocities`` at the configuration of the last ``correct``; its
-        factorisation is kept as the next step's frozen system."""
+    def solve_velocities(self, half_kick) -> None:
+        """The step's second half kick, then ``World.solve_velocities`` at the configuration of
+        the last ``correct``; its factorisation is kept as the next step's frozen system. (An
+        island body's kick is added as its velocities are gathered: the same numbers.)"""
         inv_inertia = self._inv_inertia()
         vel, omega = self.vel, self.omega
+        g0, g1, g2 = half_kick
+        for i in self.loose:
+            vel[3 * i] += g0
+            vel[3 * i + 1] += g1
+            vel[3 * i + 2] += g2
         self.factors = []
         for n, island in enumerate(self.islands):
             factor = island.factorise(inv_inertia)
             self.factors.append(factor)
             u: list[float] = []
             for i in island.bodies:
-                u += vel[3 * i:3 * i + 3]
-                u += omega[3 * i:3 * i + 3]
+                k = 3 * i
+                v0, v1, v2 = vel[k] + g0, vel[k + 1] + g1, vel[k + 2] + g2
+                vel[k], vel[k + 1], vel[k + 2] = v0, v1, v2
+                u += (v0, v1, v2, omega[k], omega[k + 1], omega[k + 2])
             lam, change = factor.velocity(u)             # minus the multipliers and the motion
             self.lam[n] = lam
             chunks = iter(change)
