@@ -132,6 +132,37 @@ def turn(q, rx: float, ry: float, rz: float):
                           2 * (xz - wy) / n, 2 * (yz + wx) / n, (ww - xx - yy + zz) / n]
 
 
+def nudge(q, dx: float, dy: float, dz: float):
+    """``turn(q, -dx, -dy, -dz)`` to rounding, for the position correction's small turns (by
+    minus its motion ``d``), in two thirds of the work: ``(q', R(q'))``.
+
+    Below an angle of 1e-4 (``s = |d|² < 1e-8``) the series ``cos(θ/2) = 1 - s/8`` and
+    ``sin(θ/2)/θ = 1/2 - s/48`` leave out terms under ``s²/384 < 3e-19``, far below a float's
+    rounding, so no square root, sine or cosine is needed; ``q'`` is not renormalised (``|exp|``
+    is 1 to the same 3e-19, so ``|q'|`` is ``|q|`` to rounding, and the next drift's ``turn``
+    renormalises), and the matrix is the homogeneous form, a rotation whatever ``|q'|``.
+    A larger or non-finite turn is ``turn``'s.
+    """
+    s = dx * dx + dy * dy + dz * dz
+    if not s < 1e-8:
+        return turn(q, -dx, -dy, -dz)
+    c = 1.0 - 0.125 * s
+    f = s / 48.0 - 0.5          # minus sin(θ/2)/θ: the turn is by -d
+    px, py, pz = f * dx, f * dy, f * dz
+    qw, qx, qy, qz = q
+    w = c * qw - px * qx - py * qy - pz * qz
+    x = c * qx + px * qw + py * qz - pz * qy
+    y = c * qy - px * qz + py * qw + pz * qx
+    z = c * qz + px * qy - py * qx + pz * qw
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    one = 1.0 / (ww + xx + yy + zz)
+    two = one + one
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    return (w, x, y, z), [(ww + xx - yy - zz) * one, (xy - wz) * two, (xz + wy) * two,
+                          (xy + wz) * two, (ww - xx + yy - zz) * one, (yz - wx) * two,
+                          (xz - wy) * two, (yz + wx) * two, (ww - xx - yy + zz) * one]
+
+
 class Joint:
     """One constraint's constants and its per-configuration evaluation (a subclass per type).
 

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from p3d_cli.constraints.scalar import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal, make_joint,
-                                        turn)
+                                        nudge, turn)
 from p3d_cli.constraints.small_islands import _Island, _Single
 from p3d_cli.constraints.solver import ImpulseSolution
 
@@ -140,7 +140,7 @@ class SmallStep:
                     com[k + 2] -= d2
                     if d3 or d4 or d5:
                         # Rows through the centre of mass only (a bob on a bar) turn nothing.
-                        quat[i], rot[i] = turn(quat[i], -d3, -d4, -d5)
+                        quat[i], rot[i] = nudge(quat[i], d3, d4, d5)
         vel, omega = self.vel, self.omega
         for n, island in enumerate(islands):
             total = moved[n]

@@ -1,0 +1,124 @@
+"""The shortcuts of the small step that change numbers, but only by rounding.
+
+``scalar.nudge`` turns a body by the position correction's small angles with truncated series
+and without renormalising, and ``small_islands._Factor.correction`` applies the correction's
+gain ``W Jᵀ K`` without the refinement step. Each is held here to an oracle computed otherwise:
+the exact rotation in 50-digit decimal arithmetic, and the exact solve in fractions.
+"""
+
+from __future__ import annotations
+
+import decimal
+import math
+from fractions import Fraction
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+from test_constraint_solver import unit_quats
+
+from p3d_cli.constraints import scalar
+from p3d_cli.constraints.small_islands import _Factor
+
+D = decimal.Context(prec=50)
+
+
+def exact_turn(q, rx, ry, rz):
+    """``exp(θ/2) ⊗ q`` (θ = (rx, ry, rz)) and its rotation matrix, in 50-digit decimals from
+    the power series of cos and sin (not from ``math``), rounded to floats at the end."""
+    r = [D.create_decimal(float(v)) for v in (rx, ry, rz)]
+    s = D.add(D.add(D.multiply(r[0], r[0]), D.multiply(r[1], r[1])), D.multiply(r[2], r[2]))
+    h2 = D.divide(s, 4)                                   # (θ/2)²
+    cos = sin_over = D.create_decimal(0)
+    term_c, term_s = D.create_decimal(1), D.create_decimal("0.5")   # sin(h)/θ = (1/2) sin(h)/h
+    for k in range(12):
+        cos, sin_over = D.add(cos, term_c), D.add(sin_over, term_s)
+        term_c = D.divide(D.multiply(-term_c, h2), (2 * k + 1) * (2 * k + 2))
+        term_s = D.divide(D.multiply(-term_s, h2), (2 * k + 2) * (2 * k + 3))
+    pw, px, py, pz = cos, *(D.multiply(sin_over, v) for v in r)
+    qw, qx, qy, qz = (D.create_decimal(float(v)) for v in q)
+    w = pw * qw - px * qx - py * qy - pz * qz
+    x = pw * qx + px * qw + py * qz - pz * qy
+    y = pw * qy - px * qz + py * qw + pz * qx
+    z = pw * qz + px * qy - py * qx + pz * qw
+    n = w * w + x * x + y * y + z * z
+    matrix = [(w * w + x * x - y * y - z * z) / n, 2 * (x * y - w * z) / n, 2 * (x * z + w * y) / n,
+              2 * (x * y + w * z) / n, (w * w - x * x + y * y - z * z) / n, 2 * (y * z - w * x) / n,
+              2 * (x * z - w * y) / n, 2 * (y * z + w * x) / n, (w * w - x * x - y * y + z * z) / n]
+    return [float(v) for v in (w, x, y, z)], [float(v) for v in matrix]
+
+
+small_turns = st.tuples(*[st.floats(-1, 1)] * 3, st.sampled_from([0.0, 1e-16, 1e-12, 1e-9, 1e-7, 3e-6, 5.7e-5]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(unit_quats(), small_turns)
+def test_nudge_is_the_exact_turn_to_rounding(q, turn):
+    d = [turn[0] * turn[3], turn[1] * turn[3], turn[2] * turn[3]]
+    got_q, got_r = scalar.nudge(tuple(q), *d)
+    expect_q, expect_r = exact_turn(q, -d[0], -d[1], -d[2])
+    np.testing.assert_allclose(got_q, expect_q, rtol=0, atol=4e-16)
+    np.testing.assert_allclose(got_r, expect_r, rtol=0, atol=6e-16)
+    # And turn, which renormalises, to the same rounding.
+    np.testing.assert_allclose(got_q, scalar.turn(tuple(q), -d[0], -d[1], -d[2])[0], rtol=0, atol=4e-16)
+
+
+def test_nudge_takes_turn_for_large_or_non_finite_turns():
+    q = (0.5, 0.5, -0.5, 0.5)
+    for d in ((1e-4, 0.0, 0.0), (0.0, 0.3, -2.0), (math.inf, 0.0, 0.0)):
+        got, expect = scalar.nudge(q, *d), scalar.turn(q, -d[0], -d[1], -d[2])
+        assert str(got) == str(expect)              # str: nan == nan
+    assert all(math.isnan(v) for v in scalar.nudge(q, math.nan, 0.0, 0.0)[0])
+    # Just under the series' limit it is not turn's code, but the same numbers to rounding.
+    d = (0.99e-4 / math.sqrt(3),) * 3
+    np.testing.assert_allclose(scalar.nudge(q, *d)[0], exact_turn(q, *(-v for v in d))[0], rtol=0, atol=4e-16)
+
+
+def test_nudges_keep_a_quaternion_unit_to_rounding():
+    # Without renormalising: a step's few nudges (and many more) leave |q| at 1 to rounding.
+    rng = np.random.default_rng(3)
+    q = tuple(np.array([0.3, -0.1, 0.9, 0.2]) / np.linalg.norm([0.3, -0.1, 0.9, 0.2]))
+    for _ in range(1000):
+        q, r = scalar.nudge(q, *(rng.normal(size=3) * 1e-6).tolist())
+    assert abs(math.fsum(v * v for v in q) - 1.0) < 1e-13
+    m = np.array(r).reshape(3, 3)
+    np.testing.assert_allclose(m @ m.T, np.eye(3), rtol=0, atol=1e-15)
+
+
+def exact_solve(a, b):
+    """The solution of ``a x = b`` in exact fractions (Gauss-Jordan), as floats."""
+    n = len(b)
+    m = [[Fraction(float(v)) for v in row] + [Fraction(float(bi))] for row, bi in zip(a, b)]
+    for c in range(n):
+        p = next(r for r in range(c, n) if m[r][c] != 0)
+        m[c], m[p] = m[p], m[c]
+        for r in range(n):
+            if r != c and m[r][c] != 0:
+                f = m[r][c] / m[c][c]
+                m[r] = [x - f * y for x, y in zip(m[r], m[c])]
+    return [m[r][n] / m[r][r] for r in range(n)]
+
+
+def test_the_gain_correction_is_the_exact_correction_to_rounding():
+    # Islands of 6 rows on 4 bodies with weights over two decades and rows scaled over two
+    # more (condition numbers ~1e1-1e5). Without the refinement step the correction
+    # W Jᵀ A⁻¹ e is off by at most a few cond(A) ε of itself; on a correction of the drift's
+    # size (1e-6) that is under 1e-16, the rounding of a position of 1.
+    rng = np.random.default_rng(11)
+    conditions = []
+    for _ in range(20):
+        jac = rng.normal(size=(6, 24)) * (10.0 ** rng.uniform(-2, 0, size=6))[:, None]
+        wjt = np.diag(10.0 ** rng.uniform(-1, 1, size=24)) @ jac.T
+        system = jac @ wjt
+        factor = _Factor(jac, wjt, system, np.linalg.inv(system), 6)
+        errors = (rng.normal(size=6) * 1e-6).tolist()
+        lam = exact_solve(system, errors)
+        expect = np.array([float(sum(Fraction(float(w)) * x for w, x in zip(row, lam))) for row in wjt])
+        got = factor.correction(errors)
+        condition = float(np.linalg.cond(system))
+        conditions.append(condition)
+        assert np.abs(got - expect).max() <= 4 * condition * 2.2e-16 * np.abs(expect).max()
+        assert np.abs(got - expect).max() < 1e-16
+        # The velocity path's solve keeps its refinement: exact to rounding whatever cond(A).
+        exact = np.array([float(x) for x in lam])
+        np.testing.assert_allclose(factor.solve(np.array(errors)), exact, rtol=0, atol=1e-15 * np.abs(exact).max())
+    assert max(conditions) > 1e3          # the refinement would have had something to recover
