@@ -3,7 +3,7 @@
 For a scene of a few bodies, a numpy call (~1 µs of overhead on arrays of 3-20 numbers) costs
 more than the arithmetic it does: a quaternion update is ~50 float operations, ~2 µs in Python
 and ~15 µs as a dozen numpy calls. ``small_step`` therefore keeps a small scene's state as lists
-of floats and does everything per body and per constraint here, leaving numpy only the
+of floats and does everything per constraint here (per body in ``body_kernels``), leaving numpy only the
 island-sized linear algebra. The formulas are those of ``rotation``, ``rows`` and the constraint
 modules (``ball``, ``hinge``, ``bar``), in the same order of operations where that is cheap, so
 results agree with the array code to rounding (~1e-16 relative).
@@ -15,7 +15,13 @@ from __future__ import annotations
 
 import math
 
+from p3d_cli.constraints.body_kernels import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal,
+                                              nudge, turn)
 from p3d_cli.constraints.rows import bar_met_error
+
+#: The per-body kernels live in ``body_kernels``; these names are kept here for their callers.
+__all__ = ["Ball", "Bar", "Hinge", "Joint", "apply", "carry_spin", "carry_spin_diagonal", "conjugate",
+           "conjugate_diagonal", "cross", "make_joint", "nudge", "turn"]
 
 
 def apply(r, v) -> tuple[float, float, float]:
@@ -25,142 +31,8 @@ def apply(r, v) -> tuple[float, float, float]:
             r[6] * v0 + r[7] * v1 + r[8] * v2)
 
 
-def carry_spin(r, t, inertia, inv_inertia, w) -> tuple[float, float, float]:
-    """``T I⁻¹ Tᵀ (R I Rᵀ ω)``: the angular velocity that keeps the angular momentum
-    ``I_world ω`` through a turn from ``R`` to ``T`` (``World.drift``), as six matrix-vector
-    products written out (one call instead of six)."""
-    w0, w1, w2 = w
-    a0, a1, a2 = r[0] * w0 + r[3] * w1 + r[6] * w2, r[1] * w0 + r[4] * w1 + r[7] * w2, r[2] * w0 + r[5] * w1 + r[8] * w2
-    m = inertia
-    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
-    s0, s1, s2 = r[0] * b0 + r[1] * b1 + r[2] * b2, r[3] * b0 + r[4] * b1 + r[5] * b2, r[6] * b0 + r[7] * b1 + r[8] * b2
-    a0, a1, a2 = t[0] * s0 + t[3] * s1 + t[6] * s2, t[1] * s0 + t[4] * s1 + t[7] * s2, t[2] * s0 + t[5] * s1 + t[8] * s2
-    m = inv_inertia
-    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
-    return (t[0] * b0 + t[1] * b1 + t[2] * b2, t[3] * b0 + t[4] * b1 + t[5] * b2, t[6] * b0 + t[7] * b1 + t[8] * b2)
-
-
-def carry_spin_diagonal(r, t, d, e, w) -> tuple[float, float, float]:
-    """``carry_spin`` for a diagonal inertia ``diag(d)`` (inverse ``diag(e)``): the same numbers
-    (the general form's products with its zero entries add exact zeros), in 60% of the work."""
-    w0, w1, w2 = w
-    a0 = d[0] * (r[0] * w0 + r[3] * w1 + r[6] * w2)
-    a1 = d[1] * (r[1] * w0 + r[4] * w1 + r[7] * w2)
-    a2 = d[2] * (r[2] * w0 + r[5] * w1 + r[8] * w2)
-    s0, s1, s2 = r[0] * a0 + r[1] * a1 + r[2] * a2, r[3] * a0 + r[4] * a1 + r[5] * a2, r[6] * a0 + r[7] * a1 + r[8] * a2
-    a0 = e[0] * (t[0] * s0 + t[3] * s1 + t[6] * s2)
-    a1 = e[1] * (t[1] * s0 + t[4] * s1 + t[7] * s2)
-    a2 = e[2] * (t[2] * s0 + t[5] * s1 + t[8] * s2)
-    return (t[0] * a0 + t[1] * a1 + t[2] * a2, t[3] * a0 + t[4] * a1 + t[5] * a2, t[6] * a0 + t[7] * a1 + t[8] * a2)
-
-
-def conjugate_diagonal(r, e) -> list[float]:
-    """``conjugate(r, diag(e))``, the same numbers in half the work."""
-    a0, a1, a2 = r[0] * e[0], r[1] * e[1], r[2] * e[2]
-    b0, b1, b2 = r[3] * e[0], r[4] * e[1], r[5] * e[2]
-    c0, c1, c2 = r[6] * e[0], r[7] * e[1], r[8] * e[2]
-    xx = a0 * r[0] + a1 * r[1] + a2 * r[2]
-    xy = a0 * r[3] + a1 * r[4] + a2 * r[5]
-    xz = a0 * r[6] + a1 * r[7] + a2 * r[8]
-    yy = b0 * r[3] + b1 * r[4] + b2 * r[5]
-    yz = b0 * r[6] + b1 * r[7] + b2 * r[8]
-    zz = c0 * r[6] + c1 * r[7] + c2 * r[8]
-    return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
-
-
-def conjugate(r, m) -> list[float]:
-    """``R M Rᵀ`` for a symmetric ``M`` (a world inverse inertia), symmetric by construction."""
-    a = [r[0] * m[0] + r[1] * m[3] + r[2] * m[6], r[0] * m[1] + r[1] * m[4] + r[2] * m[7],
-         r[0] * m[2] + r[1] * m[5] + r[2] * m[8],
-         r[3] * m[0] + r[4] * m[3] + r[5] * m[6], r[3] * m[1] + r[4] * m[4] + r[5] * m[7],
-         r[3] * m[2] + r[4] * m[5] + r[5] * m[8],
-         r[6] * m[0] + r[7] * m[3] + r[8] * m[6], r[6] * m[1] + r[7] * m[4] + r[8] * m[7],
-         r[6] * m[2] + r[7] * m[5] + r[8] * m[8]]
-    xx = a[0] * r[0] + a[1] * r[1] + a[2] * r[2]
-    xy = a[0] * r[3] + a[1] * r[4] + a[2] * r[5]
-    xz = a[0] * r[6] + a[1] * r[7] + a[2] * r[8]
-    yy = a[3] * r[3] + a[4] * r[4] + a[5] * r[5]
-    yz = a[3] * r[6] + a[4] * r[7] + a[5] * r[8]
-    zz = a[6] * r[6] + a[7] * r[7] + a[8] * r[8]
-    return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
-
-
 def cross(a, b) -> tuple[float, float, float]:
     return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
-
-
-def turn(q, rx: float, ry: float, rz: float):
-    """``(q', R(q'))`` with ``q' = exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one
-    body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
-    (exact at quarter turns), the two always wanted together, in one call.
-
-    A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
-    reports: ``math.sin`` of an infinite angle would raise instead."""
-    angle = math.sqrt(rx * rx + ry * ry + rz * rz)
-    qw, qx, qy, qz = q
-    if angle >= 1e-8:
-        if angle == math.inf:
-            return (math.nan,) * 4, [math.nan] * 9
-        half = 0.5 * angle
-        factor = math.sin(half) / angle
-        pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
-        w = pw * qw - px * qx - py * qy - pz * qz
-        x = pw * qx + px * qw + py * qz - pz * qy
-        y = pw * qy - px * qz + py * qw + pz * qx
-        z = pw * qz + px * qy - py * qx + pz * qw
-    else:
-        # The small turns of the position correction: below 1e-8, cos(angle / 2) is 1 - (at
-        # most) 1.25e-17, which rounds to 1.0, and products with 1.0 are exact: the same numbers.
-        factor = 0.5 - angle * angle / 48.0
-        px, py, pz = factor * rx, factor * ry, factor * rz
-        w = qw - px * qx - py * qy - pz * qz
-        x = qx + px * qw + py * qz - pz * qy
-        y = qy - px * qz + py * qw + pz * qx
-        z = qz + px * qy - py * qx + pz * qw
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / norm, x / norm, y / norm, z / norm
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    n = ww + xx + yy + zz
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    # 2 a ± 2 b written 2 (a ± b): doubling is exact, so these are the same numbers in fewer
-    # operations; and a division by an n of exactly 1 (often, after the normalisation) is skipped.
-    if n == 1.0:
-        return (w, x, y, z), [ww + xx - yy - zz, 2 * (xy - wz), 2 * (xz + wy), 2 * (xy + wz), ww - xx + yy - zz,
-                              2 * (yz - wx), 2 * (xz - wy), 2 * (yz + wx), ww - xx - yy + zz]
-    return (w, x, y, z), [(ww + xx - yy - zz) / n, 2 * (xy - wz) / n, 2 * (xz + wy) / n,
-                          2 * (xy + wz) / n, (ww - xx + yy - zz) / n, 2 * (yz - wx) / n,
-                          2 * (xz - wy) / n, 2 * (yz + wx) / n, (ww - xx - yy + zz) / n]
-
-
-def nudge(q, dx: float, dy: float, dz: float):
-    """``turn(q, -dx, -dy, -dz)`` to rounding, for the position correction's small turns (by
-    minus its motion ``d``), in two thirds of the work: ``(q', R(q'))``.
-
-    Below an angle of 1e-4 (``s = |d|² < 1e-8``) the series ``cos(θ/2) = 1 - s/8`` and
-    ``sin(θ/2)/θ = 1/2 - s/48`` leave out terms under ``s²/384 < 3e-19``, far below a float's
-    rounding, so no square root, sine or cosine is needed; ``q'`` is not renormalised (``|exp|``
-    is 1 to the same 3e-19, so ``|q'|`` is ``|q|`` to rounding, and the next drift's ``turn``
-    renormalises), and the matrix is the homogeneous form, a rotation whatever ``|q'|``.
-    A larger or non-finite turn is ``turn``'s.
-    """
-    s = dx * dx + dy * dy + dz * dz
-    if not s < 1e-8:
-        return turn(q, -dx, -dy, -dz)
-    c = 1.0 - 0.125 * s
-    f = s / 48.0 - 0.5          # minus sin(θ/2)/θ: the turn is by -d
-    px, py, pz = f * dx, f * dy, f * dz
-    qw, qx, qy, qz = q
-    w = c * qw - px * qx - py * qy - pz * qz
-    x = c * qx + px * qw + py * qz - pz * qy
-    y = c * qy - px * qz + py * qw + pz * qx
-    z = c * qz + px * qy - py * qx + pz * qw
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    one = 1.0 / (ww + xx + yy + zz)
-    two = one + one
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return (w, x, y, z), [(ww + xx - yy - zz) * one, (xy - wz) * two, (xz + wy) * two,
-                          (xy + wz) * two, (ww - xx + yy - zz) * one, (yz - wx) * two,
-                          (xz - wy) * two, (yz + wx) * two, (ww - xx - yy + zz) * one]
 
 
 class Joint:

@@ -19,8 +19,9 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.scalar import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal, make_joint,
-                                        nudge, turn)
+from p3d_cli.constraints.body_kernels import (axis_of_revolution, carry_spin, carry_spin_axial, carry_spin_diagonal,
+                                              conjugate, conjugate_axial, conjugate_diagonal, nudge, turn)
+from p3d_cli.constraints.scalar import make_joint
 from p3d_cli.constraints.small_islands import _Island, _Single
 from p3d_cli.constraints.solver import ImpulseSolution
 
@@ -45,11 +46,14 @@ class SmallStep:
         self.inv_mass = world.inv_mass.tolist()
         self.inertia = world.inertia_body.reshape(-1, 9).tolist()
         self.inv_inertia_body = world.inv_inertia_body.reshape(-1, 9).tolist()
-        # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms.
+        # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms, and of
+        # those the bodies of revolution (two equal moments) the axial ones.
         self.diagonal: list = [None] * self.n
+        self.axial: list = [None] * self.n
         for i, (m, e) in enumerate(zip(self.inertia, self.inv_inertia_body)):
             if not any(m[j] or e[j] for j in (1, 2, 3, 5, 6, 7)):
                 self.diagonal[i] = ((m[0], m[4], m[8]), (e[0], e[4], e[8]))
+                self.axial[i] = axis_of_revolution(*self.diagonal[i])
         self.com, self.vel = world.com.ravel().tolist(), world.vel.ravel().tolist()
         self.omega = world.omega.ravel().tolist()
         self.quat = [tuple(q) for q in world.quat.tolist()]
@@ -79,9 +83,13 @@ class SmallStep:
         """World inverse inertia ``R I⁻¹ Rᵀ`` of every body (9 floats; None for bodies not moving)."""
         out: list = [None] * self.n
         for i in self.moving:
-            diagonal = self.diagonal[i]
-            out[i] = (conjugate(self.rot[i], self.inv_inertia_body[i]) if diagonal is None
-                      else conjugate_diagonal(self.rot[i], diagonal[1]))
+            axial, diagonal = self.axial[i], self.diagonal[i]
+            if axial is not None:
+                out[i] = conjugate_axial(self.rot[i], axial)
+            elif diagonal is not None:
+                out[i] = conjugate_diagonal(self.rot[i], diagonal[1])
+            else:
+                out[i] = conjugate(self.rot[i], self.inv_inertia_body[i])
         return out
 
     # -- one step ---------------------------------------------------------------------------------
@@ -89,7 +97,8 @@ class SmallStep:
         """The step's first half kick, then ``World.drift``: centres by ``v dt``, orientations by
         ``exp(ω dt)``, keeping ``I_world ω``. (One loop for the two, in the same order of
         operations as two: each body's velocity is kicked before it moves the body.)"""
-        com, vel, omega, rot, quat, diagonal = self.com, self.vel, self.omega, self.rot, self.quat, self.diagonal
+        com, vel, omega, rot, quat = self.com, self.vel, self.omega, self.rot, self.quat
+        diagonal, axial = self.diagonal, self.axial
         g0, g1, g2 = half_kick
         for i in self.moving:
             r, k = rot[i], 3 * i
@@ -102,11 +111,13 @@ class SmallStep:
             com[k + 2] += vel[k + 2] * dt
             quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt)
             rot[i] = turned
-            d = diagonal[i]
-            if d is None:
-                spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
-            else:
+            a, d = axial[i], diagonal[i]
+            if a is not None:
+                spin = carry_spin_axial(r, turned, a, w)
+            elif d is not None:
                 spin = carry_spin_diagonal(r, turned, d[0], d[1], w)
+            else:
+                spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
             omega[k], omega[k + 1], omega[k + 2] = spin
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:

@@ -1,9 +1,11 @@
 """The shortcuts of the small step that change numbers, but only by rounding.
 
 ``scalar.nudge`` turns a body by the position correction's small angles with truncated series
-and without renormalising, and ``small_islands._Factor.correction`` applies the correction's
-gain ``W Jᵀ K`` without the refinement step. Each is held here to an oracle computed otherwise:
-the exact rotation in 50-digit decimal arithmetic, and the exact solve in fractions.
+and without renormalising; ``small_islands._Factor.correction`` applies the correction's gain
+``W Jᵀ K`` without the refinement step; ``body_kernels``' axial forms take a body of revolution's
+inertia as ``d_a E + (d_j - d_a) z zᵀ``. Each is held here to an oracle computed otherwise: the
+exact rotation in 50-digit decimal arithmetic, the exact solve in fractions, numpy's matrix
+products.
 """
 
 from __future__ import annotations
@@ -16,8 +18,11 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import unit_quats
 
-from p3d_cli.constraints import scalar
+from p3d_cli.constraints import body_kernels, scalar
+from p3d_cli.constraints.rotation import quat_to_matrix
 from p3d_cli.constraints.small_islands import _Factor
+
+scalar_axis = body_kernels.axis_of_revolution
 
 D = decimal.Context(prec=50)
 
@@ -122,3 +127,36 @@ def test_the_gain_correction_is_the_exact_correction_to_rounding():
         exact = np.array([float(x) for x in lam])
         np.testing.assert_allclose(factor.solve(np.array(errors)), exact, rtol=0, atol=1e-15 * np.abs(exact).max())
     assert max(conditions) > 1e3          # the refinement would have had something to recover
+
+
+def flat(m):
+    return [float(v) for v in np.asarray(m).ravel()]
+
+
+@settings(max_examples=200, deadline=None)
+@given(unit_quats(), unit_quats(), st.sampled_from([0, 1, 2]), st.floats(1e-4, 1e2), st.floats(1e-4, 1e2),
+       st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3))
+def test_bodies_of_revolution_take_the_axial_forms_to_rounding(q1, q2, axis, across, along, w):
+    moments = [across] * 3
+    moments[axis] = along
+    inverse = [1.0 / m for m in moments]
+    axial = scalar_axis(moments, inverse)
+    assert axial == (axis if across != along else 2, across, along, 1.0 / across, 1.0 / along)
+    r, t = quat_to_matrix(np.array(q1)), quat_to_matrix(np.array(q2))
+    # Oracle: the matrix products in numpy, R I Rᵀ ω carried to T I⁻¹ Tᵀ.
+    momentum = r @ np.diag(moments) @ r.T @ np.array(w)
+    expect = t @ np.diag(inverse) @ t.T @ momentum
+    got = body_kernels.carry_spin_axial(flat(r), flat(t), axial, tuple(w))
+    np.testing.assert_allclose(got, expect, rtol=0, atol=1e-15 * max(moments) * max(inverse) * (1 + np.abs(w).max()))
+    world_inv = r @ np.diag(inverse) @ r.T
+    got_inv = body_kernels.conjugate_axial(flat(r), axial)
+    np.testing.assert_allclose(got_inv, world_inv.ravel(), rtol=0, atol=1e-15 * max(inverse))
+    assert got_inv[1] == got_inv[3] and got_inv[2] == got_inv[6] and got_inv[5] == got_inv[7]
+
+
+def test_only_two_equal_moments_make_a_body_of_revolution():
+    assert scalar_axis((1.0, 2.0, 3.0), (1.0, 0.5, 1 / 3)) is None
+    assert scalar_axis((2.0, 1.0, 2.0), (0.5, 1.0, 0.5))[0] == 1
+    assert scalar_axis((1.0, 2.0, 2.0), (1.0, 0.5, 0.5))[0] == 0
+    # Equal moments whose inverses differ (cannot happen for 1/x, but the test is on both).
+    assert scalar_axis((1.0, 1.0, 3.0), (1.0, 0.9, 1 / 3)) is None
