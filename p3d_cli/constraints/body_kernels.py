@@ -53,27 +53,29 @@ def axis_of_revolution(d, e):
     return None
 
 
-def carry_spin_axial(r, t, axial, w) -> tuple[float, float, float]:
-    """``carry_spin`` for a body of revolution (``axis_of_revolution``): with ``z`` its axis (the
-    ``j``-th column of ``R``), ``R I Rᵀ = d_a E + (d_j - d_a) z zᵀ``, so the angular momentum
-    is ``d_a ω + (d_j - d_a)(z·ω) z`` and the new ``ω`` the same with ``T``'s axis and ``e``:
-    the same numbers to rounding (the two forms agree for any orthogonal ``R``; ``R`` is
-    orthogonal to rounding) in 60% of ``carry_spin_diagonal``'s time."""
-    j, da, dj, ea, ej = axial
+def carry_spin_axial(z, t, axial, w) -> tuple[float, float, float]:
+    """``carry_spin`` for a body of revolution (``axis_of_revolution``), from its axis before
+    (``z``, the ``j``-th column of ``R``) and after the turn (``t``): ``R I Rᵀ = d_a E +
+    (d_j - d_a) z zᵀ``, so the angular momentum is ``d_a ω + (d_j - d_a)(z·ω) z`` and the new
+    ``ω`` the same with ``t`` and ``e``: the same numbers to rounding (the two forms agree for
+    any orthogonal ``R``; ``R`` is orthogonal to rounding) in 60% of ``carry_spin_diagonal``'s
+    time."""
+    _, da, dj, ea, ej = axial
     w0, w1, w2 = w
-    z0, z1, z2 = r[j], r[j + 3], r[j + 6]
+    z0, z1, z2 = z
     s = (dj - da) * (z0 * w0 + z1 * w1 + z2 * w2)
     l0, l1, l2 = da * w0 + s * z0, da * w1 + s * z1, da * w2 + s * z2
-    z0, z1, z2 = t[j], t[j + 3], t[j + 6]
+    z0, z1, z2 = t
     s = (ej - ea) * (z0 * l0 + z1 * l1 + z2 * l2)
     return ea * l0 + s * z0, ea * l1 + s * z1, ea * l2 + s * z2
 
 
-def conjugate_axial(r, axial) -> list[float]:
-    """``conjugate(r, diag(e))`` for a body of revolution: ``e_a E + (e_j - e_a) z zᵀ`` (see
-    ``carry_spin_axial``), symmetric by construction, in half ``conjugate_diagonal``'s time."""
-    j, _, _, ea, ej = axial
-    z0, z1, z2 = r[j], r[j + 3], r[j + 6]
+def conjugate_axial(z, axial) -> list[float]:
+    """``conjugate(r, diag(e))`` for a body of revolution of axis ``z``: ``e_a E + (e_j - e_a)
+    z zᵀ`` (see ``carry_spin_axial``), symmetric by construction, in half
+    ``conjugate_diagonal``'s time."""
+    _, _, _, ea, ej = axial
+    z0, z1, z2 = z
     c = ej - ea
     a0, a1, a2 = c * z0, c * z1, c * z2
     xy, xz, yz = a0 * z1, a0 * z2, a1 * z2
@@ -111,10 +113,11 @@ def conjugate(r, m) -> list[float]:
     return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
 
 
-def turn(q, rx: float, ry: float, rz: float):
+def turn(q, rx: float, ry: float, rz: float, column: int | None = None):
     """``(q', R(q'))`` with ``q' = exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one
     body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
-    (exact at quarter turns), the two always wanted together, in one call.
+    (exact at quarter turns), the two always wanted together, in one call. With ``column``,
+    only that column of ``R`` (3 floats; the same numbers), for a body nothing reads more of.
 
     A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
     reports: ``math.sin`` of an infinite angle would raise instead."""
@@ -122,7 +125,7 @@ def turn(q, rx: float, ry: float, rz: float):
     qw, qx, qy, qz = q
     if angle >= 1e-8:
         if angle == math.inf:
-            return (math.nan,) * 4, [math.nan] * 9
+            return (math.nan,) * 4, [math.nan] * (9 if column is None else 3)
         half = 0.5 * angle
         factor = math.sin(half) / angle
         pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
@@ -143,6 +146,15 @@ def turn(q, rx: float, ry: float, rz: float):
     w, x, y, z = w / norm, x / norm, y / norm, z / norm
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
     n = ww + xx + yy + zz
+    if column is not None:
+        # The column's expressions of the matrix below (written out: a call costs as much).
+        if column == 2:
+            c0, c1, c2 = 2 * (x * z + w * y), 2 * (y * z - w * x), ww - xx - yy + zz
+        elif column == 0:
+            c0, c1, c2 = ww + xx - yy - zz, 2 * (x * y + w * z), 2 * (x * z - w * y)
+        else:
+            c0, c1, c2 = 2 * (x * y - w * z), ww - xx + yy - zz, 2 * (y * z + w * x)
+        return (w, x, y, z), [c0, c1, c2] if n == 1.0 else [c0 / n, c1 / n, c2 / n]
     xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
     # 2 a ± 2 b written 2 (a ± b): doubling is exact, so these are the same numbers in fewer
     # operations; and a division by an n of exactly 1 (often, after the normalisation) is skipped.
@@ -154,7 +166,7 @@ def turn(q, rx: float, ry: float, rz: float):
                           2 * (xz - wy) / n, 2 * (yz + wx) / n, (ww - xx - yy + zz) / n]
 
 
-def nudge(q, dx: float, dy: float, dz: float):
+def nudge(q, dx: float, dy: float, dz: float, column: int | None = None):
     """``turn(q, -dx, -dy, -dz)`` to rounding, for the position correction's small turns (by
     minus its motion ``d``), in two thirds of the work: ``(q', R(q'))``.
 
@@ -163,11 +175,11 @@ def nudge(q, dx: float, dy: float, dz: float):
     rounding, so no square root, sine or cosine is needed; ``q'`` is not renormalised (``|exp|``
     is 1 to the same 3e-19, so ``|q'|`` is ``|q|`` to rounding, and the next drift's ``turn``
     renormalises), and the matrix is the homogeneous form, a rotation whatever ``|q'|``.
-    A larger or non-finite turn is ``turn``'s.
+    A larger or non-finite turn is ``turn``'s. ``column`` as for ``turn``.
     """
     s = dx * dx + dy * dy + dz * dz
     if not s < 1e-8:
-        return turn(q, -dx, -dy, -dz)
+        return turn(q, -dx, -dy, -dz, column)
     c = 1.0 - 0.125 * s
     f = s / 48.0 - 0.5          # minus sin(θ/2)/θ: the turn is by -d
     px, py, pz = f * dx, f * dy, f * dz
@@ -178,6 +190,14 @@ def nudge(q, dx: float, dy: float, dz: float):
     z = c * qz + px * qy - py * qx + pz * qw
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
     one = 1.0 / (ww + xx + yy + zz)
+    if column is not None:
+        # The column's expressions of the matrix below, as in turn.
+        two = one + one
+        if column == 2:
+            return (w, x, y, z), [(x * z + w * y) * two, (y * z - w * x) * two, (ww - xx - yy + zz) * one]
+        if column == 0:
+            return (w, x, y, z), [(ww + xx - yy - zz) * one, (x * y + w * z) * two, (x * z - w * y) * two]
+        return (w, x, y, z), [(x * y - w * z) * two, (ww - xx + yy - zz) * one, (y * z + w * x) * two]
     two = one + one
     xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
     return (w, x, y, z), [(ww + xx - yy - zz) * one, (xy - wz) * two, (xz + wy) * two,

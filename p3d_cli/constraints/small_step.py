@@ -21,7 +21,7 @@ import numpy as np
 
 from p3d_cli.constraints.body_kernels import (axis_of_revolution, carry_spin, carry_spin_axial, carry_spin_diagonal,
                                               conjugate, conjugate_axial, conjugate_diagonal, nudge, turn)
-from p3d_cli.constraints.scalar import make_joint
+from p3d_cli.constraints.scalar import Hinge, make_joint
 from p3d_cli.constraints.small_islands import _Island, _Single
 from p3d_cli.constraints.solver import ImpulseSolution
 
@@ -78,6 +78,12 @@ class SmallStep:
             island.errors(self.com, self.rot)
         inv_inertia = self._inv_inertia()
         self.factors = [island.factorise(inv_inertia) for island in self.islands]
+        self.column = _axis_columns(self.n, self.axial, joints)
+        for i, j in enumerate(self.column):
+            if j is not None:
+                # Only this column is kept up to date from now on: nan in the others makes a
+                # read of them (a bug) show, as a non-finite result, instead of a stale number.
+                self.rot[i] = [self.rot[i][c] if c % 3 == j else math.nan for c in range(9)]
 
     def _inv_inertia(self) -> list:
         """World inverse inertia ``R I⁻¹ Rᵀ`` of every body (9 floats; None for bodies not moving)."""
@@ -85,7 +91,7 @@ class SmallStep:
         for i in self.moving:
             axial, diagonal = self.axial[i], self.diagonal[i]
             if axial is not None:
-                out[i] = conjugate_axial(self.rot[i], axial)
+                out[i] = conjugate_axial(self.rot[i][axial[0]::3], axial)
             elif diagonal is not None:
                 out[i] = conjugate_diagonal(self.rot[i], diagonal[1])
             else:
@@ -98,7 +104,7 @@ class SmallStep:
         ``exp(ω dt)``, keeping ``I_world ω``. (One loop for the two, in the same order of
         operations as two: each body's velocity is kicked before it moves the body.)"""
         com, vel, omega, rot, quat = self.com, self.vel, self.omega, self.rot, self.quat
-        diagonal, axial = self.diagonal, self.axial
+        diagonal, axial, column = self.diagonal, self.axial, self.column
         g0, g1, g2 = half_kick
         for i in self.moving:
             r, k = rot[i], 3 * i
@@ -109,11 +115,18 @@ class SmallStep:
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
+            a, d, j = axial[i], diagonal[i], column[i]
+            if j is not None:
+                # A body of revolution read along its axis only: that column of R, turned.
+                axis = r[j::3]
+                quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt, j)
+                r[j], r[j + 3], r[j + 6] = turned
+                omega[k], omega[k + 1], omega[k + 2] = carry_spin_axial(axis, turned, a, w)
+                continue
             quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt)
             rot[i] = turned
-            a, d = axial[i], diagonal[i]
             if a is not None:
-                spin = carry_spin_axial(r, turned, a, w)
+                spin = carry_spin_axial(r[a[0]::3], turned[a[0]::3], a, w)
             elif d is not None:
                 spin = carry_spin_diagonal(r, turned, d[0], d[1], w)
             else:
@@ -124,6 +137,7 @@ class SmallStep:
         """``World.correct_positions`` along the frozen system of the step's start, crediting
         the displacement to the velocities (``/ dt``); returns the largest remaining error."""
         com, rot, quat, islands, factors = self.com, self.rot, self.quat, self.islands, self.factors
+        column = self.column
         # Minus each island's motion so far: an array (or a _Single's tuple), summed in the order
         # the per-body totals were, so the same numbers.
         moved: list = [None] * len(islands)
@@ -151,7 +165,12 @@ class SmallStep:
                     com[k + 2] -= d2
                     if d3 or d4 or d5:
                         # Rows through the centre of mass only (a bob on a bar) turn nothing.
-                        quat[i], rot[i] = nudge(quat[i], d3, d4, d5)
+                        j = column[i]
+                        if j is None:
+                            quat[i], rot[i] = nudge(quat[i], d3, d4, d5)
+                        else:
+                            r = rot[i]
+                            quat[i], (r[j], r[j + 3], r[j + 6]) = nudge(quat[i], d3, d4, d5, j)
         vel, omega = self.vel, self.omega
         for n, island in enumerate(islands):
             total = moved[n]
@@ -224,3 +243,22 @@ class SmallStep:
             lam[island.rows] = -part
         return ImpulseSolution(lam, self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
                                ranks)
+
+
+def _axis_columns(n: int, axial, joints) -> list:
+    """For each body, the column ``j`` of its rotation matrix that is all the step reads of it
+    (its inertia's axis of revolution, and every joint on it attached on, and hinged about,
+    that body axis: a chain's link, a rod), or None (the whole matrix is kept)."""
+    read: list = [set() for _ in range(n)]
+    for joint in joints:
+        sides = [(joint.a, joint.free_a, joint.axial_a), (joint.b, joint.free_b, joint.axial_b)]
+        if isinstance(joint, Hinge):          # and the hinge's axis on each side
+            sides += [(joint.a, joint.free_a, joint.along_a), (joint.b, joint.free_b, joint.along_b)]
+        for body, free, along in sides:
+            if free:
+                read[body].add(None if along is None else along[0])
+    out: list = [None] * n
+    for i, a in enumerate(axial):
+        if a is not None and read[i] == {a[0]}:
+            out[i] = a[0]
+    return out

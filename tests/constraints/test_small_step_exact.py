@@ -116,3 +116,16 @@ def test_the_both_sides_axial_path_gives_the_general_numbers(qa, qb, off_a, off_
             assert fast.entries() == slow.entries()
         fixed = scalar.make_joint(kind, 0, 1, oa, ob, False, True, com, rot, "here", axes, 0.3)
         assert fixed._both_axial is None
+
+
+@settings(max_examples=300, deadline=None)
+@given(unit_quats(), turn_vectors, st.integers(0, 2))
+def test_a_turned_column_is_that_column_of_the_matrix_bit_for_bit(q, v, j):
+    # turn and nudge with column=j: the same quaternion and the j-th column of the full matrix.
+    rx, ry, rz = v[0] * v[3], v[1] * v[3], v[2] * v[3]
+    for kernel in (scalar.turn, scalar.nudge):
+        full_q, full_r = kernel(tuple(q), rx, ry, rz)
+        got_q, got_c = kernel(tuple(q), rx, ry, rz, j)
+        assert got_q == full_q and got_c == full_r[j::3]
+    nan_q, nan_c = scalar.turn(tuple(q), math.inf, 0.0, 0.0, j)
+    assert len(nan_c) == 3 and all(math.isnan(c) for c in nan_c)

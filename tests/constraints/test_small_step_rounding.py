@@ -15,10 +15,13 @@ import math
 from fractions import Fraction
 
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import unit_quats
+from test_small_step import assert_same, both_paths
 
-from p3d_cli.constraints import body_kernels, scalar
+from p3d_cli.constraints import body_kernels, parse_scene, scalar, small_step
+from p3d_cli.constraints.scalar import make_joint
 from p3d_cli.constraints.rotation import quat_to_matrix
 from p3d_cli.constraints.small_islands import _Factor
 
@@ -146,10 +149,10 @@ def test_bodies_of_revolution_take_the_axial_forms_to_rounding(q1, q2, axis, acr
     # Oracle: the matrix products in numpy, R I Rᵀ ω carried to T I⁻¹ Tᵀ.
     momentum = r @ np.diag(moments) @ r.T @ np.array(w)
     expect = t @ np.diag(inverse) @ t.T @ momentum
-    got = body_kernels.carry_spin_axial(flat(r), flat(t), axial, tuple(w))
+    got = body_kernels.carry_spin_axial(r[:, axial[0]].tolist(), t[:, axial[0]].tolist(), axial, tuple(w))
     np.testing.assert_allclose(got, expect, rtol=0, atol=1e-15 * max(moments) * max(inverse) * (1 + np.abs(w).max()))
     world_inv = r @ np.diag(inverse) @ r.T
-    got_inv = body_kernels.conjugate_axial(flat(r), axial)
+    got_inv = body_kernels.conjugate_axial(r[:, axial[0]].tolist(), axial)
     np.testing.assert_allclose(got_inv, world_inv.ravel(), rtol=0, atol=1e-15 * max(inverse))
     assert got_inv[1] == got_inv[3] and got_inv[2] == got_inv[6] and got_inv[5] == got_inv[7]
 
@@ -160,3 +163,88 @@ def test_only_two_equal_moments_make_a_body_of_revolution():
     assert scalar_axis((1.0, 2.0, 2.0), (1.0, 0.5, 0.5))[0] == 0
     # Equal moments whose inverses differ (cannot happen for 1/x, but the test is on both).
     assert scalar_axis((1.0, 1.0, 3.0), (1.0, 0.9, 1 / 3)) is None
+
+
+# -- bodies read along one axis only (small_step._axis_columns) -----------------------------------
+ROD_TURN = {0: {"axis": [0, 1, 0], "degrees": -90}, 1: {"axis": [1, 0, 0], "degrees": 90},
+            2: {"axis": [0, 0, 1], "degrees": 0}}
+
+
+@st.composite
+def rod_chains(draw):
+    """A chain of rods (bodies of revolution about body axis ``j``) hanging from an anchor,
+    joined end to end on their axes by balls or hinges (about the rods' axis, or across it),
+    with random velocities; ``off_axis`` moves one joint off the axis (no body is then read
+    along one column only, on that joint's bodies)."""
+    j = draw(st.integers(0, 2))
+    n = draw(st.integers(1, 4))
+    half = draw(st.floats(0.05, 0.5))
+    unit = [0.0, 0.0, 0.0]
+    unit[j] = half
+    bodies: dict = {"anchor": {"fixed": True}}
+    constraints = []
+    for i in range(1, n + 1):
+        across = draw(st.floats(0.1, 2.0))
+        along = across * draw(st.floats(0.05, 1.9))       # a solid's: along <= 2 across
+        moments = [across] * 3
+        moments[j] = along
+        bodies[f"rod{i}"] = {"mass": draw(st.floats(0.2, 3.0)), "inertia": moments,
+                             "position": [0.0, 0.0, -half * (2 * i - 1)], "rotation": ROD_TURN[j],
+                             "velocity": draw(st.lists(st.floats(-2, 2), min_size=3, max_size=3)),
+                             "angular_velocity": draw(st.lists(st.floats(-5, 5), min_size=3, max_size=3))}
+        a = "anchor" if i == 1 else f"rod{i - 1}"
+        entry = {"type": draw(st.sampled_from(["ball", "hinge"])), "a": a, "b": f"rod{i}",
+                 "attach_a": [0.0, 0.0, 0.0] if i == 1 else [-x for x in unit], "attach_b": list(unit)}
+        if entry["type"] == "hinge":
+            entry["axis_a"] = [0.0, 0.0, 1.0] if i == 1 else list(draw(st.sampled_from([unit, [half, half, 0.0]])))
+            entry.pop("attach_b")         # the same world point
+        constraints.append(entry)
+    off_axis = draw(st.booleans())
+    if off_axis:
+        constraints[-1]["attach_a"] = [0.01, 0.02, 0.0] if n == 1 else [0.01 - x for x in unit]
+    on_axis = not off_axis and all(c.get("axis_a", unit) in (unit, [0.0, 0.0, 1.0]) for c in constraints)
+    return {"gravity": [0, 0, -9.81], "bodies": bodies, "constraints": constraints}, j, on_axis
+
+
+@settings(max_examples=40, deadline=None)
+@given(rod_chains())
+def test_rods_read_along_their_axis_step_as_the_array_path(chain):
+    data, j, on_axis = chain
+    seen = []
+    real = small_step._axis_columns
+
+    def spy(*args):
+        seen.append(real(*args))
+        return seen[-1]
+
+    scene = parse_scene(data, "scene.yaml", ".")
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(small_step, "_axis_columns", spy)
+        fast, slow, taken = both_paths(scene, steps=20, dt=1e-3)
+    assert taken and seen
+    # Every rod whose joints are all on its axis (and whose hinges turn about it, or across it:
+    # then not) is kept as that one column.
+    columns = seen[0]
+    assert columns[0] is None                     # the anchor
+    assert all(c in (None, j) for c in columns)
+    if on_axis:
+        assert columns[1:] == [j] * (len(columns) - 1)
+    scale = 1.0 + max(max(float(np.abs(b.velocity).max()), float(np.abs(b.angular_velocity).max()))
+                      for b in slow.bodies)
+    assert_same(fast, slow, 1e-11 * scale, 1e-8 * scale)
+
+
+def test_a_chain_of_rods_is_read_along_one_column():
+    rot = [[1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0]] * 3
+    com = [0.0] * 9
+    axial = [None, (2, 1.0, 0.1, 1.0, 10.0), (2, 1.0, 0.1, 1.0, 10.0)]
+    on_axis = [make_joint("ball", 0, 1, [0.0] * 3, [0, 0, 0.1], False, True, com, rot, ""),
+               make_joint("hinge", 1, 2, [0, 0, -0.1], [0, 0, 0.1], True, True, com, rot, "",
+                          ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]))]
+    assert small_step._axis_columns(3, axial, on_axis) == [None, 2, 2]
+    across = on_axis[:1] + [make_joint("hinge", 1, 2, [0, 0, -0.1], [0, 0, 0.1], True, True, com, rot, "",
+                                       ([1.0, 0.0, 0.0], [1.0, 0.0, 0.0]))]
+    assert small_step._axis_columns(3, axial, across) == [None, None, None]
+    off = on_axis[:1] + [make_joint("ball", 1, 2, [0.1, 0, -0.1], [0, 0, 0.1], True, True, com, rot, "")]
+    assert small_step._axis_columns(3, axial, off) == [None, None, 2]
+    assert small_step._axis_columns(3, [None, None, axial[2]], on_axis) == [None, None, 2]
