@@ -115,17 +115,23 @@ class Joint:
 
     def columns(self) -> list[tuple[int, int]]:
         """(row, column within a side's 6) of one side's ``entries``, in order."""
-        return [(i, 3 + j) for i in range(3) for j in range(3)]
+        return list(SKEW)
 
     def entries(self) -> list[float]:
         """The entries of its rows that depend on the pose, side a's then side b's (free sides
-        only), in the order ``small_step`` scatters them (the ``±E`` entries are constant).
+        only), in the order ``small_step`` scatters them (the ``±E`` entries, and the zero
+        diagonal of the cross-product matrices, are constant and written once).
         Ball rows (a hinge's first three): ``[-E, [r_a]ₓ]`` and ``[E, -[r_b]ₓ]``."""
         ra, rb = self._state[0], self._state[1]
-        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0] if self.free_a else []
+        out = [-ra[2], ra[1], ra[2], -ra[0], -ra[1], ra[0]] if self.free_a else []
         if self.free_b:
-            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0]
+            out += [rb[2], -rb[1], -rb[2], rb[0], rb[1], -rb[0]]
         return out
+
+
+#: (row, column) of the off-diagonal entries of a cross-product matrix ``[r]ₓ`` in a side's 6
+#: columns of a ball row, in ``Joint.entries``' order.
+SKEW = ((0, 4), (0, 5), (1, 3), (1, 5), (2, 3), (2, 4))
 
 
 def _axial(off):
@@ -254,10 +260,10 @@ class Hinge(Joint):
     def entries(self) -> list[float]:
         """The ball rows, then the axis rows ``[0, -x], [0, -y]`` and ``[0, x], [0, y]``."""
         ra, rb, x, y = self._state
-        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0,
+        out = [-ra[2], ra[1], ra[2], -ra[0], -ra[1], ra[0],
                -x[0], -x[1], -x[2], -y[0], -y[1], -y[2]] if self.free_a else []
         if self.free_b:
-            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0, *x, *y]
+            out += [rb[2], -rb[1], -rb[2], rb[0], rb[1], -rb[0], *x, *y]
         return out
 
 

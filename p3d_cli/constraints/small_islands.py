@@ -92,7 +92,7 @@ class _Factor:
     def velocity(self, u: list):
         """``(-λ, -W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
         island is factorised again: the next step's correction needs the gain only)."""
-        lam = self.solve(self.jac.dot(np.array(u)))
+        lam = self.solve(self.jac.dot(u))            # dot converts the list as np.array would
         return lam, self.wjt.dot(lam).tolist()
 
 
