@@ -4,10 +4,18 @@
 which is what a large scene needs; but a scene of a few bodies then pays ~1-2 µs of call
 overhead for arrays of 3-20 numbers, about 150 calls a step. Here the per-body and
 per-constraint work (drift, quaternions, the constraints' errors and the variable entries of
-their rows) is plain float arithmetic (``scalar``), and numpy does only what grows with the
-square of an island's rows: its dense system ``J W Jᵀ``, factorised once per step, and the
-products with it. The step is the one of ``simulation`` (docs/solve.md, "Stepping"), operation
-for operation; only the order of some sums differs, so trajectories agree to rounding.
+their rows) is plain float arithmetic (``scalar``, ``body_kernels``), and numpy does only what
+grows with the square of an island's rows (``small_islands``): its dense system ``J W Jᵀ``,
+factorised once per step, and the products with it. The step is the one of ``simulation``
+(docs/solve.md, "Stepping"), with the same position-correction iterates: some sums are taken
+in another order, and a few formulas are cheaper ones equal to rounding (the correction's
+unrefined gain, its small turns by series, bodies of revolution's inertia along their axis),
+so trajectories agree to rounding.
+
+Rounding matters in one way: a step whose last correction error lands within a few units in
+the last place of the ``1e-12`` tolerance may take one correction more or less than the old
+code did (a ~1e-12 difference in positions, a few 1e-12 in velocities once credited ``/ dt``
+and projected); the recorded chain has two such steps (docs/solve.md, "Stepping").
 
 Used for scenes whose islands are all dense and small (``fits``); the cost per step still grows
 linearly with the number of bodies and constraints, and larger scenes take ``World``'s path.
