@@ -173,7 +173,7 @@ ROD_TURN = {0: {"axis": [0, 1, 0], "degrees": -90}, 1: {"axis": [1, 0, 0], "degr
 @st.composite
 def rod_chains(draw):
     """A chain of rods (bodies of revolution about body axis ``j``) hanging from an anchor,
-    joined end to end on their axes by balls or hinges (about the rods' axis, or across it),
+    joined on their axes by balls, bars or hinges (about the rods' axis, or across it),
     with random velocities; ``off_axis`` moves one joint off the axis (no body is then read
     along one column only, on that joint's bodies)."""
     j = draw(st.integers(0, 2))
@@ -193,8 +193,10 @@ def rod_chains(draw):
                              "velocity": draw(st.lists(st.floats(-2, 2), min_size=3, max_size=3)),
                              "angular_velocity": draw(st.lists(st.floats(-5, 5), min_size=3, max_size=3))}
         a = "anchor" if i == 1 else f"rod{i - 1}"
-        entry = {"type": draw(st.sampled_from(["ball", "hinge"])), "a": a, "b": f"rod{i}",
+        entry = {"type": draw(st.sampled_from(["ball", "hinge", "bar"])), "a": a, "b": f"rod{i}",
                  "attach_a": [0.0, 0.0, 0.0] if i == 1 else [-x for x in unit], "attach_b": list(unit)}
+        if entry["type"] == "bar":        # from a point half a rod's half-length beyond its end
+            entry["attach_b"] = [1.5 * x for x in unit]
         if entry["type"] == "hinge":
             entry["axis_a"] = [0.0, 0.0, 1.0] if i == 1 else list(draw(st.sampled_from([unit, [half, half, 0.0]])))
             entry.pop("attach_b")         # the same world point
