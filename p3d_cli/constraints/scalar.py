@@ -3,7 +3,7 @@
 For a scene of a few bodies, a numpy call (~1 µs of overhead on arrays of 3-20 numbers) costs
 more than the arithmetic it does: a quaternion update is ~50 float operations, ~2 µs in Python
 and ~15 µs as a dozen numpy calls. ``small_step`` therefore keeps a small scene's state as lists
-of floats and does everything per body and per constraint here, leaving numpy only the
+of floats and does everything per constraint here (per body in ``body_kernels``), leaving numpy only the
 island-sized linear algebra. The formulas are those of ``rotation``, ``rows`` and the constraint
 modules (``ball``, ``hinge``, ``bar``), in the same order of operations where that is cheap, so
 results agree with the array code to rounding (~1e-16 relative).
@@ -15,7 +15,13 @@ from __future__ import annotations
 
 import math
 
+from p3d_cli.constraints.body_kernels import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal,
+                                              nudge, turn)
 from p3d_cli.constraints.rows import bar_met_error
+
+#: The per-body kernels live in ``body_kernels``; these names are kept here for their callers.
+__all__ = ["Ball", "Bar", "Hinge", "Joint", "apply", "carry_spin", "carry_spin_diagonal", "conjugate",
+           "conjugate_diagonal", "cross", "make_joint", "nudge", "turn"]
 
 
 def apply(r, v) -> tuple[float, float, float]:
@@ -25,111 +31,8 @@ def apply(r, v) -> tuple[float, float, float]:
             r[6] * v0 + r[7] * v1 + r[8] * v2)
 
 
-def carry_spin(r, t, inertia, inv_inertia, w) -> tuple[float, float, float]:
-    """``T I⁻¹ Tᵀ (R I Rᵀ ω)``: the angular velocity that keeps the angular momentum
-    ``I_world ω`` through a turn from ``R`` to ``T`` (``World.drift``), as six matrix-vector
-    products written out (one call instead of six)."""
-    w0, w1, w2 = w
-    a0, a1, a2 = r[0] * w0 + r[3] * w1 + r[6] * w2, r[1] * w0 + r[4] * w1 + r[7] * w2, r[2] * w0 + r[5] * w1 + r[8] * w2
-    m = inertia
-    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
-    s0, s1, s2 = r[0] * b0 + r[1] * b1 + r[2] * b2, r[3] * b0 + r[4] * b1 + r[5] * b2, r[6] * b0 + r[7] * b1 + r[8] * b2
-    a0, a1, a2 = t[0] * s0 + t[3] * s1 + t[6] * s2, t[1] * s0 + t[4] * s1 + t[7] * s2, t[2] * s0 + t[5] * s1 + t[8] * s2
-    m = inv_inertia
-    b0, b1, b2 = m[0] * a0 + m[1] * a1 + m[2] * a2, m[3] * a0 + m[4] * a1 + m[5] * a2, m[6] * a0 + m[7] * a1 + m[8] * a2
-    return (t[0] * b0 + t[1] * b1 + t[2] * b2, t[3] * b0 + t[4] * b1 + t[5] * b2, t[6] * b0 + t[7] * b1 + t[8] * b2)
-
-
-def carry_spin_diagonal(r, t, d, e, w) -> tuple[float, float, float]:
-    """``carry_spin`` for a diagonal inertia ``diag(d)`` (inverse ``diag(e)``): the same numbers
-    (the general form's products with its zero entries add exact zeros), in 60% of the work."""
-    w0, w1, w2 = w
-    a0 = d[0] * (r[0] * w0 + r[3] * w1 + r[6] * w2)
-    a1 = d[1] * (r[1] * w0 + r[4] * w1 + r[7] * w2)
-    a2 = d[2] * (r[2] * w0 + r[5] * w1 + r[8] * w2)
-    s0, s1, s2 = r[0] * a0 + r[1] * a1 + r[2] * a2, r[3] * a0 + r[4] * a1 + r[5] * a2, r[6] * a0 + r[7] * a1 + r[8] * a2
-    a0 = e[0] * (t[0] * s0 + t[3] * s1 + t[6] * s2)
-    a1 = e[1] * (t[1] * s0 + t[4] * s1 + t[7] * s2)
-    a2 = e[2] * (t[2] * s0 + t[5] * s1 + t[8] * s2)
-    return (t[0] * a0 + t[1] * a1 + t[2] * a2, t[3] * a0 + t[4] * a1 + t[5] * a2, t[6] * a0 + t[7] * a1 + t[8] * a2)
-
-
-def conjugate_diagonal(r, e) -> list[float]:
-    """``conjugate(r, diag(e))``, the same numbers in half the work."""
-    a0, a1, a2 = r[0] * e[0], r[1] * e[1], r[2] * e[2]
-    b0, b1, b2 = r[3] * e[0], r[4] * e[1], r[5] * e[2]
-    c0, c1, c2 = r[6] * e[0], r[7] * e[1], r[8] * e[2]
-    xx = a0 * r[0] + a1 * r[1] + a2 * r[2]
-    xy = a0 * r[3] + a1 * r[4] + a2 * r[5]
-    xz = a0 * r[6] + a1 * r[7] + a2 * r[8]
-    yy = b0 * r[3] + b1 * r[4] + b2 * r[5]
-    yz = b0 * r[6] + b1 * r[7] + b2 * r[8]
-    zz = c0 * r[6] + c1 * r[7] + c2 * r[8]
-    return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
-
-
-def conjugate(r, m) -> list[float]:
-    """``R M Rᵀ`` for a symmetric ``M`` (a world inverse inertia), symmetric by construction."""
-    a = [r[0] * m[0] + r[1] * m[3] + r[2] * m[6], r[0] * m[1] + r[1] * m[4] + r[2] * m[7],
-         r[0] * m[2] + r[1] * m[5] + r[2] * m[8],
-         r[3] * m[0] + r[4] * m[3] + r[5] * m[6], r[3] * m[1] + r[4] * m[4] + r[5] * m[7],
-         r[3] * m[2] + r[4] * m[5] + r[5] * m[8],
-         r[6] * m[0] + r[7] * m[3] + r[8] * m[6], r[6] * m[1] + r[7] * m[4] + r[8] * m[7],
-         r[6] * m[2] + r[7] * m[5] + r[8] * m[8]]
-    xx = a[0] * r[0] + a[1] * r[1] + a[2] * r[2]
-    xy = a[0] * r[3] + a[1] * r[4] + a[2] * r[5]
-    xz = a[0] * r[6] + a[1] * r[7] + a[2] * r[8]
-    yy = a[3] * r[3] + a[4] * r[4] + a[5] * r[5]
-    yz = a[3] * r[6] + a[4] * r[7] + a[5] * r[8]
-    zz = a[6] * r[6] + a[7] * r[7] + a[8] * r[8]
-    return [xx, xy, xz, xy, yy, yz, xz, yz, zz]
-
-
 def cross(a, b) -> tuple[float, float, float]:
     return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
-
-
-def turn(q, rx: float, ry: float, rz: float):
-    """``(q', R(q'))`` with ``q' = exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one
-    body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
-    (exact at quarter turns), the two always wanted together, in one call.
-
-    A rotation that overflowed gives nan (as numpy does), which the step's finiteness check
-    reports: ``math.sin`` of an infinite angle would raise instead."""
-    angle = math.sqrt(rx * rx + ry * ry + rz * rz)
-    qw, qx, qy, qz = q
-    if angle >= 1e-8:
-        if angle == math.inf:
-            return (math.nan,) * 4, [math.nan] * 9
-        half = 0.5 * angle
-        factor = math.sin(half) / angle
-        pw, px, py, pz = math.cos(half), factor * rx, factor * ry, factor * rz
-        w = pw * qw - px * qx - py * qy - pz * qz
-        x = pw * qx + px * qw + py * qz - pz * qy
-        y = pw * qy - px * qz + py * qw + pz * qx
-        z = pw * qz + px * qy - py * qx + pz * qw
-    else:
-        # The small turns of the position correction: below 1e-8, cos(angle / 2) is 1 - (at
-        # most) 1.25e-17, which rounds to 1.0, and products with 1.0 are exact: the same numbers.
-        factor = 0.5 - angle * angle / 48.0
-        px, py, pz = factor * rx, factor * ry, factor * rz
-        w = qw - px * qx - py * qy - pz * qz
-        x = qx + px * qw + py * qz - pz * qy
-        y = qy - px * qz + py * qw + pz * qx
-        z = qz + px * qy - py * qx + pz * qw
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / norm, x / norm, y / norm, z / norm
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    n = ww + xx + yy + zz
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    # 2 a ± 2 b written 2 (a ± b): doubling is exact, so these are the same numbers in fewer
-    # operations; and a division by an n of exactly 1 (often, after the normalisation) is skipped.
-    if n == 1.0:
-        return (w, x, y, z), [ww + xx - yy - zz, 2 * (xy - wz), 2 * (xz + wy), 2 * (xy + wz), ww - xx + yy - zz,
-                              2 * (yz - wx), 2 * (xz - wy), 2 * (yz + wx), ww - xx - yy + zz]
-    return (w, x, y, z), [(ww + xx - yy - zz) / n, 2 * (xy - wz) / n, 2 * (xz + wy) / n,
-                          2 * (xy + wz) / n, (ww - xx + yy - zz) / n, 2 * (yz - wx) / n,
-                          2 * (xz - wy) / n, 2 * (yz + wx) / n, (ww - xx - yy + zz) / n]
 
 
 class Joint:
@@ -141,7 +44,7 @@ class Joint:
     """
 
     __slots__ = ("a", "b", "off_a", "off_b", "free_a", "free_b", "const_a", "const_b", "where", "_state",
-                 "axial_a", "axial_b")
+                 "axial_a", "axial_b", "_both_axial")
     kind = ""
     rows = 0
 
@@ -151,11 +54,32 @@ class Joint:
         self.const_a = None if free_a else _point(com, rot, a, off_a)
         self.const_b = None if free_b else _point(com, rot, b, off_b)
         self.axial_a, self.axial_b = _axial(off_a), _axial(off_b)
+        # Both sides free with axial offsets (the links of a chain): the indices ``points``
+        # needs, unpacked from one attribute (3 column entries of R, the centre's 3 entries).
+        self._both_axial = None
+        if free_a and free_b and self.axial_a is not None and self.axial_b is not None:
+            (ja, oa), (jb, ob) = self.axial_a, self.axial_b
+            self._both_axial = (a, 3 * a, ja, ja + 3, ja + 6, oa, b, 3 * b, jb, jb + 3, jb + 6, ob)
         self._state: tuple = ()
 
-    def points(self, com, rot):
-        """``(r_a, r_b, gap)``: offsets of the attachment points from the centres of mass, world
-        frame, and ``p_b - p_a`` (``rows.RowSet.geometry``)."""
+    def points(self, com, rot) -> list[float]:
+        """``gap = p_b - p_a`` as a list (``rows.RowSet.geometry``), keeping ``(r_a, r_b)``, the
+        offsets of the attachment points from the centres of mass (world frame), as ``_state``.
+
+        The gap is a ball joint's errors, so that ``Ball.evaluate`` is this function (one call
+        less for the commonest joint: this runs for every constraint 3-6 times a step)."""
+        plan = self._both_axial
+        if plan is not None:
+            # The axial branches below for both sides, without their attribute look-ups and
+            # index sums: the same operations in the same order, a third less time.
+            ia, ka, a0, a1, a2, oa, ib, kb, b0, b1, b2, ob = plan
+            r = rot[ia]
+            ra = (r[a0] * oa, r[a1] * oa, r[a2] * oa)
+            r = rot[ib]
+            rb = (r[b0] * ob, r[b1] * ob, r[b2] * ob)
+            self._state = (ra, rb)
+            return [com[kb] + rb[0] - (com[ka] + ra[0]), com[kb + 1] + rb[1] - (com[ka + 1] + ra[1]),
+                    com[kb + 2] + rb[2] - (com[ka + 2] + ra[2])]
         # _point written out twice: this runs for every constraint 3-6 times a step. An offset
         # along one body axis (a link's end) takes that column of R only: the products with its
         # zero components are exact zeros, so the sums are the same numbers (up to the sign of a
@@ -186,21 +110,28 @@ class Joint:
             pb = (com[k] + rb[0], com[k + 1] + rb[1], com[k + 2] + rb[2])
         else:
             rb, pb = self.const_b
-        return ra, rb, (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+        self._state = (ra, rb)
+        return [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]]
 
     def columns(self) -> list[tuple[int, int]]:
         """(row, column within a side's 6) of one side's ``entries``, in order."""
-        return [(i, 3 + j) for i in range(3) for j in range(3)]
+        return list(SKEW)
 
     def entries(self) -> list[float]:
         """The entries of its rows that depend on the pose, side a's then side b's (free sides
-        only), in the order ``small_step`` scatters them (the ``±E`` entries are constant).
+        only), in the order ``small_step`` scatters them (the ``±E`` entries, and the zero
+        diagonal of the cross-product matrices, are constant and written once).
         Ball rows (a hinge's first three): ``[-E, [r_a]ₓ]`` and ``[E, -[r_b]ₓ]``."""
         ra, rb = self._state[0], self._state[1]
-        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0] if self.free_a else []
+        out = [-ra[2], ra[1], ra[2], -ra[0], -ra[1], ra[0]] if self.free_a else []
         if self.free_b:
-            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0]
+            out += [rb[2], -rb[1], -rb[2], rb[0], rb[1], -rb[0]]
         return out
+
+
+#: (row, column) of the off-diagonal entries of a cross-product matrix ``[r]ₓ`` in a side's 6
+#: columns of a ball row, in ``Joint.entries``' order.
+SKEW = ((0, 4), (0, 5), (1, 3), (1, 5), (2, 3), (2, 4))
 
 
 def _axial(off):
@@ -222,11 +153,7 @@ def _point(com, rot, i: int, off):
 class Ball(Joint):
     __slots__ = ()
     kind, rows = "ball", 3
-
-    def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
-        self._state = (ra, rb)
-        return list(gap)
+    evaluate = Joint.points
 
 
 class Bar(Joint):
@@ -235,7 +162,8 @@ class Bar(Joint):
     length: float
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, gap = self.points(com, rot)
+        gap = self.points(com, rot)
+        ra, rb = self._state
         norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
         self._state = (ra, rb, gap, norm)
         return [norm - self.length]
@@ -300,7 +228,8 @@ class Hinge(Joint):
         return za, zb
 
     def evaluate(self, com, rot) -> list[float]:
-        ra, rb, (g0, g1, g2) = self.points(com, rot)
+        g0, g1, g2 = self.points(com, rot)
+        ra, rb = self._state
         (a0, a1, a2), (b0, b1, b2) = self._axes(rot)
         # rows.hinge_frames for one hinge: z the bisector of the world axes (zb flipped when it
         # points away; multiplying by s = 1 is exact, so it is skipped), x the world axis least
@@ -331,10 +260,10 @@ class Hinge(Joint):
     def entries(self) -> list[float]:
         """The ball rows, then the axis rows ``[0, -x], [0, -y]`` and ``[0, x], [0, y]``."""
         ra, rb, x, y = self._state
-        out = [0.0, -ra[2], ra[1], ra[2], 0.0, -ra[0], -ra[1], ra[0], 0.0,
+        out = [-ra[2], ra[1], ra[2], -ra[0], -ra[1], ra[0],
                -x[0], -x[1], -x[2], -y[0], -y[1], -y[2]] if self.free_a else []
         if self.free_b:
-            out += [0.0, rb[2], -rb[1], -rb[2], 0.0, rb[0], rb[1], -rb[0], 0.0, *x, *y]
+            out += [rb[2], -rb[1], -rb[2], rb[0], rb[1], -rb[0], *x, *y]
         return out
 
 

@@ -181,14 +181,12 @@ def _step_small(world: World, before, steps: int, dt: float, half_kick, toleranc
     state = small_step.SmallStep(world)
     kick = half_kick.tolist()
     for step in range(1, steps + 1):
-        state.kick(kick)
-        state.drift(dt)
+        state.drift(dt, kick)                # the first half kick, then the drift
         if not state.finite():
             state.store(world)
             _check_state(world, step, dt)
         worst = max(worst, state.correct(tolerance, dt))
-        state.kick(kick)
-        state.solve_velocities()
+        state.solve_velocities(kick)         # the second half kick, then the velocity solve
         if not state.finite():
             state.store(world)
             _check_state(world, step, dt)   # the correction's kick

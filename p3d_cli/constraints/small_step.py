@@ -4,10 +4,18 @@
 which is what a large scene needs; but a scene of a few bodies then pays ~1-2 µs of call
 overhead for arrays of 3-20 numbers, about 150 calls a step. Here the per-body and
 per-constraint work (drift, quaternions, the constraints' errors and the variable entries of
-their rows) is plain float arithmetic (``scalar``), and numpy does only what grows with the
-square of an island's rows: its dense system ``J W Jᵀ``, factorised once per step, and the
-products with it. The step is the one of ``simulation`` (docs/solve.md, "Stepping"), operation
-for operation; only the order of some sums differs, so trajectories agree to rounding.
+their rows) is plain float arithmetic (``scalar``, ``body_kernels``), and numpy does only what
+grows with the square of an island's rows (``small_islands``): its dense system ``J W Jᵀ``,
+factorised once per step, and the products with it. The step is the one of ``simulation``
+(docs/solve.md, "Stepping"), with the same position-correction iterates: some sums are taken
+in another order, and a few formulas are cheaper ones equal to rounding (the correction's
+unrefined gain, its small turns by series, bodies of revolution's inertia along their axis),
+so trajectories agree to rounding.
+
+Rounding matters in one way: a step whose last correction error lands within a few units in
+the last place of the ``1e-12`` tolerance may take one correction more or less than the old
+code did (a ~1e-12 difference in positions, a few 1e-12 in velocities once credited ``/ dt``
+and projected); the recorded chain has two such steps (docs/solve.md, "Stepping").
 
 Used for scenes whose islands are all dense and small (``fits``); the cost per step still grows
 linearly with the number of bodies and constraints, and larger scenes take ``World``'s path.
@@ -19,52 +27,11 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.scalar import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal, make_joint,
-                                        turn)
-from p3d_cli.constraints.solver import RANK_RTOL, ImpulseSolution
-
-try:
-    # numpy.linalg's own LAPACK gufuncs, without the public wrappers' checks and error-state
-    # set-up (~4 µs a call, a tenth of a small scene's step); results are identical.
-    from numpy.linalg import _umath_linalg as _gufuncs
-except ImportError:  # pragma: no cover - a numpy that moved them: the public functions
-    _gufuncs = None
-
-
-def _private_gufuncs_agree() -> bool:
-    """Whether the private gufuncs take these calls and give the public functions' numbers on
-    a small known matrix (a private API may change under a new numpy: then they are not used)."""
-    probe = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]])
-    try:
-        inverse = _gufuncs.inv(probe, signature="d->d")
-        values, vectors = _gufuncs.eigh_lo(probe, signature="d->dd")
-    except Exception:  # noqa: BLE001 - any failure means: use the public functions
-        return False
-    public_values, public_vectors = np.linalg.eigh(probe)
-    return (np.array_equal(inverse, np.linalg.inv(probe)) and np.array_equal(values, public_values)
-            and np.array_equal(np.abs(vectors), np.abs(public_vectors)))
-
-
-if _gufuncs is not None and not _private_gufuncs_agree():  # pragma: no cover
-    _gufuncs = None
-
-
-def _inverse(a: np.ndarray) -> np.ndarray:
-    """``inv(a)``; a singular ``a`` gives non-finite entries (or ``LinAlgError``)."""
-    if _gufuncs is None:  # pragma: no cover
-        return np.linalg.inv(a)
-    return _gufuncs.inv(a, signature="d->d")
-
-
-def _eigh(a: np.ndarray):
-    """``numpy.linalg.eigh(a)``, which is called when the fast call's result is not finite so
-    that it raises as it would have."""
-    if _gufuncs is not None:
-        values, vectors = _gufuncs.eigh_lo(a, signature="d->dd")
-        if math.isfinite(float(values.sum())):
-            return values, vectors
-    return np.linalg.eigh(a)
-
+from p3d_cli.constraints.body_kernels import (axis_of_revolution, carry_spin, carry_spin_axial, carry_spin_diagonal,
+                                              conjugate, conjugate_axial, conjugate_diagonal, nudge, turn)
+from p3d_cli.constraints.scalar import Hinge, make_joint
+from p3d_cli.constraints.small_islands import _Island, _Single
+from p3d_cli.constraints.solver import ImpulseSolution
 
 #: Scenes with at most this many rows, and this many free bodies, take this path.
 SMALL_ROWS = 60
@@ -77,173 +44,6 @@ def fits(world) -> bool:
             and all(path == "dense" for path, _, _ in world.plan.order))
 
 
-class _Factor:
-    """One island's factorised system: ``K`` the pseudo-inverse of ``A = J W Jᵀ``, and ``W Jᵀ``."""
-
-    __slots__ = ("jac", "wjt", "system", "pinv", "rank")
-
-    def __init__(self, jac, wjt, system, pinv, rank) -> None:
-        self.jac, self.wjt, self.system, self.pinv, self.rank = jac, wjt, system, pinv, rank
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """Minimum-norm ``λ`` of ``A λ = b`` with one step of iterative refinement, which recovers
-        the digits the factorisation's rounding loses on an ill-conditioned island (so an
-        explicit (pseudo-)inverse is as accurate here as applying the factors)."""
-        dot = self.pinv.dot
-        lam = dot(b)
-        return lam + dot(b - self.system.dot(lam))
-
-    # Both right-hand sides carry a minus sign (``-C``, ``-J u``); every operation of the solve is
-    # linear and rounds symmetrically, so solving for ``+C`` and subtracting the result is exact
-    # negation, and saves a numpy call per solve.
-    def correction(self, errors: list) -> np.ndarray:
-        """``-W Jᵀ λ`` for ``A λ = -C``: minus the motion (6 per island body) that closes ``errors``."""
-        return self.wjt.dot(self.solve(np.array(errors)))
-
-    def velocity(self, u: list):
-        """``(-λ, -W Jᵀ λ)`` for ``A λ = -J u`` (``jac`` holds this step's rows only until the
-        island is factorised again: the next step's correction needs ``W Jᵀ`` and ``A`` only)."""
-        lam = self.solve(self.jac.dot(np.array(u)))
-        return lam, self.wjt.dot(lam).tolist()
-
-
-class _Island:
-    """One island's rows as a dense ``(m, 6 nb)`` matrix whose variable entries are scattered in
-    from the joints' ``entries`` each step (the ``±E`` of gap rows are set once)."""
-
-    def __init__(self, island, joints, offsets, inv_mass) -> None:
-        self.bodies = list(island.bodies)
-        self.joints = [joints[k] for k in island.constraints]
-        self.evaluators = [joint.evaluate for joint in self.joints]     # bound once
-        self.rows = np.concatenate([np.arange(offsets[k], offsets[k + 1]) for k in island.constraints])
-        m, width = len(self.rows), 6 * len(self.bodies)
-        self.m = m
-        column = {b: 6 * c for c, b in enumerate(self.bodies)}
-        self.jac = np.zeros((m, width))
-        index, first = [], 0
-        for joint in self.joints:
-            for body, free, sign in ((joint.a, joint.free_a, -1.0), (joint.b, joint.free_b, 1.0)):
-                if not free:
-                    continue
-                c0 = column[body]
-                index += [(first + r) * width + c0 + c for r, c in joint.columns()]
-                if joint.kind != "bar":
-                    for i in range(3):
-                        self.jac[first + i, c0 + i] = sign
-            first += joint.rows
-        self.index = np.array(index, dtype=np.intp)
-        self.weights = np.zeros((width, width))
-        for c, body in enumerate(self.bodies):
-            for i in range(3):
-                self.weights[6 * c + i, 6 * c + i] = inv_mass[body]
-        self.weight_index = np.array([(6 * c + 3 + i) * width + 6 * c + 3 + j for c in range(len(self.bodies))
-                                      for i in range(3) for j in range(3)], dtype=np.intp)
-        self.redundant = False
-        self.flat_jac, self.flat_weights = self.jac.reshape(-1), self.weights.reshape(-1)   # views
-
-    def errors(self, com, rot) -> list[float]:
-        out: list[float] = []
-        extend = out.extend
-        for evaluate in self.evaluators:
-            extend(evaluate(com, rot))
-        return out
-
-    def factorise(self, inv_inertia) -> _Factor:
-        """``J W Jᵀ`` at the configuration of the joints' last ``evaluate``, and its inverse or
-        pseudo-inverse (``_pseudo_inverse``)."""
-        values: list[float] = []
-        for joint in self.joints:
-            values += joint.entries()
-        self.flat_jac[self.index] = values
-        weights: list[float] = []
-        for body in self.bodies:
-            weights += inv_inertia[body]
-        self.flat_weights[self.weight_index] = weights
-        wjt = self.weights.dot(self.jac.T)
-        # J (W Jᵀ) is symmetric but for rounding, which the refinement step absorbs (the
-        # eigendecomposition reads one triangle).
-        system = self.jac.dot(wjt)
-        pinv, rank = self._pseudo_inverse(system)
-        return _Factor(self.jac, wjt, system, pinv, rank)
-
-    def _pseudo_inverse(self, system):
-        """``(A⁺, rank)`` with the rank rule of ``solver._DenseStack``: eigenvalues below
-        ``RANK_RTOL ×`` the largest diagonal entry count as zero.
-
-        The eigendecomposition costs 2-3 times an inverse, so an island is first inverted:
-        ``‖A⁻¹‖_F >= ‖A⁻¹‖₂ = 1/λ_min``, so ``‖A⁻¹‖_F RANK_RTOL d < 1/2`` proves every
-        eigenvalue is above twice the threshold (its rounding is far smaller), and the inverse
-        is the pseudo-inverse. Otherwise (a redundant island, which stays so: it is not tried
-        again), the eigendecomposition decides.
-        """
-        threshold = RANK_RTOL * max(float(system.diagonal().max()), 0.0)
-        if not self.redundant:
-            try:
-                inverse = _inverse(system)
-            except np.linalg.LinAlgError:
-                inverse = None
-            if inverse is not None and threshold > 0 and math.sqrt(float(np.vdot(inverse, inverse))) * threshold < 0.5:
-                return inverse, self.m
-            self.redundant = True
-        eig, vectors = _eigh(system)
-        keep = eig > threshold
-        inv = np.divide(1.0, eig, out=np.zeros_like(eig), where=keep)
-        return (vectors * inv).dot(vectors.T), int(keep.sum())
-
-
-class _Single:
-    """An island of one row (a bar) in floats: its system is the number ``a = J W Jᵀ``.
-
-    Same rules as ``_Island``: rank 1 when ``a > RANK_RTOL a``, one refinement step.
-    """
-
-    def __init__(self, island, joints, offsets, inv_mass) -> None:
-        self.joint = joints[island.constraints[0]]
-        self.bodies = list(island.bodies)
-        self.rows = np.array([offsets[island.constraints[0]]])
-        self.m = 1
-        self.inv_mass = [inv_mass[b] for b in self.bodies]
-
-    def errors(self, com, rot) -> list[float]:
-        return self.joint.evaluate(com, rot)
-
-    def factorise(self, inv_inertia) -> "_SingleFactor":
-        row = self.joint.entries()          # 6 per free side, the free sides in body order
-        if self.joint.free_a and self.joint.free_b and self.joint.a > self.joint.b:
-            row = row[6:] + row[:6]
-        wjt: list[float] = []
-        for c, body in enumerate(self.bodies):
-            j0, j1, j2, j3, j4, j5 = row[6 * c:6 * c + 6]
-            im, w = self.inv_mass[c], inv_inertia[body]
-            wjt += [im * j0, im * j1, im * j2, w[0] * j3 + w[1] * j4 + w[2] * j5,
-                    w[3] * j3 + w[4] * j4 + w[5] * j5, w[6] * j3 + w[7] * j4 + w[8] * j5]
-        # Plain sums, not math.fsum, which raises on an overflow that must reach the checks as inf.
-        a = sum([j * w for j, w in zip(row, wjt)])
-        keep = a > RANK_RTOL * max(a, 0.0)
-        if not math.isfinite(a):
-            raise np.linalg.LinAlgError("the constraint system is not finite")
-        return _SingleFactor(row, wjt, a, 1.0 / a if keep else 0.0, int(keep))
-
-
-class _SingleFactor:
-    __slots__ = ("row", "wjt", "system", "pinv", "rank")
-
-    def __init__(self, row, wjt, system, pinv, rank) -> None:
-        self.row, self.wjt, self.system, self.pinv, self.rank = row, wjt, system, pinv, rank
-
-    def _solve(self, b: float) -> float:
-        lam = self.pinv * b
-        return lam + self.pinv * (b - self.system * lam)
-
-    def correction(self, errors: list) -> tuple:
-        lam = self._solve(errors[0])
-        return tuple([w * lam for w in self.wjt])
-
-    def velocity(self, u: list):
-        lam = self._solve(sum([j * v for j, v in zip(self.row, u)]))
-        return np.array([lam]), [w * lam for w in self.wjt]
-
-
 class SmallStep:
     """The state of a small ``World`` as floats, and its steps (``simulation`` drives them)."""
 
@@ -254,11 +54,14 @@ class SmallStep:
         self.inv_mass = world.inv_mass.tolist()
         self.inertia = world.inertia_body.reshape(-1, 9).tolist()
         self.inv_inertia_body = world.inv_inertia_body.reshape(-1, 9).tolist()
-        # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms.
+        # Principal-axis bodies (most: shapes, diagonal inertias) take the diagonal forms, and of
+        # those the bodies of revolution (two equal moments) the axial ones.
         self.diagonal: list = [None] * self.n
+        self.axial: list = [None] * self.n
         for i, (m, e) in enumerate(zip(self.inertia, self.inv_inertia_body)):
             if not any(m[j] or e[j] for j in (1, 2, 3, 5, 6, 7)):
                 self.diagonal[i] = ((m[0], m[4], m[8]), (e[0], e[4], e[8]))
+                self.axial[i] = axis_of_revolution(*self.diagonal[i])
         self.com, self.vel = world.com.ravel().tolist(), world.vel.ravel().tolist()
         self.omega = world.omega.ravel().tolist()
         self.quat = [tuple(q) for q in world.quat.tolist()]
@@ -276,51 +79,73 @@ class SmallStep:
         self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].rows == 1 else _Island)
                         (isl, joints, rs.offsets, self.inv_mass) for isl in world.islands]
         self.lam: list = [np.zeros(island.m) for island in self.islands]   # minus the last multipliers
+        # Moving bodies in no island (no joint to a free body): kicked on their own.
+        joined = {i for island in self.islands for i in island.bodies}
+        self.loose = [i for i in self.moving if i not in joined]
         for island in self.islands:
             island.errors(self.com, self.rot)
         inv_inertia = self._inv_inertia()
         self.factors = [island.factorise(inv_inertia) for island in self.islands]
+        self.column = _axis_columns(self.n, self.axial, joints)
+        for i, j in enumerate(self.column):
+            if j is not None:
+                # Only this column is kept up to date from now on: nan in the others makes a
+                # read of them (a bug) show, as a non-finite result, instead of a stale number.
+                self.rot[i] = [self.rot[i][c] if c % 3 == j else math.nan for c in range(9)]
 
     def _inv_inertia(self) -> list:
         """World inverse inertia ``R I⁻¹ Rᵀ`` of every body (9 floats; None for bodies not moving)."""
         out: list = [None] * self.n
         for i in self.moving:
-            diagonal = self.diagonal[i]
-            out[i] = (conjugate(self.rot[i], self.inv_inertia_body[i]) if diagonal is None
-                      else conjugate_diagonal(self.rot[i], diagonal[1]))
+            axial, diagonal = self.axial[i], self.diagonal[i]
+            if axial is not None:
+                out[i] = conjugate_axial(self.rot[i][axial[0]::3], axial)
+            elif diagonal is not None:
+                out[i] = conjugate_diagonal(self.rot[i], diagonal[1])
+            else:
+                out[i] = conjugate(self.rot[i], self.inv_inertia_body[i])
         return out
 
     # -- one step ---------------------------------------------------------------------------------
-    def kick(self, half_kick) -> None:
-        vel = self.vel
+    def drift(self, dt: float, half_kick) -> None:
+        """The step's first half kick, then ``World.drift``: centres by ``v dt``, orientations by
+        ``exp(ω dt)``, keeping ``I_world ω``. (One loop for the two, in the same order of
+        operations as two: each body's velocity is kicked before it moves the body.)"""
+        com, vel, omega, rot, quat = self.com, self.vel, self.omega, self.rot, self.quat
+        diagonal, axial, column = self.diagonal, self.axial, self.column
         g0, g1, g2 = half_kick
         for i in self.moving:
-            vel[3 * i] += g0
-            vel[3 * i + 1] += g1
-            vel[3 * i + 2] += g2
-
-    def drift(self, dt: float) -> None:
-        """``World.drift``: centres by ``v dt``, orientations by ``exp(ω dt)``, keeping ``I_world ω``."""
-        com, vel, omega, rot, quat, diagonal = self.com, self.vel, self.omega, self.rot, self.quat, self.diagonal
-        for i in self.moving:
             r, k = rot[i], 3 * i
-            w = (omega[k], omega[k + 1], omega[k + 2])
+            w0, w1, w2 = w = (omega[k], omega[k + 1], omega[k + 2])
+            vel[k] += g0
+            vel[k + 1] += g1
+            vel[k + 2] += g2
             com[k] += vel[k] * dt
             com[k + 1] += vel[k + 1] * dt
             com[k + 2] += vel[k + 2] * dt
-            quat[i], turned = turn(quat[i], w[0] * dt, w[1] * dt, w[2] * dt)
+            a, d, j = axial[i], diagonal[i], column[i]
+            if j is not None:
+                # A body of revolution read along its axis only: that column of R, turned.
+                axis = r[j::3]
+                quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt, j)
+                r[j], r[j + 3], r[j + 6] = turned
+                omega[k], omega[k + 1], omega[k + 2] = carry_spin_axial(axis, turned, a, w)
+                continue
+            quat[i], turned = turn(quat[i], w0 * dt, w1 * dt, w2 * dt)
             rot[i] = turned
-            d = diagonal[i]
-            if d is None:
-                spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
-            else:
+            if a is not None:
+                spin = carry_spin_axial(r[a[0]::3], turned[a[0]::3], a, w)
+            elif d is not None:
                 spin = carry_spin_diagonal(r, turned, d[0], d[1], w)
+            else:
+                spin = carry_spin(r, turned, self.inertia[i], self.inv_inertia_body[i], w)
             omega[k], omega[k + 1], omega[k + 2] = spin
 
     def correct(self, tolerance: float, dt: float, iterations: int = 8) -> float:
         """``World.correct_positions`` along the frozen system of the step's start, crediting
         the displacement to the velocities (``/ dt``); returns the largest remaining error."""
         com, rot, quat, islands, factors = self.com, self.rot, self.quat, self.islands, self.factors
+        column = self.column
         # Minus each island's motion so far: an array (or a _Single's tuple), summed in the order
         # the per-body totals were, so the same numbers.
         moved: list = [None] * len(islands)
@@ -348,7 +173,12 @@ class SmallStep:
                     com[k + 2] -= d2
                     if d3 or d4 or d5:
                         # Rows through the centre of mass only (a bob on a bar) turn nothing.
-                        quat[i], rot[i] = turn(quat[i], -d3, -d4, -d5)
+                        j = column[i]
+                        if j is None:
+                            quat[i], rot[i] = nudge(quat[i], d3, d4, d5)
+                        else:
+                            r = rot[i]
+                            quat[i], (r[j], r[j + 3], r[j + 6]) = nudge(quat[i], d3, d4, d5, j)
         vel, omega = self.vel, self.omega
         for n, island in enumerate(islands):
             total = moved[n]
@@ -366,19 +196,27 @@ class SmallStep:
                 omega[k + 2] -= d5 / dt
         return worst
 
-    def solve_velocities(self) -> None:
-        """``World.solve_velocities`` at the configuration of the last ``correct``; its
-        factorisation is kept as the next step's frozen system."""
+    def solve_velocities(self, half_kick) -> None:
+        """The step's second half kick, then ``World.solve_velocities`` at the configuration of
+        the last ``correct``; its factorisation is kept as the next step's frozen system. (An
+        island body's kick is added as its velocities are gathered: the same numbers.)"""
         inv_inertia = self._inv_inertia()
         vel, omega = self.vel, self.omega
+        g0, g1, g2 = half_kick
+        for i in self.loose:
+            vel[3 * i] += g0
+            vel[3 * i + 1] += g1
+            vel[3 * i + 2] += g2
         self.factors = []
         for n, island in enumerate(self.islands):
             factor = island.factorise(inv_inertia)
             self.factors.append(factor)
             u: list[float] = []
             for i in island.bodies:
-                u += vel[3 * i:3 * i + 3]
-                u += omega[3 * i:3 * i + 3]
+                k = 3 * i
+                v0, v1, v2 = vel[k] + g0, vel[k + 1] + g1, vel[k + 2] + g2
+                vel[k], vel[k + 1], vel[k + 2] = v0, v1, v2
+                u += (v0, v1, v2, omega[k], omega[k + 1], omega[k + 2])
             lam, change = factor.velocity(u)             # minus the multipliers and the motion
             self.lam[n] = lam
             chunks = iter(change)
@@ -413,3 +251,22 @@ class SmallStep:
             lam[island.rows] = -part
         return ImpulseSolution(lam, self.offsets, sum(r for r, _ in ranks), sum(e for _, e in ranks),
                                ranks)
+
+
+def _axis_columns(n: int, axial, joints) -> list:
+    """For each body, the column ``j`` of its rotation matrix that is all the step reads of it
+    (its inertia's axis of revolution, and every joint on it attached on, and hinged about,
+    that body axis: a chain's link, a rod), or None (the whole matrix is kept)."""
+    read: list = [set() for _ in range(n)]
+    for joint in joints:
+        sides = [(joint.a, joint.free_a, joint.axial_a), (joint.b, joint.free_b, joint.axial_b)]
+        if isinstance(joint, Hinge):          # and the hinge's axis on each side
+            sides += [(joint.a, joint.free_a, joint.along_a), (joint.b, joint.free_b, joint.along_b)]
+        for body, free, along in sides:
+            if free:
+                read[body].add(None if along is None else along[0])
+    out: list = [None] * n
+    for i, a in enumerate(axial):
+        if a is not None and read[i] == {a[0]}:
+            out[i] = a[0]
+    return out

@@ -94,3 +94,38 @@ def test_an_offset_off_the_axes_or_not_finite_takes_the_general_form():
     assert scalar._axial([0.1, 0.1, 0.0]) is None
     assert scalar._axial([0.0, 0.0, 0.0]) is None
     assert scalar._axial([0.0, math.inf, 0.0]) is None
+
+
+@settings(max_examples=200, deadline=None)
+@given(unit_quats(), unit_quats(), axial_offsets, axial_offsets,
+       st.lists(st.floats(-5, 5), min_size=6, max_size=6))
+def test_the_both_sides_axial_path_gives_the_general_numbers(qa, qb, off_a, off_b, com):
+    # Joint.points' first branch (both sides free and axial, one attribute of indices) against
+    # the general products, for every joint type, bit for bit; and a fixed side never takes it.
+    rot = [rotation(qa), rotation(qb)]
+    oa, ob = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
+    oa[off_a[0]], ob[off_b[0]] = off_a[1], off_b[1]
+    axes = ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0])
+    for kind in ("ball", "hinge", "bar"):
+        fast = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
+        slow = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
+        assert fast._both_axial is not None
+        slow._both_axial = slow.axial_a = slow.axial_b = None
+        assert fast.evaluate(com, rot) == slow.evaluate(com, rot)
+        if kind != "bar" or slow._state[3] != 0.0:
+            assert fast.entries() == slow.entries()
+        fixed = scalar.make_joint(kind, 0, 1, oa, ob, False, True, com, rot, "here", axes, 0.3)
+        assert fixed._both_axial is None
+
+
+@settings(max_examples=300, deadline=None)
+@given(unit_quats(), turn_vectors, st.integers(0, 2))
+def test_a_turned_column_is_that_column_of_the_matrix_bit_for_bit(q, v, j):
+    # turn and nudge with column=j: the same quaternion and the j-th column of the full matrix.
+    rx, ry, rz = v[0] * v[3], v[1] * v[3], v[2] * v[3]
+    for kernel in (scalar.turn, scalar.nudge):
+        full_q, full_r = kernel(tuple(q), rx, ry, rz)
+        got_q, got_c = kernel(tuple(q), rx, ry, rz, j)
+        assert got_q == full_q and got_c == full_r[j::3]
+    nan_q, nan_c = scalar.turn(tuple(q), math.inf, 0.0, 0.0, j)
+    assert len(nan_c) == 3 and all(math.isnan(c) for c in nan_c)
