@@ -21,7 +21,9 @@ its integrals are polynomials in the constants ``g`` times the local sums, ``X =
   ``p3d check`` gets the same volume term without the local frame (``WorldCross``);
 - ``Q_ki = Σ X_k t_i`` (9) and ``R_kij = Σ X_k w_ij`` (18),
   ``w_ij = a_i a_j + b_i b_j + t_i t_j``: each term in double-double (~106 bits), its high
-  part summed exactly and its low part in float64, with the a-priori bound of ``_Locals``.
+  part summed exactly (``Q``, which the result multiplies by ``|o|²``) or by cascaded
+  error-free sums (``R``, multiplied by ``|o|`` only), its low part in float64, with the
+  a-priori bound of ``Locals``.
 
 The ten sums then follow in ``Fraction`` arithmetic (``combine``), a few hundred operations per
 mesh, and so does their error bound (the same formula with absolute values).
@@ -34,7 +36,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.expansions import TINY, UNIT, ExactSum, two_product, two_sum
+from p3d_cli.mesh.expansions import TINY, UNIT, ExactSum, cascaded_sums, two_product, two_sum
 
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _CYCLE = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
@@ -122,9 +124,10 @@ class Locals:
     """
 
     def __init__(self) -> None:
-        self._high = ExactSum(27)
+        self._high = ExactSum(9)
         self._cross = ExactSum(3)
         self._low = [Fraction(0)] * 27
+        self._r_high = [Fraction(0)] * 18
         self._rounding = np.zeros(27)
         self.count = 0
         self.underflow = 0            # sides whose cross products may have lost bits to underflow
@@ -150,11 +153,18 @@ class Locals:
         for k in range(3):
             for row in range(6):
                 high[9 + 6 * k + row], low[9 + 6 * k + row] = _dd_product(xh[k], xl[k], wh[row], wl[row])
-        self._high.add(high, np.arange(27))
-        self._low = [x + Fraction(float(s)) for x, s in zip(self._low, low.sum(axis=1).tolist())]
-        self._bound(np.abs(a), np.abs(b), np.abs(xh), n)
+        # Q is multiplied by |o|² in the end, R by |o| only: Q's high parts are summed exactly,
+        # R's by a cascade of error-free sums (``cascaded_sums``: ~2^-100 of their magnitude,
+        # far more than R needs, at a fifth of the cost).
+        self._high.add(high[:9], np.arange(9))
+        r_high, r_low, cascade = cascaded_sums(high[9:])
+        low_sums = low.sum(axis=1)
+        low_sums[9:] += r_low
+        self._low = [x + Fraction(float(s)) for x, s in zip(self._low, low_sums.tolist())]
+        self._r_high = [x + Fraction(float(s)) for x, s in zip(self._r_high, r_high.tolist())]
+        self._bound(np.abs(a), np.abs(b), np.abs(xh), n, cascade)
 
-    def _bound(self, a: np.ndarray, b: np.ndarray, mag: np.ndarray, n: int) -> None:
+    def _bound(self, a: np.ndarray, b: np.ndarray, mag: np.ndarray, n: int, cascade: float) -> None:
         """Accumulate ``Σ |X_k| T_i``, ``Σ |X_k| W_ij`` and the block's rounding factors."""
         big_t = a + b
         big_w = np.empty((6, n))
@@ -165,7 +175,9 @@ class Locals:
         r_mag = (mag @ big_w.T).reshape(-1)              # [k, row] -> 6k + row
         low_sum = 1.04 * (math.log2(n) + 8)
         self._rounding[:9] += (8.3 + low_sum) * q_mag
-        self._rounding[9:] += (28.0 + low_sum) * r_mag
+        # |high| <= 1.01 · magnitude, so the cascade's bound is in terms of r_mag too; the low
+        # sums (now with the cascade's errors in them) get 3 more roundings (1.04 -> 1.1).
+        self._rounding[9:] += (28.0 + 1.1 / 1.04 * low_sum + 1.01 * cascade) * r_mag
         self.count += n
 
     def cross_totals(self) -> tuple[list[Fraction], float]:
@@ -174,7 +186,7 @@ class Locals:
 
     def totals(self) -> tuple[list[Fraction], np.ndarray]:
         """``Q`` (9, ``[3k + i]``) and ``R`` (18, ``[6k + pair]``) and their error bounds."""
-        high = self._high.totals()
+        high = self._high.totals() + self._r_high
         # X's own u³ term: 6.3 ε³ m_k with m_k <= 2, times T_i <= 2 or W_ij <= 6 (|a|, |b| <= 1).
         cubic = 6.3 * UNIT ** 3 * 12.0 * self.count
         error = 1.01 * (self._rounding * UNIT * UNIT + cubic + 256.0 * self.count * TINY)

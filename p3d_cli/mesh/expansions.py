@@ -26,6 +26,7 @@ T. Ogita, S. M. Rump, S. Oishi, "Accurate sum and dot product", SIAM J. Sci. Com
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -69,6 +70,32 @@ def two_product(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     bh, bl = split(b)
     e = ((ah * bh - p) + ah * bl + al * bh) + al * bl
     return p, e
+
+
+def cascaded_sums(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Row sums of ``values`` ``(k, n)`` to about twice float64's precision, cheaply.
+
+    A pairwise tree of ``two_sum``: each level adds the two halves of the row with error-free
+    sums and sets the errors aside; the errors are added in plain float64 (Ogita, Rump and
+    Oishi's ``Sum2``, vectorised as a tree). Returns ``(high, low, factor)``: each row sum is
+    ``high + low`` within ``factor · ε² · Σ|values|`` (``ε = 2**-53``): ``L = ceil(log2 n)``
+    levels, each setting aside errors of at most ``ε`` of its (non-growing, to first order)
+    absolute sum, added with at most ``log2 n + 9`` roundings.
+    """
+    x = values
+    k, n = x.shape
+    low = np.zeros(k)
+    levels = 0
+    while x.shape[1] > 1:
+        if x.shape[1] % 2:
+            x = np.concatenate([x, np.zeros((k, 1))], axis=1)
+        half = x.shape[1] // 2
+        x, error = two_sum(x[:, :half], x[:, half:])
+        low += error.sum(axis=1)
+        levels += 1
+    high = x[:, 0] if n else np.zeros(k)
+    factor = 1.02 * levels * (math.log2(max(n, 1)) + 9)
+    return high, low, factor
 
 
 class ExactSum:
