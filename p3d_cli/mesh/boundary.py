@@ -274,6 +274,10 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
     frame = frame_origin(lo, hi)
     reach = float(np.maximum(np.abs(np.asarray(hi, dtype=np.float64) - frame),
                              np.abs(np.asarray(lo, dtype=np.float64) - frame)).max())
+    if not math.isfinite(reach):
+        # Coordinates spanning more than float64's range: the moments overflow whatever the
+        # terms are; an infinite bound makes that one RangeError downstream.
+        return BoundaryTerms([Fraction(0)] * 10, np.full(10, math.inf), unbalanced.edges)
     scale = math.frexp(reach)[1] if reach > 0 else 0          # 2**scale > reach
     local = Locals()
     try:
@@ -286,11 +290,14 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
     qr, qr_error = local.totals()
     unit = Fraction(2) ** scale
     p = [x * unit ** 2 for x in p]
-    p_error *= 2.0 ** (2 * scale)
     q = [x * unit ** 3 for x in qr[:9]]
     r = [x * unit ** 4 for x in qr[9:]]
-    q_error = [e * 2.0 ** (3 * scale) for e in qr_error[:9]]
-    r_error = [e * 2.0 ** (4 * scale) for e in qr_error[9:]]
+    # Bounds back in the mesh's units; inf when they overflow (so do the moments then: the
+    # caller turns that into one RangeError).
+    with np.errstate(over="ignore"):
+        p_error = float(np.ldexp(p_error, 2 * scale))
+        q_error = list(np.ldexp(qr_error[:9], 3 * scale))
+        r_error = list(np.ldexp(qr_error[9:], 4 * scale))
     sums = combine(p, q, r, origin, frame)
     error = combine_bound([p_error] * 3, q_error, r_error, origin, frame)
     return BoundaryTerms(sums, error, unbalanced.edges)

@@ -252,13 +252,18 @@ def combine_bound(p: list, q: list, r: list, o, frame) -> np.ndarray:
     the constants; evaluated with the errors and the constants' absolute values (exactly, in
     ``Fraction``) it bounds each coefficient by the sum of its monomials' magnitudes.
     """
+    if not all(math.isfinite(float(x)) for x in (*p, *q, *r)):
+        return np.full(10, math.inf)
     o = [abs(Fraction(float(x))) for x in o]
     frame = [abs(Fraction(float(x))) for x in frame]
     p, q, r = ([Fraction(float(x)) for x in e] for e in (p, q, r))
     world = _tetra_sums(p, q, r, o, frame)
     local = _tetra_sums(p, q, r, [Fraction(0)] * 3, [f + x for f, x in zip(frame, o)])
     # Rounded up by a relative 2**-50: the float can round below the exact bound.
-    return np.array([float(x + y) * (1 + 2.0 ** -50) for x, y in zip(world, local)])
+    try:
+        return np.array([float(x + y) * (1 + 2.0 ** -50) for x, y in zip(world, local)])
+    except OverflowError:
+        return np.full(10, math.inf)
 
 
 def _tetra_sums(p, q, r, alpha, g) -> list:
