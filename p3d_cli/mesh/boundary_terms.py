@@ -36,10 +36,15 @@ from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.expansions import TINY, UNIT, ExactSum, cascaded_sums, two_product, two_sum
+from p3d_cli.mesh.expansions import (TINY, UNIT, ExactSum, cascaded_sums, product_of_splits, split, two_product,
+                                     two_sum)
 
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _CYCLE = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+#: X_k = a_i b_j - a_j b_i for (k, i, j) cyclic, as index arrays over k.
+_I, _J = np.array([1, 2, 0]), np.array([2, 0, 1])
+#: The pairs (i, j) of PAIRS as index arrays.
+_PI, _PJ = np.array([i for i, _ in PAIRS]), np.array([j for _, j in PAIRS])
 #: World coordinates up to this magnitude keep ``two_product`` exact (products below 2**960).
 WORLD_LIMIT = 2.0 ** 480
 #: Products below this may lose bits to underflow (``two_product``'s error term is subnormal).
@@ -137,31 +142,31 @@ class Locals:
         n = a.shape[1]
         if n == 0:
             return
-        xh, xl = np.empty((3, n)), np.empty((3, n))
-        parts = np.empty((12, n))
-        small = np.zeros(n, dtype=bool)
-        for k, i, j in _CYCLE:
-            xh[k], xl[k] = _cross(a[i], b[j], a[j], b[i], parts[4 * k:4 * k + 4], small)
-        self._cross.add(parts, np.repeat(np.arange(3), 4))
-        self.underflow += int(small.sum())
+        # Every product of the same quantities in one numpy call, each value split once
+        # (Veltkamp) for all its products: rows (k, i) of Q are 3k + i, rows (k, pair) of R 6k + pair.
+        sa, sb = split(a), split(b)
+        p1, e1 = product_of_splits(a[_I], _rows(sa, _I), b[_J], _rows(sb, _J))
+        p2, e2 = product_of_splits(a[_J], _rows(sa, _J), b[_I], _rows(sb, _I))
+        xh, xl, parts = _cross(p1, e1, p2, e2)
+        self._cross.add(parts.transpose(1, 0, 2).reshape(12, n), np.repeat(np.arange(3), 4))
+        small = ((p1 != 0.0) & (np.abs(p1) < _UNDERFLOW)) | ((p2 != 0.0) & (np.abs(p2) < _UNDERFLOW))
+        self.underflow += int(small.any(axis=0).sum())
         th, tl = two_sum(a, b)
-        high, low = np.empty((27, n)), np.empty((27, n))
-        for k in range(3):
-            for i in range(3):
-                high[3 * k + i], low[3 * k + i] = _dd_product(xh[k], xl[k], th[i], tl[i])
-        wh, wl = _w(a, b, th, tl)
-        for k in range(3):
-            for row in range(6):
-                high[9 + 6 * k + row], low[9 + 6 * k + row] = _dd_product(xh[k], xl[k], wh[row], wl[row])
+        sth, sxh = split(th), split(xh)
+        q_high, q_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
+                                    th[None], _rows(sth, None), tl[None])
+        wh, wl = _w(a, sa, b, sb, th, sth, tl)
+        r_high, r_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
+                                    wh[None], _rows(split(wh), None), wl[None])
         # Q is multiplied by |o|² in the end, R by |o| only: Q's high parts are summed exactly,
         # R's by a cascade of error-free sums (``cascaded_sums``: ~2^-100 of their magnitude,
         # far more than R needs, at a fifth of the cost).
-        self._high.add(high[:9], np.arange(9))
-        r_high, r_low, cascade = cascaded_sums(high[9:])
-        low_sums = low.sum(axis=1)
-        low_sums[9:] += r_low
+        self._high.add(q_high.reshape(9, n), np.arange(9))
+        r_sum, r_sum_low, cascade = cascaded_sums(r_high.reshape(18, n))
+        low_sums = np.concatenate([q_low.reshape(9, n).sum(axis=1), r_low.reshape(18, n).sum(axis=1)])
+        low_sums[9:] += r_sum_low
         self._low = [x + Fraction(float(s)) for x, s in zip(self._low, low_sums.tolist())]
-        self._r_high = [x + Fraction(float(s)) for x, s in zip(self._r_high, r_high.tolist())]
+        self._r_high = [x + Fraction(float(s)) for x, s in zip(self._r_high, r_sum.tolist())]
         self._bound(np.abs(a), np.abs(b), np.abs(xh), n, cascade)
 
     def _bound(self, a: np.ndarray, b: np.ndarray, mag: np.ndarray, n: int, cascade: float) -> None:
@@ -193,47 +198,43 @@ class Locals:
         return [h + lo for h, lo in zip(high, self._low)], error
 
 
-def _cross(a1, b1, a2, b2, parts: np.ndarray, small: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``a1 b1 - a2 b2`` in double-double, within ``1.01 ε² |high| + 6.3 ε³ m`` of the exact
-    value (``m = |a1 b1| + |a2 b2|``): the four exact parts of the two products are added
-    with error-free sums first (in the manner of Ogita, Rump and Oishi's ``SumK``), so that
-    only parts already ``ε²`` below ``m`` are rounded, and a thin triangle's small cross
-    product is as accurate as its own size allows (not just ``ε² m``).
+def _rows(pair: tuple, *index) -> tuple:
+    """``(hi[index], lo[index])`` of a ``split`` pair."""
+    return pair[0][index], pair[1][index]
 
-    Also writes the exact value's four parts into ``parts`` ``(4, n)`` and marks in ``small``
-    the sides where a product may have underflowed."""
-    p1, e1 = two_product(a1, b1)
-    p2, e2 = two_product(a2, b2)
-    for p in (p1, p2):
-        small |= (p != 0.0) & (np.abs(p) < _UNDERFLOW)
+
+def _cross(p1, e1, p2, e2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(p1 + e1) - (p2 + e2)`` (two exact products) in double-double, within
+    ``1.01 ε² |high| + 6.3 ε³ m`` of the exact value (``m = |p1| + |p2|``): the four exact
+    parts are added with error-free sums first (in the manner of Ogita, Rump and Oishi's
+    ``SumK``), so that only parts already ``ε²`` below ``m`` are rounded, and a thin
+    triangle's small cross product is as accurate as its own size allows (not just ``ε² m``).
+
+    Returns ``high``, ``low`` and the exact value's four parts ``(4, ...)``."""
     s, t = two_sum(p1, -p2)
     f, g = two_sum(e1, -e2)
     h, c = two_sum(t, f)
     high, d = two_sum(s, h)
-    parts[0], parts[1], parts[2], parts[3] = high, d, c, g
-    return high, d + (c + g)
+    return high, d + (c + g), np.stack([high, d, c, g])
 
 
-def _dd_product(xh, xl, yh, yl) -> tuple[np.ndarray, np.ndarray]:
-    """``(xh + xl)(yh + yl)`` as an exact high part and a rounded low part (``xl yl`` dropped)."""
-    p, e = two_product(xh, yh)
+def _dd_product(xh, x_split, xl, yh, y_split, yl) -> tuple[np.ndarray, np.ndarray]:
+    """``(xh + xl)(yh + yl)`` as an exact high part and a rounded low part (``xl yl`` dropped),
+    broadcasting; ``x_split``, ``y_split``: ``split`` of ``xh`` and ``yh``."""
+    p, e = product_of_splits(xh, x_split, yh, y_split)
     e += xh * yl + xl * yh
     return p, e
 
 
-def _w(a, b, th, tl) -> tuple[np.ndarray, np.ndarray]:
+def _w(a, sa, b, sb, th, sth, tl) -> tuple[np.ndarray, np.ndarray]:
     """``w_ij = a_i a_j + b_i b_j + t_i t_j`` in double-double, one row per ``PAIRS`` entry."""
-    n = a.shape[1]
-    wh, wl = np.empty((6, n)), np.empty((6, n))
-    for row, (i, j) in enumerate(PAIRS):
-        x1, y1 = two_product(a[i], a[j])
-        x2, y2 = two_product(b[i], b[j])
-        x3, y3 = two_product(th[i], th[j])
-        y3 += th[i] * tl[j] + tl[i] * th[j]
-        h, l2 = two_sum(x1, x2)
-        h, l3 = two_sum(h, x3)
-        wh[row], wl[row] = two_sum(h, ((y1 + y2) + y3) + (l2 + l3))
-    return wh, wl
+    x1, y1 = product_of_splits(a[_PI], _rows(sa, _PI), a[_PJ], _rows(sa, _PJ))
+    x2, y2 = product_of_splits(b[_PI], _rows(sb, _PI), b[_PJ], _rows(sb, _PJ))
+    x3, y3 = product_of_splits(th[_PI], _rows(sth, _PI), th[_PJ], _rows(sth, _PJ))
+    y3 += th[_PI] * tl[_PJ] + tl[_PI] * th[_PJ]
+    h, l2 = two_sum(x1, x2)
+    h, l3 = two_sum(h, x3)
+    return two_sum(h, ((y1 + y2) + y3) + (l2 + l3))
 
 
 def combine(p: list, q: list, r: list, o, frame) -> list:

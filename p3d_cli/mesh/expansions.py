@@ -98,6 +98,16 @@ def cascaded_sums(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     return high, low, factor
 
 
+def product_of_splits(a: np.ndarray, a_split: tuple, b: np.ndarray, b_split: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """``two_product(a, b)`` given ``split(a)`` and ``split(b)`` (a value split once serves
+    all its products: half the cost of ``two_product`` when each value is used many times)."""
+    p = a * b
+    ah, al = a_split
+    bh, bl = b_split
+    e = ((ah * bh - p) + ah * bl + al * bh) + al * bl
+    return p, e
+
+
 class ExactSum:
     """Exact running sums of ``count`` quantities, fed float64 arrays.
 
