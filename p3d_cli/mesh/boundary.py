@@ -308,11 +308,13 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
 
 
 def _local(u: np.ndarray, frame: np.ndarray, scale: int) -> np.ndarray:
-    """``(u - o') · 2**-scale``, checked exact (``two_sum``'s error term is zero)."""
+    """``(u - o') · 2**-scale``, checked exact: ``two_sum``'s error term is zero, and the
+    scaling lost nothing to underflow (coordinates spanning more than 2**1000)."""
     a, error = two_sum(u, -frame[:, None])
-    if error.any():
+    scaled = np.ldexp(a, -scale)
+    if error.any() or not np.array_equal(np.ldexp(scaled, scale), a):
         raise InexactLocal
-    return np.ldexp(a, -scale)
+    return scaled
 
 
 def _exact_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> list:

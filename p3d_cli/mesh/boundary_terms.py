@@ -122,10 +122,12 @@ class Locals:
     cyclic): ``X_k`` in double-double is within ``1.01 ε² |X_k| + 6.3 ε³ m_k`` (``_cross``),
     ``w_ij`` within ``20 ε² W_ij``, a double-double product adds ``7.2 ε²`` of its magnitude;
     the low parts, each ``<= 1.04 ε`` of the term's magnitude, are summed pairwise per block
-    (``numpy.sum``: at most ``log2(n) + 8`` roundings). So each ``Q_ki`` is within
-    ``(8.3 + 1.04 (log2 n + 8)) ε² Σ |X_k| T_i`` and each ``R_kij`` within
-    ``(28 + 1.04 (log2 n + 8)) ε² Σ |X_k| W_ij``, plus ``6.3 ε³ · 12`` (``m_k <= 2``,
-    ``T_i <= 2``, ``W_ij <= 6``) and ``256 ε_min`` (underflow) per side.
+    (``numpy.sum``: 8 running sums of up to 16 values in blocks of 128, combined in 3 steps,
+    then halving: at most ``log2(n) + 12`` roundings deep). So each ``Q_ki`` is within
+    ``(8.3 + 1.04 (log2 n + 12)) ε² Σ |X_k| T_i`` and each ``R_kij`` within
+    ``(28 + 1.1 (log2 n + 12) + 1.01 c) ε² Σ |X_k| W_ij`` (``c``: ``cascaded_sums``' factor for
+    its high parts), plus ``6.3 ε³ · 12`` (``m_k <= 2``, ``T_i <= 2``, ``W_ij <= 6``) and
+    ``256 ε_min`` (underflow) per side.
     """
 
     def __init__(self) -> None:
@@ -178,7 +180,7 @@ class Locals:
         # Sums of non-negative products: float rounding is far inside the final 1.01 margin.
         q_mag = (mag @ big_t.T).reshape(-1)              # [k, i] -> 3k + i
         r_mag = (mag @ big_w.T).reshape(-1)              # [k, row] -> 6k + row
-        low_sum = 1.04 * (math.log2(n) + 8)
+        low_sum = 1.04 * (math.log2(n) + 12)
         self._rounding[:9] += (8.3 + low_sum) * q_mag
         # |high| <= 1.01 · magnitude, so the cascade's bound is in terms of r_mag too; the low
         # sums (now with the cascade's errors in them) get 3 more roundings (1.04 -> 1.1).

@@ -80,7 +80,8 @@ def cascaded_sums(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     Oishi's ``Sum2``, vectorised as a tree). Returns ``(high, low, factor)``: each row sum is
     ``high + low`` within ``factor · ε² · Σ|values|`` (``ε = 2**-53``): ``L = ceil(log2 n)``
     levels, each setting aside errors of at most ``ε`` of its (non-growing, to first order)
-    absolute sum, added with at most ``log2 n + 9`` roundings.
+    absolute sum, added by ``numpy.sum`` (at most ``log2 n + 12`` roundings deep, see
+    ``boundary_terms.Locals``) and then into ``low`` (``L`` more).
     """
     x = values
     k, n = x.shape
@@ -94,7 +95,7 @@ def cascaded_sums(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         low += error.sum(axis=1)
         levels += 1
     high = x[:, 0] if n else np.zeros(k)
-    factor = 1.02 * levels * (math.log2(max(n, 1)) + 9)
+    factor = 1.02 * levels * (math.log2(max(n, 1)) + 12 + levels)
     return high, low, factor
 
 

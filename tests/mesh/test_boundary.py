@@ -284,3 +284,12 @@ def test_frame_origin_makes_local_coordinates_exact():
     a, error = two_sum(u, -frame)
     assert not error.any()
     assert frame[2] == 0.0 and lo[0] <= frame[0] <= hi[0] and lo[1] <= frame[1] <= hi[1]
+
+
+def test_coordinates_spanning_beyond_the_scaling_fall_back_to_exact_integers():
+    # Scaled by 2**-333 to |a| <= 1, a coordinate of 5e-324 (the least subnormal) would vanish.
+    t = soup(8, 6, [0.0, 0.0, 0.0])
+    t[0, 0] = [5e-324, 3e-320, 0.0]
+    t[1, 1] = [1e100, 0.5, 0.25]
+    found, o = terms_of(t)
+    assert found.sums == oracle_terms(t, o)
