@@ -13,7 +13,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.boundary import EXACT_LIMIT, boundary_sums, net_boundary, unbalanced_edges
+from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_sums
 from p3d_cli.results import Bounds, Moments
@@ -110,40 +110,36 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
         keys = keys[:filled]
         is_closed = bounding = keys_pair_up(keys)
         if not is_closed:
-            unbalanced = unbalanced_edges(keys)
+            unbalanced = unbalanced_groups(keys)
             # A 64-bit hash collision can only make a closed mesh look open: most failures
             # prove openness from the sorted keys alone; the few doubtful edges are compared
             # exactly in one more pass.
             doubtful = doubtful_edges(keys)
             del keys
             is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
-            bounding = is_closed or unbalanced.size == 0
+            bounding = is_closed or unbalanced.ids.size == 0
             if not bounding:
-                moments, boundary = _open_moments(source, sums, unbalanced)
+                moments = _open_moments(source, sums, unbalanced, lo, hi)
+                boundary = unbalanced.edges
     bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
     if moments is None:
         moments = sums.moments()
     return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary)
 
 
-def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: np.ndarray) -> tuple[Moments, int]:
-    """An open surface's moments in the world-origin convention, and its net boundary size.
+def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: Unbalanced,
+                  lo: np.ndarray, hi: np.ndarray) -> Moments:
+    """An open surface's moments in the world-origin convention.
 
     An open surface bounds no solid: its divergence-theorem sums depend on the origin of the
     tetrahedra. p3d reports the convention of the reference tools, signed tetrahedra from the
     world origin (docs/method.md, "Open and non-manifold meshes"), computed as the local sums
-    plus the net boundary's exact terms, so that a part far from the origin keeps its accuracy.
+    plus the net boundary's terms (exact volume, the rest to ~100 bits, with their error bound
+    added to the result's), so that a part far from the origin keeps its accuracy whatever the
+    number of boundary edges (a soup of loose faces is all boundary).
     """
-    start, end, count = net_boundary(source.read_blocks(), unbalanced)
-    total = int(count.sum())
-    if total <= EXACT_LIMIT:
-        return sums.moments(boundary_sums(start, end, count, sums.origin)), total
-    # Too many boundary edges for exact terms (a soup of loose faces): plain sums about the
-    # world origin, whose rounding bound grows with the distance from it.
-    about_world = MomentSums(np.zeros(3))
-    for block in source.read_blocks():
-        about_world.add_triangles(block)
-    return about_world.moments(), total
+    terms = boundary_terms(source.read_blocks, unbalanced, sums.origin, lo, hi)
+    return sums.moments(terms.sums, terms.error)
 
 
 def _analyze_tetrahedra(source: MeshSource, where: str) -> MeshAnalysis:

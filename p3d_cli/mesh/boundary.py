@@ -13,23 +13,87 @@ boundary of the 4-simplex ``[0, o, a, b, c]`` is zero as a chain, so summed over
 
 ``T`` being a signed tetrahedron's integrals (interior edges cancel pairwise). A bounding
 mesh's sums about a local origin are therefore its world sums; an open mesh's world sums are
-its accurate local sums plus a few boundary terms, which are computed here in exact integer
-arithmetic (every float64 is an integer times a power of two).
+its accurate local sums plus the boundary terms. ``boundary_terms`` computes them for any
+number of sides, streamed from one more pass (exact volume row, ~2^-100 elsewhere, with a
+bound: ``p3d_cli.mesh.boundary_terms``); ``boundary_sums`` computes them exactly in Python
+integers (every float64 is an integer times a power of two), ~7 µs a side: the tests' oracle
+and the fast path's safety net.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.closed import _lex_less, column_edge_keys, key_groups, sides_of_edges
+from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combine, combine_bound, frame_origin
+from p3d_cli.mesh.closed import (_column_hashes, _lex_less, _side_keys, column_edge_keys, key_groups,
+                                  sides_of_edges)
+from p3d_cli.mesh.expansions import two_sum
+
+#: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
+#: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).
+SIDE_BLOCK = 1 << 14
 
 
-#: Above this many net boundary sides the exact terms would cost more than the float sums
-#: about the world origin (a soup of disconnected faces is all boundary); the caller falls
-#: back to those, whose rounding bound says how accurate they are.
-EXACT_LIMIT = 1 << 16
+@dataclass(frozen=True)
+class BoundaryTerms:
+    """``Σ T(0, o, u, v)`` over an open mesh's net boundary, in ``MomentSums``' units.
+
+    Attributes
+    ----------
+    sums : list of 10 Fraction
+        The terms (``boundary_terms``): exact in the volume row, within ``error`` elsewhere.
+    error : (10,) float64
+        Bounds on the error of each sum.
+    edges : int
+        Directed edges of the net boundary, counted with multiplicity.
+    """
+
+    sums: list
+    error: np.ndarray
+    edges: int
+
+
+@dataclass(frozen=True)
+class Unbalanced:
+    """The edges of sorted side keys whose two directions are not used equally often.
+
+    Attributes
+    ----------
+    ids : (d,) uint64, sorted
+        Their edge ids (``key >> 1``), as ``unbalanced_edges``.
+    edges : int
+        The net boundary's size: ``|forward - backward|`` summed over their key groups.
+    sides : int
+        Sides in their key groups.
+    total : int
+        All the sides.
+    """
+
+    ids: np.ndarray
+    edges: int
+    sides: int
+    total: int
+
+    @property
+    def most(self) -> bool:
+        """Whether most sides are in unbalanced groups (a soup): then every side is used."""
+        return 2 * self.sides > self.total
+
+
+def unbalanced_groups(keys: np.ndarray) -> Unbalanced:
+    """``Unbalanced`` of sorted side ``keys``, in one scan."""
+    found, size, sides = [], 0, 0
+    for edge, counts, forward in key_groups(keys):
+        net = 2 * forward.astype(np.int64) - counts
+        odd = net != 0
+        found.append(edge[odd])
+        size += int(np.abs(net[odd]).sum())
+        sides += int(counts[odd].sum())
+    return Unbalanced(np.concatenate(found) if found else keys[:0], size, sides, int(keys.size))
 
 
 def unbalanced_edges(keys: np.ndarray) -> np.ndarray:
@@ -87,12 +151,17 @@ def net_boundary(source_blocks, unbalanced: np.ndarray) -> tuple[np.ndarray, np.
 
 def boundary_of(source_blocks) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``net_boundary`` of triangles read twice from ``source_blocks()`` (a callable)."""
+    return net_boundary(source_blocks(), unbalanced_of(source_blocks).ids)
+
+
+def unbalanced_of(source_blocks) -> Unbalanced:
+    """``unbalanced_groups`` of the triangles read once from ``source_blocks()`` (a callable)."""
     from p3d_cli.mesh.integrals import columns
 
     keys = [column_edge_keys(columns(block)) for block in source_blocks()]
     flat = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
     flat.sort()
-    return net_boundary(source_blocks(), unbalanced_edges(flat))
+    return unbalanced_groups(flat)
 
 
 def boundary_sums(start: np.ndarray, end: np.ndarray, count: np.ndarray, origin: np.ndarray) -> list[Fraction]:
@@ -136,3 +205,131 @@ def _integers(*arrays: np.ndarray):
         ints[:] = [n << (shift - (d.bit_length() - 1)) for n, d in r]
         out.append(ints.reshape(np.shape(arr)))
     return (*out, shift)
+
+
+def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False):
+    """Every side (as ``(3, k)`` start and end columns, ``-0.0`` read as ``0.0``) whose edge
+    is in ``unbalanced`` (or every side with two distinct ends, if ``every``), ``SIDE_BLOCK``
+    at most at a time, from one more pass.
+
+    These sides are the net boundary plus sides that cancel in pairs (``u→v`` and ``v→u``):
+    as a chain they are the net boundary, a cycle, which is all ``boundary_terms`` needs, and
+    the terms of a pair cancel (exactly: ``Locals`` computes ``v→u``'s as the negated bits of
+    ``u→v``'s, but for the order of the low parts' sum, within its bound). Membership is a
+    binary search in the sorted ids, not ``numpy.isin`` (which hashes all the ids again for
+    every block); a soup, whose sides are nearly all unbalanced, skips it (``every``).
+    """
+    from p3d_cli.mesh.integrals import columns as to_columns
+
+    ids = np.sort(unbalanced)
+    if ids.size == 0:
+        return
+    for block in source_blocks:
+        cols = to_columns(block)
+        if cols.shape[2] == 0:
+            continue
+        scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)
+        keys, keep = _side_keys(_column_hashes(cols, scratch), scratch)
+        hit: slice | np.ndarray = slice(None)
+        if not every:
+            hit = _members(keys >> np.uint64(1), ids)
+            if not hit.any():
+                continue
+        corners = np.moveaxis(cols, 1, 2) + 0.0            # (slot, face, axis), as keys
+        start, end = corners, corners[[1, 2, 0]]
+        if keep is not None:
+            start, end = start[keep], end[keep]
+        start, end = start.reshape(-1, 3)[hit], end.reshape(-1, 3)[hit]
+        for first in range(0, start.shape[0], SIDE_BLOCK):
+            at = slice(first, first + SIDE_BLOCK)
+            yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)
+
+
+def _members(edge: np.ndarray, ids: np.ndarray) -> np.ndarray:
+    """``numpy.isin(edge, ids)`` for sorted ``ids``: a few equality tests when there are a few
+    ids (a mesh with a hole or two: 12x faster than the binary search), else a binary search."""
+    if ids.size <= 16:
+        hit = edge == ids[0]
+        for value in ids[1:]:
+            hit |= edge == value
+        return hit
+    at = np.minimum(np.searchsorted(ids, edge), ids.size - 1)
+    return ids[at] == edge
+
+
+def boundary_volume(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> tuple[Fraction, float]:
+    """The ``6V`` row of ``boundary_terms`` alone, ``o · Σ u × v`` (the same exact number),
+    and a bound on what underflow can have taken from it (0 for any ordinary mesh)."""
+    cross = WorldCross()
+    for u, v in unbalanced_sides(source_blocks, unbalanced.ids, unbalanced.most):
+        cross.add(u, v)
+    p, lost = cross.totals()
+    o = [Fraction(float(x)) for x in origin]
+    return sum((a * b for a, b in zip(o, p)), Fraction(0)), lost * float(np.abs(origin).sum())
+
+
+def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
+                   lo: np.ndarray, hi: np.ndarray) -> BoundaryTerms:
+    """``Σ T(0, o, u, v)`` over the net boundary, any number of sides, ~1 µs a side.
+
+    Parameters
+    ----------
+    source_blocks : callable
+        Returns an iterable of the triangles ``(k, 3, 3)`` (read once more, twice if the fast
+        path's local coordinates were not exact, which ``frame_origin`` rules out).
+    unbalanced : Unbalanced
+        From ``unbalanced_groups``.
+    origin : (3,)
+        The local origin ``o`` of the moment sums.
+    lo, hi : (3,)
+        Bounds of the mesh's coordinates.
+    """
+    frame = frame_origin(lo, hi)
+    reach = float(np.maximum(np.abs(np.asarray(hi, dtype=np.float64) - frame),
+                             np.abs(np.asarray(lo, dtype=np.float64) - frame)).max())
+    if not math.isfinite(reach):
+        # Coordinates spanning more than float64's range: the moments overflow whatever the
+        # terms are; an infinite bound makes that one RangeError downstream.
+        return BoundaryTerms([Fraction(0)] * 10, np.full(10, math.inf), unbalanced.edges)
+    scale = math.frexp(reach)[1] if reach > 0 else 0          # 2**scale > reach
+    local = Locals()
+    try:
+        for u, v in unbalanced_sides(source_blocks(), unbalanced.ids, unbalanced.most):
+            local.add(_local(u, frame, scale), _local(v, frame, scale))
+    except InexactLocal:
+        sums = _exact_terms(source_blocks, unbalanced, origin)
+        return BoundaryTerms(sums, np.zeros(10), unbalanced.edges)
+    p, p_error = local.cross_totals()
+    qr, qr_error = local.totals()
+    unit = Fraction(2) ** scale
+    p = [x * unit ** 2 for x in p]
+    q = [x * unit ** 3 for x in qr[:9]]
+    r = [x * unit ** 4 for x in qr[9:]]
+    # Bounds back in the mesh's units; inf when they overflow (so do the moments then: the
+    # caller turns that into one RangeError).
+    with np.errstate(over="ignore"):
+        p_error = float(np.ldexp(p_error, 2 * scale))
+        q_error = list(np.ldexp(qr_error[:9], 3 * scale))
+        r_error = list(np.ldexp(qr_error[9:], 4 * scale))
+    sums = combine(p, q, r, origin, frame)
+    error = combine_bound([p_error] * 3, q_error, r_error, origin, frame)
+    return BoundaryTerms(sums, error, unbalanced.edges)
+
+
+def _local(u: np.ndarray, frame: np.ndarray, scale: int) -> np.ndarray:
+    """``(u - o') · 2**-scale``, checked exact: ``two_sum``'s error term is zero, and the
+    scaling lost nothing to underflow (coordinates spanning more than 2**1000)."""
+    a, error = two_sum(u, -frame[:, None])
+    scaled = np.ldexp(a, -scale)
+    if error.any() or not np.array_equal(np.ldexp(scaled, scale), a):
+        raise InexactLocal
+    return scaled
+
+
+def _exact_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> list:
+    """``boundary_terms`` by exact integer arithmetic on every side (the slow safety net)."""
+    total = [Fraction(0)] * 10
+    for u, v in unbalanced_sides(source_blocks(), unbalanced.ids, unbalanced.most):
+        part = boundary_sums(u.T, v.T, np.ones(u.shape[1], dtype=np.int64), origin)
+        total = [x + y for x, y in zip(total, part)]
+    return total

@@ -233,16 +233,19 @@ class MomentSums:
         total = np.array([_fsum(blocks[:, k]) for k in range(N_SUMS)])
         return total, np.array(self._abs_totals).sum(axis=0)
 
-    def moments(self, extra: list[Fraction] | None = None) -> Moments:
+    def moments(self, extra: list[Fraction] | None = None, extra_error: np.ndarray | None = None) -> Moments:
         """The solid's ``Moments``; volume 0 and no centre when the sum is within rounding of 0.
 
         Parameters
         ----------
         extra : list of 10 Fraction, optional
             Exact terms to add to the totals (an open mesh's boundary terms,
-            ``p3d_cli.mesh.boundary.boundary_sums``); the sum and the shift to the centre are
+            ``p3d_cli.mesh.boundary.boundary_terms``); the sum and the shift to the centre are
             then done exactly and rounded once, so that a centre far from the local origin
             loses nothing to cancellation.
+        extra_error : (10,) array_like, optional
+            Bounds on the errors of ``extra``, added to the sums' rounding bounds (and so
+            carried into the result's uncertainty).
         """
         total, abs_total = self.totals()
         # A-priori rounding bound per summed quantity. Each term D·f: D's error is at most
@@ -254,6 +257,8 @@ class MomentSums:
         # loses up to half the smallest subnormal, whatever the magnitudes: ~40 operations per
         # term, each at most 2^-1075 off. Negligible for any part of ordinary size.
         bound = rounding * abs_total + 40 * self.count * _SMALLEST
+        if extra_error is not None:
+            bound = bound + np.asarray(extra_error, dtype=np.float64)
         if extra is not None:
             if np.isfinite(total).all():
                 try:

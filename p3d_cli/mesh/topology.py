@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.mesh.boundary import EXACT_LIMIT, boundary_of, boundary_sums
+from p3d_cli.mesh.boundary import boundary_volume, unbalanced_of
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
@@ -52,7 +52,6 @@ from p3d_cli.mesh.paired import Paired, paired_topology
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
 from p3d_cli.mesh.vertices import corner_coords, group_corners
-from p3d_cli.mesh.volume import SignedVolume
 
 __all__ = ["Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
            "TopologyReport", "VertexSample", "components", "corner_vertex_ids",
@@ -200,18 +199,14 @@ def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
 def _volume(blocks, corners, edges: Edges) -> float:
     """The signed volume ``p3d props`` reports for the same triangles (one convention,
     docs/method.md, "Open and non-manifold meshes"): the local sums when every edge cancels,
-    plus the net boundary's exact terms when some does not (``p3d_cli.mesh.boundary``)."""
+    plus the net boundary's exact volume term when some does not (``p3d_cli.mesh.boundary``)."""
     if not (edges.boundary.size or edges.nonmanifold.size or edges.misoriented.size):
         return corners.volume                       # closed: nothing to add
-    start, end, count = boundary_of(blocks)
-    if count.size == 0:
+    unbalanced = unbalanced_of(blocks)
+    if unbalanced.ids.size == 0:
         return corners.volume                       # non-manifold but bounding
-    if int(count.sum()) <= EXACT_LIMIT:
-        return corners.volume_sums.volume(boundary_sums(start, end, count, corners.volume_sums.origin)[0])
-    about_world = SignedVolume(np.zeros(3), block=None)   # the fallback of analysis._open_moments
-    for block in blocks():
-        about_world.add(block)
-    return about_world.volume()
+    six_volume, _ = boundary_volume(blocks(), unbalanced, corners.volume_sums.origin)
+    return corners.volume_sums.volume(six_volume)
 
 
 def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> np.ndarray:

@@ -1,0 +1,295 @@
+"""Open meshes' boundary terms (p3d_cli.mesh.boundary, boundary_terms, expansions) against
+exact rational arithmetic on the meshes' own floats.
+
+Oracles, independent of the code under test: ``exact.exact_moments`` (the world-convention
+sums of T(0, a, b, c) over the faces in Python integers), ``boundary.boundary_sums`` (the net
+boundary's terms in Python integers, the former exact path) and ``fractions.Fraction``; for
+the open box far away, the closed form (its missing face lies in a plane through the origin,
+so its world-convention moments are the closed box's).
+"""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from conftest import write_ascii_stl
+from exact import exact_moments
+import p3d_cli as p3d
+from p3d_cli.io.source import array_source
+from p3d_cli.mesh import boundary, boundary_terms as terms_module
+from p3d_cli.mesh.analysis import analyze
+from p3d_cli.mesh.boundary import (boundary_of, boundary_sums, boundary_terms, boundary_volume,
+                                   unbalanced_groups, unbalanced_of)
+from p3d_cli.mesh.closed import column_edge_keys
+from p3d_cli.mesh.expansions import ExactSum, cascaded_sums, two_product, two_sum
+from p3d_cli.mesh.integrals import columns
+from p3d_cli.rotation import rotation_from_axis_degrees
+
+REL = 1e-9
+
+
+def analysed(t):
+    t = np.asarray(t)
+    return analyze(array_source("t", t, str(t.dtype)), "t")
+
+
+def soup(seed: int, n: int, offset, rotation=None, dtype=np.float64, size: float = 1.0) -> np.ndarray:
+    """``n`` loose random triangles in a cube of side ``size`` (every side is boundary), placed."""
+    t = np.random.default_rng(seed).random((n, 3, 3)) * size
+    if rotation is not None:
+        t = t @ rotation.T
+    return (t + np.asarray(offset, dtype=np.float64)).astype(dtype)
+
+
+def open_box(k: int, offset, split: bool, k2: int | None = None) -> np.ndarray:
+    """The unit cube without its z = 0 face, each face a k × k2 grid (powers of two, so that
+    every point is exact) of rectangles cut into two
+    triangles; with ``split`` every first triangle of a square is cut into four at its
+    edges' midpoints, so no side of a whole triangle meets a matching side (T-junctions
+    everywhere: most sides are boundary, the surface is the same)."""
+    faces = [((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, 0), (0, 0, 1), (0, 1, 0)),
+             ((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((0, 0, 0), (1, 0, 0), (0, 0, 1)),
+             ((0, 1, 0), (0, 0, 1), (1, 0, 0))]
+    k2 = k if k2 is None else k2
+    i, j = np.meshgrid(np.arange(k), np.arange(k2), indexing="ij")
+    i, j = i.reshape(-1, 1) / k, j.reshape(-1, 1) / k2
+    out = []
+    for corner, e1, e2 in faces:
+        c, e1, e2 = (np.asarray(x, dtype=np.float64) for x in (corner, e1, e2))
+        p00 = c + i * e1 + j * e2
+        p10, p01 = p00 + e1 / k, p00 + e2 / k2
+        p11 = p10 + e2 / k2
+        out.append(np.stack([p00, p11, p01], axis=1))
+        if split:
+            m01, m12, m20 = (p00 + p10) / 2, (p10 + p11) / 2, (p11 + p00) / 2
+            out += [np.stack(x, axis=1) for x in ((p00, m01, m20), (m01, p10, m12),
+                                                  (m20, m12, p11), (m01, m12, m20))]
+        else:
+            out.append(np.stack([p00, p10, p11], axis=1))
+    return np.concatenate(out) + np.asarray(offset, dtype=np.float64)
+
+
+def terms_of(t, origin=None):
+    """``boundary_terms`` of ``t`` about ``origin`` (default: the bounding-box centre)."""
+    t = np.asarray(t)
+    flat = t.reshape(-1, 3).astype(np.float64)
+    lo, hi = flat.min(axis=0), flat.max(axis=0)
+    o = 0.5 * (lo + hi) if origin is None else np.asarray(origin, dtype=np.float64)
+    keys = np.sort(column_edge_keys(columns(t)))
+    return boundary_terms(lambda: iter([t]), unbalanced_groups(keys), o, lo, hi), o
+
+
+def oracle_terms(t, origin) -> list:
+    start, end, count = boundary_of(lambda: iter([np.asarray(t)]))
+    return boundary_sums(start, end, count, origin)
+
+
+def assert_terms_exact_within_bounds(t, origin=None):
+    found, o = terms_of(t, origin)
+    exact = oracle_terms(t, o)
+    assert found.sums[0] == exact[0]                       # the volume term: exact
+    for got, want, bound in zip(found.sums, exact, found.error):
+        assert abs(got - want) <= Fraction(float(bound))
+    return found, exact
+
+
+def assert_moments(moments, exact, size: float):
+    """Volume and central second moments within ``REL`` of the exact world-convention values,
+    the centre within ``REL`` of the part's size, and each exact error inside the stated
+    uncertainty (plus the final rounding to float64)."""
+    volume = float(exact.volume)
+    assert abs(moments.volume - volume) <= REL * abs(volume)
+    assert abs(Fraction(moments.volume) - exact.volume) <= (Fraction(moments.errors.volume)
+                                                            + Fraction(float(np.spacing(abs(volume)))))
+    for got, want, bound in zip(moments.center, exact.center, moments.errors.center):
+        error = abs(Fraction(float(got)) - want)
+        assert error <= Fraction(REL * size) + Fraction(float(np.spacing(abs(got))))
+        assert error <= Fraction(float(bound)) + Fraction(float(np.spacing(abs(got))))
+    central = np.array([[float(x) for x in row] for row in exact.central])
+    scale = np.abs(central).max()
+    for i in range(3):
+        for j in range(3):
+            error = abs(Fraction(float(moments.central[i, j])) - exact.central[i][j])
+            assert error <= Fraction(REL * scale)
+            assert error <= (Fraction(float(moments.errors.central[i, j]))
+                             + Fraction(float(np.spacing(scale))))
+
+
+ROTATION = rotation_from_axis_degrees(np.array([1.0, 2.0, 3.0]), 37.0)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4, 1e8, -3e7])
+@pytest.mark.parametrize("rotated", [False, True])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_soup_terms_are_exact_in_volume_and_within_their_bounds(offset, rotated, dtype):
+    size = 1024.0 if dtype == np.float32 and abs(offset) >= 1e7 else 1.0
+    t = soup(3, 60, [offset, -0.5 * offset, 0.25], ROTATION if rotated else None, dtype, size)
+    assert_terms_exact_within_bounds(t)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4, 1e8])
+@pytest.mark.parametrize("rotated", [False, True])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_far_soups_moments_match_the_exact_world_convention(offset, rotated, dtype):
+    # float32 resolves 8 at 1e8: the part is made big enough to keep its shape there.
+    size = 1024.0 if dtype == np.float32 and offset >= 1e8 else 1.0
+    t = soup(11, 400, [offset, offset, 0.0], ROTATION if rotated else None, dtype, size)
+    found = analysed(t)
+    assert found.closed is False and found.bounding is False and found.boundary_edges == 3 * len(t)
+    assert_moments(found.moments, exact_moments(t), 2.0 * size)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4, 1e8])
+@pytest.mark.parametrize("split", [False, True])
+def test_open_box_far_away_has_the_closed_box_moments(offset, split):
+    # The missing face is in the plane z = 0, through the origin: its cone is flat, so the
+    # world-convention moments are exactly the unit cube's, however far along x and y.
+    t = open_box(8, [offset, offset, 0.0], split)
+    found = analysed(t)
+    assert found.bounding is False
+    exact = exact_moments(t)
+    assert exact.volume == 1 and exact.central[0][0] == Fraction(1, 12)
+    assert_moments(found.moments, exact, 1.0)
+    assert_terms_exact_within_bounds(t)
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e8])
+def test_rotated_open_box_far_away(offset):
+    t = open_box(8, [0.0, 0.0, 0.0], True, 4) @ ROTATION.T + [offset, 2 * offset, -offset]
+    assert_moments(analysed(t).moments, exact_moments(t), 1.7)
+    assert_terms_exact_within_bounds(t)
+
+
+def test_open_mesh_with_a_few_holes_uses_the_membership_path():
+    t = open_box(10, [1e8, -1e8, 5.0], False)
+    unbalanced = unbalanced_of(lambda: iter([t]))
+    assert not unbalanced.most and unbalanced.edges == 40      # the missing face's rim
+    assert_moments(analysed(t).moments, exact_moments(t), 1.0)
+    assert_terms_exact_within_bounds(t)
+
+
+def test_soup_and_membership_paths_give_the_same_terms():
+    t = open_box(4, [1e8, 3.0, -2e7], True, 8)
+    keys = np.sort(column_edge_keys(columns(t)))
+    groups = unbalanced_groups(keys)
+    lo, hi = t.reshape(-1, 3).min(axis=0), t.reshape(-1, 3).max(axis=0)
+    o = 0.5 * (lo + hi)
+    every = boundary_terms(lambda: iter([t]), groups, o, lo, hi)
+    some = boundary_terms(lambda: iter([t]), boundary.Unbalanced(groups.ids, groups.edges, 1, 10**9), o, lo, hi)
+    exact = oracle_terms(t, o)
+    assert every.sums[0] == some.sums[0] == exact[0]
+    for a, b, want, ea, eb in zip(every.sums, some.sums, exact, every.error, some.error):
+        assert abs(a - want) <= Fraction(float(ea)) and abs(b - want) <= Fraction(float(eb))
+
+
+def test_check_volume_term_is_the_same_exact_number():
+    t = soup(5, 200, [1e8, 1e8, 0.5], ROTATION)
+    found, o = terms_of(t)
+    six_volume, lost = boundary_volume(iter([t]), unbalanced_of(lambda: iter([t])), o)
+    assert six_volume == found.sums[0] and lost == 0.0
+
+
+def test_inexact_local_coordinates_fall_back_to_exact_integers(monkeypatch):
+    t = soup(7, 50, [0.3, 1e8, 0.0])
+    # A frame in which u - o' is not exact: the fast path must notice and not use it.
+    monkeypatch.setattr(boundary, "frame_origin", lambda lo, hi: np.array([0.1, 1e8 / 3, 0.7]))
+    found, o = terms_of(t)
+    assert found.sums == oracle_terms(t, o)
+
+
+def test_huge_world_coordinates_keep_the_volume_term_exact():
+    t = soup(2, 20, [2.0 ** 500, 0.0, 0.0]) * np.array([1.0, 2.0 ** 480, 1.0])
+    six_volume, _ = boundary_volume(iter([t]), unbalanced_of(lambda: iter([t])), np.zeros(3) + 1.5)
+    assert six_volume == oracle_terms(t, np.zeros(3) + 1.5)[0]
+
+
+def test_large_far_soup_end_to_end(tmp_path):
+    # More than 65,536 boundary edges (the former limit of the exact terms), far away.
+    t = open_box(64, [1e8, 1e8, 0.0], True, 32)
+    path = tmp_path / "soup.stl"
+    write_ascii_stl(path, t)
+    result = p3d.props(str(path))
+    assert result.facts.closed is False
+    p = result.properties
+    assert abs(p.volume - 1.0) <= REL
+    assert np.abs(p.center_of_mass - [1e8 + 0.5, 1e8 + 0.5, 0.5]).max() <= REL + np.spacing(1e8)
+    assert np.abs(p.inertia - np.eye(3) / 6).max() <= REL / 6
+    inertia_bound = np.asarray(result.uncertainty["inertia"])
+    assert (np.abs(p.inertia - np.eye(3) / 6) <= inertia_bound + 1e-15).all()
+    assert (inertia_bound < 1e-10).all()
+    report = p3d.check(str(path))
+    assert report.report.boundary_edges > 65536
+    assert report.report.volume == p.volume
+    assert json.dumps(report.report.volume) == json.dumps(p.volume)
+
+
+def test_exact_sum_against_fractions():
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal((4, 500)) * np.exp2(rng.integers(-80, 80, (4, 500)))
+    x[0, :6] = [1e-310, -3e-320, 5e307, -5e307, 0.0, -0.0]
+    total = ExactSum(2)
+    total.add(x, np.array([0, 1, 0, 1]))
+    total.add(x[:1], np.array([1]))
+    want = [sum(map(Fraction, x[0].tolist() + x[2].tolist())),
+            sum(map(Fraction, x[1].tolist() + x[3].tolist() + x[0].tolist()))]
+    assert total.totals() == want
+
+
+def test_cascaded_sums_are_within_their_bound():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal((3, 1001)) * np.exp2(rng.integers(-30, 30, (3, 1001)))
+    high, low, factor = cascaded_sums(x)
+    for row in range(3):
+        exact = sum(map(Fraction, x[row].tolist()))
+        bound = Fraction(factor) * Fraction(2) ** -106 * sum(abs(Fraction(v)) for v in x[row].tolist())
+        assert abs(Fraction(float(high[row])) + Fraction(float(low[row])) - exact) <= bound
+
+
+@given(st.lists(st.floats(-1e150, 1e150, allow_nan=False), min_size=2, max_size=40),
+       st.lists(st.floats(-1e150, 1e150, allow_nan=False), min_size=2, max_size=40))
+def test_two_product_and_two_sum_are_error_free(a, b):
+    n = min(len(a), len(b))
+    x, y = np.array(a[:n]), np.array(b[:n])
+    p, e = two_product(x, y)
+    s, f = two_sum(x, y)
+    for xi, yi, pi, ei, si, fi in zip(x.tolist(), y.tolist(), p.tolist(), e.tolist(), s.tolist(), f.tolist()):
+        product = Fraction(xi) * Fraction(yi)
+        if product == 0 or abs(product) > 2.0 ** -900:     # no underflow of the error term
+            assert Fraction(pi) + Fraction(ei) == product
+        assert Fraction(si) + Fraction(fi) == Fraction(xi) + Fraction(yi)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(3, 40), st.sampled_from([0.0, 1.0, 1e3, 1e6, 1e8, 1e12]),
+       st.floats(0.0, 360.0), st.booleans())
+def test_random_soups_terms_property(seed, n, offset, degrees, float32):
+    rotation = rotation_from_axis_degrees(np.array([0.3, -1.0, 0.5]), degrees)
+    t = soup(seed, n, [offset, -offset, 0.5 * offset], rotation, np.float32 if float32 else np.float64)
+    found, exact = assert_terms_exact_within_bounds(t)
+    # The bound is small: far below the terms' own size (|o|³ L² for the second moments).
+    scale = max(1.0, offset) ** 3
+    assert (found.error[4:] <= 1e-20 * scale * n).all()
+
+
+def test_frame_origin_makes_local_coordinates_exact():
+    lo = np.array([1e8, -3.0, 0.1])
+    hi = np.array([1e8 + 1.0, -1.0, 1.0])
+    frame = terms_module.frame_origin(lo, hi)
+    u = np.random.default_rng(4).uniform(lo, hi, size=(1000, 3))
+    a, error = two_sum(u, -frame)
+    assert not error.any()
+    assert frame[2] == 0.0 and lo[0] <= frame[0] <= hi[0] and lo[1] <= frame[1] <= hi[1]
+
+
+def test_coordinates_spanning_beyond_the_scaling_fall_back_to_exact_integers():
+    # Scaled by 2**-333 to |a| <= 1, a coordinate of 5e-324 (the least subnormal) would vanish.
+    t = soup(8, 6, [0.0, 0.0, 0.0])
+    t[0, 0] = [5e-324, 3e-320, 0.0]
+    t[1, 1] = [1e100, 0.5, 0.25]
+    found, o = terms_of(t)
+    assert found.sums == oracle_terms(t, o)
