@@ -1,5 +1,5 @@
 """``python -m p3d_cli`` runs the ``p3d`` command line."""
 
-from p3d_cli.cli.main import cli
+from p3d_cli.cli.main import run
 
-cli(prog_name="p3d")
+run()

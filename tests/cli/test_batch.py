@@ -284,6 +284,25 @@ def test_dask_props_with_standard_input_done_locally(mixed, dask_address):
     assert records[0]["volume"] == records[1]["volume"] == 27.0
 
 
+def test_the_program_after_a_dask_batch_ends_with_its_status_and_all_its_output(mixed):
+    # ``python -m p3d_cli`` (the console script's ``run``) skips dask.distributed's teardown
+    # with os._exit: every line must still be written, in order, and the status kept. The
+    # cluster listens on TCP, so that another process can reach it.
+    if os.environ.get("CI") != "true":
+        pytest.importorskip("dask.distributed")
+    from dask.distributed import LocalCluster
+
+    _, listing, expected = mixed
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp",
+                      dashboard_address=":0") as cluster:
+        done = subprocess.run([sys.executable, "-m", "p3d_cli", "check", "--files-from", str(listing), "--json",
+                               "--dask", cluster.scheduler_address], capture_output=True, text=True, timeout=120)
+    assert verdicts(done.stdout) == list(expected.items())
+    assert done.returncode == 2
+    assert done.stderr.rstrip().endswith("p3d: 10 files: 7 ok, 1 failed check, 2 errors")
+    assert "Traceback" not in done.stderr
+
+
 def test_dask_losing_a_task_is_that_input_error(monkeypatch):
     distributed = pytest.importorskip("dask.distributed")
 
