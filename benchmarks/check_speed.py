@@ -39,7 +39,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from installed import cache_bytecode
+from installed import cache_bytecode, run_once
 
 #: name -> (u, v) of a grid torus with 2·u·v triangles, and whether to remove two faces.
 MESHES = {"closed-1m": (1000, 500, False), "open-1m": (1000, 500, True),
@@ -69,20 +69,6 @@ with open(path, "wb") as f:
     f.write(np.uint32(len(faces)).tobytes())
     out.tofile(f)
 '''
-
-
-def run_once(argv, env) -> tuple[float, float, float, int, str]:
-    """Run ``argv``; return wall s, user+sys s, peak RSS MB, exit status, stdout."""
-    with tempfile.TemporaryFile() as out:
-        start = time.perf_counter()
-        child = subprocess.Popen(argv, stdout=out, stderr=subprocess.DEVNULL,
-                                 stdin=subprocess.DEVNULL, env=env)
-        _, status, usage = os.wait4(child.pid, 0)
-        wall = time.perf_counter() - start
-        out.seek(0)
-        text = out.read().decode(errors="replace")
-    rss = usage.ru_maxrss / (1 << 20 if sys.platform == "darwin" else 1 << 10)
-    return wall, usage.ru_utime + usage.ru_stime, rss, os.waitstatus_to_exitcode(status), text
 
 
 def commands(paths: dict, admesh: str | None) -> dict:

@@ -5,7 +5,8 @@ run does). A development shell that sets ``PYTHONDONTWRITEBYTECODE=1`` would ins
 editable p3d compile every module from source on every run, while numpy, trimesh and dask
 load their cached bytecode: 0.1-0.2 s of every p3d process that no user pays. Every benchmark
 that starts processes calls ``cache_bytecode()`` first; the cache goes to a folder of its own
-(``PYTHONPYCACHEPREFIX``), so the source tree is left as it is.
+(``PYTHONPYCACHEPREFIX``), so the source tree is left as it is. ``run_once`` times one such
+process.
 """
 
 from __future__ import annotations
@@ -20,3 +21,22 @@ def cache_bytecode(folder: str | None = None) -> dict:
     os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
     os.environ["PYTHONPYCACHEPREFIX"] = folder or os.path.join(tempfile.gettempdir(), "p3d-bench-pycache")
     return dict(os.environ)
+
+
+def run_once(argv, env) -> tuple[float, float, float, int, str]:
+    """Run ``argv`` as a whole process; return wall s, user+sys s, peak RSS MB, exit status
+    and stdout (CPU time and peak memory from ``os.wait4``, as ``/usr/bin/time -v`` shows them)."""
+    import subprocess
+    import sys
+    import time
+
+    with tempfile.TemporaryFile() as out:
+        start = time.perf_counter()
+        child = subprocess.Popen(argv, stdout=out, stderr=subprocess.DEVNULL,
+                                 stdin=subprocess.DEVNULL, env=env)
+        _, status, usage = os.wait4(child.pid, 0)
+        wall = time.perf_counter() - start
+        out.seek(0)
+        text = out.read().decode(errors="replace")
+    rss = usage.ru_maxrss / (1 << 20 if sys.platform == "darwin" else 1 << 10)
+    return wall, usage.ru_utime + usage.ru_stime, rss, os.waitstatus_to_exitcode(status), text

@@ -38,7 +38,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from installed import cache_bytecode
+from installed import cache_bytecode, run_once
 
 HERE = Path(__file__).resolve().parent.parent
 
@@ -73,20 +73,6 @@ with open(path, "wb") as f:
     t.reshape(-1, 3).astype("<f8").tofile(f)
     face.tofile(f)
 '''
-
-
-def run_once(argv, env) -> tuple[float, float, float, int, str]:
-    """Run ``argv``; return wall s, user+sys s, peak RSS MB, exit status, stdout."""
-    with tempfile.TemporaryFile() as out:
-        start = time.perf_counter()
-        child = subprocess.Popen(argv, stdout=out, stderr=subprocess.DEVNULL,
-                                 stdin=subprocess.DEVNULL, env=env)
-        _, status, usage = os.wait4(child.pid, 0)
-        wall = time.perf_counter() - start
-        out.seek(0)
-        text = out.read().decode(errors="replace")
-    rss = usage.ru_maxrss / (1 << 20 if sys.platform == "darwin" else 1 << 10)
-    return wall, usage.ru_utime + usage.ru_stime, rss, os.waitstatus_to_exitcode(status), text
 
 
 def cases(paths: dict, trees: dict, env: dict, baseline_runs: int, runs: int) -> dict:
