@@ -237,9 +237,13 @@ def test_ctrl_c_keeps_written_lines_and_exits_130(tmp_path):
     for i in range(300):
         write_binary_stl(tmp_path / f"m{i:03}.stl", CUBE + i)
     # Unbuffered: communicate() reads the pipe directly, past anything a buffer held back.
-    proc = subprocess.Popen([sys.executable, "-m", "p3d_cli", "props", str(tmp_path), "--json", "--jobs", "2"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
-                            bufsize=0)
+    # The last input is standard input, read by p3d at its turn and never written here: the
+    # batch cannot end before the Ctrl-C, however fast the files go (on a loaded machine the
+    # 300 files could all be done before the signal landed).
+    proc = subprocess.Popen([sys.executable, "-m", "p3d_cli", "props", str(tmp_path), "-", "--format", "stl",
+                             "--json", "--jobs", "2"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True, bufsize=0)
     first = proc.stdout.readline()
     os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
     rest, err = proc.communicate(timeout=30)
