@@ -239,6 +239,12 @@ class _Mesh:
         self.skipped = skipped
         self.base = base            # vertices defined before (in earlier chunks)
 
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(vertices (v, 3) float64, corners, sizes)``: the vertices copied out of the buffer,
+        the other two views of it."""
+        vertices = np.frombuffer(self.vertices, dtype=np.float64).reshape(-1, 3).copy()
+        return vertices, np.frombuffer(self.corners, dtype=np.int64), np.frombuffer(self.sizes, dtype=np.int64)
+
 
 def parse_lines(where: str, chunks):
     """Line by line, with line numbers in every error. Returns vertices, faces, warnings."""
@@ -247,11 +253,9 @@ def parse_lines(where: str, chunks):
     for number, words in _statements(where, chunks):
         _statement(where, number, words, mesh)
     _refuse_garbled(where, skipped)
-    vertices = np.frombuffer(mesh.vertices, dtype=np.float64).reshape(-1, 3)
-    corners = np.frombuffer(mesh.corners, dtype=np.int64)
-    sizes = np.frombuffer(mesh.sizes, dtype=np.int64)
+    vertices, corners, sizes = mesh.arrays()
     _check_range(where, corners, sizes, mesh.face_line, len(vertices))
-    return vertices.copy(), fan_triangles(corners, sizes), _warnings(skipped)
+    return vertices, fan_triangles(corners, sizes), _warnings(skipped)
 
 
 def _careful_chunk(where: str, chunk: bytes, lines: int, defined: int, skipped: _Skipped):
@@ -261,9 +265,8 @@ def _careful_chunk(where: str, chunk: bytes, lines: int, defined: int, skipped: 
     mesh = _Mesh(skipped, defined)
     for number, words in _statements(where, [chunk], lines):
         _statement(where, number, words, mesh)
-    vertices = np.frombuffer(mesh.vertices, dtype=np.float64).reshape(-1, 3).copy()
-    corners = np.frombuffer(mesh.corners, dtype=np.int64)
-    return vertices, fan_triangles(corners, np.frombuffer(mesh.sizes, dtype=np.int64))
+    vertices, corners, sizes = mesh.arrays()
+    return vertices, fan_triangles(corners, sizes)
 
 
 def _statement(where: str, number: int, words: list[bytes], mesh: _Mesh) -> None:

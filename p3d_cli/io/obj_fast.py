@@ -121,9 +121,7 @@ def parse_chunk(data: bytes, defined: int):
         corners = np.where(corners < 0, before + corners, corners - 1)
     else:
         corners -= 1
-    corners = _narrow(corners)
-    # A chunk of triangles only (the usual file) needs no fan splitting.
-    return vertices, (corners.reshape(-1, 3) if (sizes == 3).all() else fan_triangles(corners, sizes)), statements
+    return vertices, fan_triangles(_narrow(corners), sizes), statements
 
 
 def _narrow(corners: np.ndarray) -> np.ndarray:
