@@ -64,7 +64,9 @@ class Unbalanced:
     Attributes
     ----------
     ids : (d,) uint64, sorted
-        Their edge ids (``key >> 1``), as ``unbalanced_edges``.
+        Their edge ids (``key >> 1``). Equal exact edges have equal keys, so an edge whose key
+        group is balanced cancels unless two different edges' 64-bit keys collided (the risk
+        ``closed`` already takes for its pairs).
     edges : int
         The net boundary's size: ``|forward - backward|`` summed over their key groups.
     sides : int
@@ -96,23 +98,6 @@ def unbalanced_groups(keys: np.ndarray) -> Unbalanced:
     return Unbalanced(np.concatenate(found) if found else keys[:0], size, sides, int(keys.size))
 
 
-def unbalanced_edges(keys: np.ndarray) -> np.ndarray:
-    """Edge ids (``key >> 1``) whose two directions are not used equally often.
-
-    Parameters
-    ----------
-    keys : (m,) uint64, sorted
-        Directed edge keys (``closed.column_edge_keys``).
-
-    Notes
-    -----
-    Equal exact edges have equal keys, so an edge whose key group is balanced cancels unless
-    two different edges' 64-bit keys collided (the risk ``closed`` already takes for its pairs).
-    """
-    found = [edge[2 * forward != counts] for edge, counts, forward in key_groups(keys)]
-    return np.concatenate(found) if found else keys[:0]
-
-
 def net_boundary(source_blocks, unbalanced: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The net boundary's distinct directed edges ``u→v`` with their multiplicities.
 
@@ -121,7 +106,7 @@ def net_boundary(source_blocks, unbalanced: np.ndarray) -> tuple[np.ndarray, np.
     source_blocks : iterable of (k, 3, 3) arrays
         The triangles, in blocks (read once more).
     unbalanced : (d,) uint64
-        From ``unbalanced_edges``.
+        Edge ids, ``Unbalanced.ids``.
 
     Returns
     -------
