@@ -16,7 +16,7 @@ import click
 
 from p3d_cli.batch import Outcome, run_each
 from p3d_cli.batch.inputs import collect, extension_counts
-from p3d_cli.cli.main import error_message, exit_status
+from p3d_cli.cli.main import error_message, exit_status, import_frozen
 from p3d_cli.cli.output import shown_name
 from p3d_cli.cli.reports import Entry, ReportOptions, write_reports
 from p3d_cli.errors import UsageError
@@ -98,6 +98,8 @@ class Batch:
 
     def outcomes(self, work: Callable[[str], object]) -> Generator[Outcome, None, None]:
         """``run_each`` over the inputs, with a progress bar on a terminal's stderr."""
+        if self.options.dask is not None:
+            import_frozen("dask.distributed")  # the client's import, ahead and faster (see there)
         results = run_each(self.items, work, jobs=self.options.jobs, dask=self.options.dask)
         self._bar = _progress_bar(len(self.items))
         try:
