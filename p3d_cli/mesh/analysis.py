@@ -15,7 +15,8 @@ from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import MeshSource
 from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
-from p3d_cli.mesh.integrals import MomentSums, columns, local_origin, origin_from_bounds, tetrahedron_sums
+from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
+from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
 from p3d_cli.results import Bounds, Moments
 
 

@@ -141,7 +141,7 @@ def boundary_of(source_blocks) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def unbalanced_of(source_blocks) -> Unbalanced:
     """``unbalanced_groups`` of the triangles read once from ``source_blocks()`` (a callable)."""
-    from p3d_cli.mesh.integrals import columns
+    from p3d_cli.mesh.columns import columns
 
     keys = [column_edge_keys(columns(block)) for block in source_blocks()]
     flat = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
@@ -204,7 +204,7 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
     binary search in the sorted ids, not ``numpy.isin`` (which hashes all the ids again for
     every block); a soup, whose sides are nearly all unbalanced, skips it (``every``).
     """
-    from p3d_cli.mesh.integrals import columns as to_columns
+    from p3d_cli.mesh.columns import columns as to_columns
 
     ids = np.sort(unbalanced)
     if ids.size == 0:

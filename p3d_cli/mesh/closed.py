@@ -228,7 +228,7 @@ def sides_of_edges(source_blocks, edges: np.ndarray) -> tuple[np.ndarray, np.nda
         The triangles again, in blocks.
     edges : (d,) uint64, sorted
     """
-    from p3d_cli.mesh.integrals import columns as to_columns
+    from p3d_cli.mesh.columns import columns as to_columns
 
     ends = []
     for block in source_blocks:

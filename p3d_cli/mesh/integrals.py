@@ -26,6 +26,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from p3d_cli.mesh.columns import columns, local_origin
 from p3d_cli.results import MomentErrors, Moments
 
 #: Number of summed quantities: 6V, 24·first (3), 120·second (xx, yy, zz, xy, xz, yz).
@@ -345,18 +346,6 @@ def _radius(local: np.ndarray) -> np.ndarray:
     return np.maximum(local.max(axis=(0, 2)), -local.min(axis=(0, 2)))
 
 
-def columns(points: np.ndarray) -> np.ndarray:
-    """A fresh float64 copy of ``points`` ``(n, k, 3)`` as ``(k, 3, n)``: vertex slot, axis, element.
-
-    Float32 input is widened (exactly) first (docs/method.md, "Float32 input": widen before any arithmetic). Always a
-    new array, so callers may shift it in place.
-    """
-    points = np.asarray(points)
-    out = np.empty((points.shape[1], 3, points.shape[0]))
-    np.copyto(out, points.transpose(1, 2, 0))
-    return out
-
-
 def _local_columns(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
     """``points - origin`` in float64 as ``(k, 3, n)``: vertex slot, axis, element."""
     local = columns(points)
@@ -405,23 +394,3 @@ def tetrahedron_sums(tetrahedra: np.ndarray, origin=None, block: int = 65536) ->
     for start in range(0, len(tetrahedra), block):
         sums.add_tetrahedra(tetrahedra[start:start + block])
     return sums
-
-
-def local_origin(points: np.ndarray) -> np.ndarray:
-    """A local origin near the part: the centre of the points' bounding box.
-
-    For float32 input the centre is rounded to float32, so that ``p - origin`` is exact in
-    float64 for every float32 coordinate ``p`` of comparable magnitude.
-    """
-    flat = np.asarray(points).reshape(-1, 3)
-    if flat.shape[0] == 0:
-        return np.zeros(3)
-    return origin_from_bounds(flat.min(axis=0), flat.max(axis=0), flat.dtype == np.float32)
-
-
-def origin_from_bounds(lo: np.ndarray, hi: np.ndarray, float32: bool) -> np.ndarray:
-    """``local_origin`` from the points' bounds (for callers that have them already)."""
-    center = 0.5 * (np.asarray(lo, dtype=np.float64) + np.asarray(hi, dtype=np.float64))
-    if float32:
-        center = center.astype(np.float32).astype(np.float64)
-    return center

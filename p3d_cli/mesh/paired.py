@@ -40,7 +40,7 @@ import numpy as np
 from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, _mix, corner_hashes
 from p3d_cli.mesh.edges import corner_slot
 from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.mesh.integrals import columns, origin_from_bounds
+from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
 from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
 from p3d_cli.mesh.volume import SignedVolume

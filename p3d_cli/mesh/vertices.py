@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.mesh.closed import _column_hashes, corner_hashes
-from p3d_cli.mesh.integrals import columns, origin_from_bounds
+from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.volume import SignedVolume
 
 #: Corners handled per vectorised step of the passes over the sorted keys (cache-sized).

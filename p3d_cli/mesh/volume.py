@@ -15,7 +15,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.integrals import columns, determinants, volume_from
+from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.integrals import determinants, volume_from
 
 #: Faces per summed block: ``triangle_moments``' default block.
 BLOCK = 65536
@@ -48,7 +49,7 @@ class SignedVolume:
         self.add_columns(columns(triangles))
 
     def add_columns(self, cols: np.ndarray) -> None:
-        """Add triangles as ``(3, 3, k)`` float64 columns (``integrals.columns``); shifted in
+        """Add triangles as ``(3, 3, k)`` float64 columns (``columns.columns``); shifted in
         place to the origin."""
         cols -= self.origin[None, :, None]
         start, k = 0, cols.shape[2]

@@ -11,7 +11,7 @@ from p3d_cli.io.source import array_source
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.closed import (closed_exact, column_edge_keys, doubtful_edges, keys_pair_up,
                                  sides_pair_up_exactly)
-from p3d_cli.mesh.integrals import columns
+from p3d_cli.mesh.columns import columns
 
 
 def sorted_keys(t):

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from conftest import write_ascii_stl
 from p3d_cli.io import load_mesh
 from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.mesh.integrals import columns
+from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.topology import topology
 from p3d_cli.mesh.verdicts import check_source
 from test_topology_oracle import exact_zero_area

@@ -20,7 +20,8 @@ import p3d_cli.mesh.fans as fans
 import p3d_cli.mesh.vertices as vertices
 from p3d_cli.mesh.edges import group_edges
 from p3d_cli.mesh.faces import duplicate_faces
-from p3d_cli.mesh.integrals import local_origin, triangle_moments
+from p3d_cli.mesh.columns import local_origin
+from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.mesh.topology import _array_blocks, topology
 from p3d_cli.mesh.vertices import group_corners
 from p3d_cli.mesh.volume import SignedVolume
