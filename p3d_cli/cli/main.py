@@ -235,9 +235,9 @@ def import_frozen(name: str) -> None:
     program only (``run``), freeze every object made so far (``gc.freeze``).
 
     dask.distributed's import makes some 90,000 objects the collector tracks (classes,
-    functions, tornado's and asyncio's tables) that live as long as the process. On their way in, the collector walks
-    them at each threshold crossed: ~160 collections, a full one among them, 50-60 ms of a
-    0.4 s import; and every full collection after walks them again. Frozen, they are left
+    functions, tornado's and asyncio's tables) that live as long as the process. On their way
+    in, the collector walks them at each threshold crossed: ~160 collections, a full one among
+    them, 50-60 ms of a 0.4 s import; and every full collection after walks them again. Frozen, they are left
     alone: the client of a ``--dask`` batch sends its first task 0.075 s sooner (0.54 s to
     0.47 s after start, medians of 12 alternated runs). A caller of ``cli`` from Python
     (the tests) keeps its collector as it was: freezing is not a library's call to make. An

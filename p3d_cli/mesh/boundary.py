@@ -31,6 +31,7 @@ import numpy as np
 from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combine, combine_bound, frame_origin
 from p3d_cli.mesh.closed import (_column_hashes, _lex_less, _side_keys, column_edge_keys, key_groups,
                                   sides_of_edges)
+from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.expansions import two_sum
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
@@ -141,8 +142,6 @@ def boundary_of(source_blocks) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def unbalanced_of(source_blocks) -> Unbalanced:
     """``unbalanced_groups`` of the triangles read once from ``source_blocks()`` (a callable)."""
-    from p3d_cli.mesh.columns import columns
-
     keys = [column_edge_keys(columns(block)) for block in source_blocks()]
     flat = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
     flat.sort()
@@ -204,13 +203,11 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
     binary search in the sorted ids, not ``numpy.isin`` (which hashes all the ids again for
     every block); a soup, whose sides are nearly all unbalanced, skips it (``every``).
     """
-    from p3d_cli.mesh.columns import columns as to_columns
-
     ids = np.sort(unbalanced)
     if ids.size == 0:
         return
     for block in source_blocks:
-        cols = to_columns(block)
+        cols = columns(block)
         if cols.shape[2] == 0:
             continue
         scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.mesh.columns import columns
+
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -228,11 +230,9 @@ def sides_of_edges(source_blocks, edges: np.ndarray) -> tuple[np.ndarray, np.nda
         The triangles again, in blocks.
     edges : (d,) uint64, sorted
     """
-    from p3d_cli.mesh.columns import columns as to_columns
-
     ends = []
     for block in source_blocks:
-        cols = to_columns(block)
+        cols = columns(block)
         if cols.shape[2] == 0:
             continue
         scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)
