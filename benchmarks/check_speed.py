@@ -45,30 +45,7 @@ from installed import cache_bytecode, run_once
 MESHES = {"closed-1m": (1000, 500, False), "open-1m": (1000, 500, True),
           "closed-70k": (250, 140, False), "open-70k": (250, 140, True)}
 
-GENERATE = r'''
-import sys
-import numpy as np
-u, v, open_, path = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3] == "1", sys.argv[4]
-i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-ring = 3.0 + np.cos(phi)
-vertices = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], axis=-1)
-vertices = (vertices.reshape(-1, 3) + [12.5, -7.25, 3.0]).astype(np.float32)
-a = (i * v + j).reshape(-1)
-b = (((i + 1) % u) * v + j).reshape(-1)
-c = (((i + 1) % u) * v + (j + 1) % v).reshape(-1)
-d = (i * v + (j + 1) % v).reshape(-1)
-faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-if open_:
-    faces = faces[2:]
-record = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
-out = np.zeros(len(faces), record)
-out["corners"] = vertices[faces]
-with open(path, "wb") as f:
-    f.write(b"p3d check benchmark torus".ljust(80, b" "))
-    f.write(np.uint32(len(faces)).tobytes())
-    out.tofile(f)
-'''
+TORUS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "torus.py")  # the mesh writer, run as a child
 
 
 def commands(paths: dict, admesh: str | None) -> dict:
@@ -152,8 +129,8 @@ def main(argv=None) -> int:
     for name, (u, v, open_) in MESHES.items():
         paths[name] = os.path.join(workdir, f"torus-{name}.stl")
         if not os.path.exists(paths[name]):
-            subprocess.run([sys.executable, "-c", GENERATE, str(u), str(v), "1" if open_ else "0",
-                            paths[name]], check=True)
+            subprocess.run([sys.executable, TORUS, "stl", str(u), str(v), paths[name], "--at", "12.5", "-7.25", "3.0"]
+                           + (["--open"] if open_ else []), check=True)
     sizes = {name: os.path.getsize(p) for name, p in paths.items()}
     admesh = shutil.which("admesh")
     if admesh is None:

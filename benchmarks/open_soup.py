@@ -42,37 +42,7 @@ from installed import cache_bytecode, run_once
 
 HERE = Path(__file__).resolve().parent.parent
 
-GENERATE = r'''
-import sys
-import numpy as np
-u, v, soup, path = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3] == "1", sys.argv[4]
-i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-ring = 3.0 + np.cos(phi)
-vertices = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], axis=-1)
-vertices = vertices.reshape(-1, 3) + [1e8, 1e8, 0.0]
-a = (i * v + j).reshape(-1)
-b = (((i + 1) % u) * v + j).reshape(-1)
-c = (((i + 1) % u) * v + (j + 1) % v).reshape(-1)
-d = (i * v + (j + 1) % v).reshape(-1)
-faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-t = vertices[faces]
-if soup:
-    centre = t.mean(axis=1, keepdims=True)
-    t = centre + (t - centre) * (1 - 2.0 ** -20)
-n = len(t)
-header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {3 * n}\n"
-          "property double x\nproperty double y\nproperty double z\n"
-          f"element face {n}\nproperty list uchar int vertex_indices\nend_header\n").encode()
-record = np.dtype([("k", "u1"), ("ids", "<i4", (3,))], align=False)
-face = np.zeros(n, record)
-face["k"] = 3
-face["ids"] = np.arange(3 * n, dtype=np.int32).reshape(n, 3)
-with open(path, "wb") as f:
-    f.write(header)
-    t.reshape(-1, 3).astype("<f8").tofile(f)
-    face.tofile(f)
-'''
+TORUS = str(Path(__file__).resolve().parent / "torus.py")  # the mesh writer, run as a child
 
 
 def cases(paths: dict, trees: dict, env: dict, baseline_runs: int, runs: int) -> dict:
@@ -140,8 +110,8 @@ def main(argv=None) -> int:
     for mesh in ("closed", "soup"):
         path = work / f"torus-1m-{mesh}.ply"
         if not path.exists():
-            subprocess.run([sys.executable, "-c", GENERATE, "1000", "500", str(int(mesh == "soup")), str(path)],
-                           check=True)
+            subprocess.run([sys.executable, TORUS, "ply", "1000", "500", str(path), "--at", "1e8", "1e8", "0"]
+                           + (["--soup"] if mesh == "soup" else []), check=True)
         paths[mesh] = str(path)
     trees = {"after": HERE}
     if args.baseline:
