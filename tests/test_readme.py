@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 from conftest import REPO
 
@@ -13,7 +17,7 @@ README = (REPO / "README.md").read_text()
 
 
 def test_readme_opens_with_the_two_setup_commands():
-    blocks = re.findall(r"```sh\n(.*?)\n```", README, re.S)
+    blocks = _readme_blocks()
     assert blocks[0].startswith("python3 -m venv") and "pip install . && p3d props sample_meshes/" in blocks[0]
     assert "pip install '.[test]' && pytest" in blocks[1]
     sample = blocks[0].rsplit("p3d props ", 1)[1].split()[0]
@@ -51,3 +55,29 @@ def test_api_doc_examples_run():
     done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert "sample_meshes/bracket.stl" in done.stdout
+
+
+def _readme_blocks() -> list[str]:
+    return re.findall(r"```sh\n(.*?)\n```", README, re.S)
+
+
+def test_bare_pytest_collects_without_errors():
+    """The README runs bare ``pytest``, which (unlike ``python -m pytest``) does not put the working
+    directory on the import path: every test module must import that way too."""
+    pytest_script = Path(sys.executable).with_name("pytest")
+    if not pytest_script.is_file():
+        pytest.skip(f"no pytest console script beside {sys.executable}")
+    env = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
+    done = subprocess.run([str(pytest_script), "--collect-only", "-q", "-p", "no:cacheprovider"], cwd=REPO,
+                          env=env, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert "error" not in done.stdout.splitlines()[-1].lower(), done.stdout[-3000:]
+    assert re.search(r"\b[1-9][0-9]{2,} tests collected\b", done.stdout), done.stdout[-500:]
+
+
+def test_ci_runs_the_readme_test_command_as_written():
+    """.ci/run takes the command from the README (the second sh block), not a copy of it."""
+    done = subprocess.run(["bash", str(REPO / ".ci" / "run"), "--print-command"], cwd=REPO,
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.rstrip("\n") == _readme_blocks()[1]

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from p3d_cli.cli.main import cli
 from p3d_cli.robots import load_robot
-from tests.robots.conftest import box_mesh, write_stl
+from helpers.robot_arm import box_mesh, write_stl
 
 ARGS = ("--units", "mm", "--density", "2700kg/m^3", "--rpy", "0.1,0.2,0.3", "--translate", "5,0,-3")
 

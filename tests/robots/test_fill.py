@@ -13,8 +13,8 @@ from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
 from p3d_cli.robots import fill_robot, load_robot
 from p3d_cli.robots.xmltree import parse_xml
-from tests.robots import oracle
-from tests.robots.conftest import DENSITY
+from helpers import robot_oracle as oracle
+from helpers.robot_arm import DENSITY
 
 INERTIAL = re.compile(r"\s*<inertial\b(?:[^>]*/>|.*?</inertial>)", re.S)
 
@@ -189,7 +189,7 @@ def load_robot_bytes(folder, data, packages):
 
 
 def test_inward_wound_mesh_is_kept(arm):
-    from tests.robots.conftest import BOX_MM, box_mesh, write_stl
+    from helpers.robot_arm import BOX_MM, box_mesh, write_stl
 
     v, f = box_mesh(BOX_MM, (-20.0, -30.0, 0.0))
     write_stl(arm.root / "upper.stl", v, f[:, ::-1])

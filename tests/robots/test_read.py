@@ -11,8 +11,8 @@ import p3d_cli as p3d
 from p3d_cli.errors import InputError
 from p3d_cli.robots import load_robot
 from p3d_cli.robots.geometry import measure_link
-from tests.robots import oracle
-from tests.robots.conftest import DENSITY, RPY_WEDGE, YAW_BOX
+from helpers import robot_oracle as oracle
+from helpers.robot_arm import DENSITY, RPY_WEDGE, YAW_BOX
 
 
 def _props(robot, name):
@@ -165,7 +165,7 @@ def test_mjcf_orientations_agree(tmp_path):
                                 '<compiler angle="radian"/>')
     np.testing.assert_allclose(radian, quarter, atol=1e-15)
     # Rotating axes (xyz): Rx then Ry about the new y; fixed axes (XYZ): Rz Ry Rx.
-    from tests.robots.oracle import rx, ry, rz
+    from helpers.robot_oracle import rx, ry, rz
     (moving,) = _geom_rotations(tmp_path, f'<geom {box} euler="10 20 30"/>')
     (fixed,) = _geom_rotations(tmp_path, f'<geom {box} euler="10 20 30"/>', '<compiler eulerseq="XYZ"/>')
     a, b, c = np.radians([10, 20, 30])

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.robots.conftest import BOX_MM, DENSITY, RPY_WEDGE, WEDGE_FACES, WEDGE_MM, YAW_BOX
+from helpers.robot_arm import BOX_MM, DENSITY, RPY_WEDGE, WEDGE_FACES, WEDGE_MM, YAW_BOX
 
 
 def rz(a):
