@@ -94,6 +94,11 @@ class SceneError(InputError):
     """A constraint scene file is invalid."""
 
 
+class OutputError(P3DError):
+    """A file p3d was asked to write cannot be written, or writing it would damage a file (an
+    input, a read-only file): nothing is written then (``p3d_cli.io.atomic``)."""
+
+
 class MissingExtraError(P3DError):
     """An optional backend is needed but not installed."""
 
