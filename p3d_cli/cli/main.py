@@ -221,6 +221,7 @@ cli.commands = _Commands({
     "check": "p3d_cli.cli.check",
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
+    "render": "p3d_cli.cli.render",
     "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })
