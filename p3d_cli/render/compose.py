@@ -67,7 +67,7 @@ def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers
     if rows:
         legend.draw_legend(image, rows, legend_top, scale)
     return Picture(image, surface, tuple(strokes), tuple(layers), title, note, (title_height, area_height),
-                   legend_top, scale, len(triangles), camera.azimuth, camera.elevation)
+                   legend_top, scale, len(triangles), camera.azimuth, camera.elevation, camera, frame)
 
 
 def legend_entries(layers) -> list:

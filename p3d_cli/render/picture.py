@@ -52,6 +52,9 @@ class Picture:
         Triangles drawn.
     azimuth, elevation : float
         The camera's direction, degrees.
+    camera : camera.Camera
+    frame : camera.Frame
+        Where world points land in the picture (``project``).
     """
 
     pixels: np.ndarray
@@ -66,6 +69,12 @@ class Picture:
     faces: int
     azimuth: float
     elevation: float
+    camera: Any = None
+    frame: Any = None
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel ``(x, y)`` in the whole picture (x right, y down) of world points ``(..., 3)``."""
+        return self.frame.pixels(self.camera.view(np.asarray(points, dtype=np.float64)))
 
     @property
     def size(self) -> tuple[int, int]:
