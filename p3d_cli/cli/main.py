@@ -72,6 +72,8 @@ FLAGS = {
     "rpy": "--rpy", "units": "--units", "output_units": "--output-units",
     "null": "-0/--null", "ignore_warning": "--ignore-warning", "rtol": "--rtol", "atol": "--atol",
     "root": "--root",
+    "size": "--size", "show": "--show", "view": "--view", "up": "--up", "azimuth": "--azimuth",
+    "elevation": "--elevation", "output": "--output", "plot": "--plot", "animate": "--animate",
 }
 
 
