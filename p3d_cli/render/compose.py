@@ -15,8 +15,12 @@ from p3d_cli.render.shade import BACKGROUND, face_normals, shade, signed_volume_
 TRIAD = (95, 95, 105)
 
 
-def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers: list, title: str, note: str):
-    """The ``Picture`` of ``triangles`` seen by ``camera`` with ``layers`` drawn over them."""
+def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers: list, title: str, note: str,
+            fit_points: np.ndarray | None = None):
+    """The ``Picture`` of ``triangles`` seen by ``camera`` with ``layers`` drawn over them.
+
+    The frame fits the triangles and the layers, or ``fit_points`` ((k, 3) world points) when
+    given: the frames of an animation share one."""
     from p3d_cli.render.picture import SUPERSAMPLE_FACES, Picture
 
     width, height = size
@@ -30,10 +34,12 @@ def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers
     triangles = np.asarray(triangles)
     dtype = np.float32 if triangles.dtype == np.float32 else np.float64
     # View coordinates about the middle of the part: float32 keeps its precision there.
-    camera = camera.about(_middle(triangles, layers))
+    fitted = triangles if fit_points is None else np.asarray(fit_points, dtype=np.float64).reshape(-1, 1, 3)
+    camera = camera.about(_middle(fitted, layers))
     view = camera.view(triangles.reshape(-1, 3).astype(dtype, copy=False)).reshape(-1, 3, 3)
     marks = _overlay_points(layers)
-    low, high = _extent(view, camera.view(marks) if len(marks) else None)
+    fitted_view = view if fit_points is None else camera.view(fitted.reshape(-1, 3))
+    low, high = _extent(fitted_view, camera.view(marks) if len(marks) else None)
     frame = fit_frame(low, high, width, area_height, top=title_height)
 
     ss = 2 if len(triangles) <= SUPERSAMPLE_FACES else 1
@@ -46,8 +52,16 @@ def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers
     shaded = shade(buffer, view_normals, big.scale)
     depth, face = buffer.depth, buffer.face
     if ss > 1:
-        shaded = shaded.reshape(area_height, ss, width, ss, 3).mean(axis=(1, 3)).round().astype(np.uint8)
-        depth = depth.reshape(area_height, ss, width, ss).min(axis=(1, 3))
+        # Average the ss x ss samples of each pixel (strided slices: numpy's reductions over
+        # the axes of a reshaped array are many times slower here).
+        total = np.zeros((area_height, width, 3), dtype=np.uint16)
+        nearest = np.full((area_height, width), np.inf)
+        for dy in range(ss):
+            for dx in range(ss):
+                total += shaded[dy::ss, dx::ss]
+                np.minimum(nearest, depth[dy::ss, dx::ss], out=nearest)
+        shaded = ((total + ss * ss // 2) // (ss * ss)).astype(np.uint8)
+        depth = nearest
         face = face[::ss, ::ss]
 
     image = np.empty((height, width, 3), dtype=np.uint8)

@@ -36,6 +36,7 @@ COLOURS = {
     "inertia": (0, 120, 120),
     "ellipsoid": (110, 40, 160),
     "bounds": (90, 90, 110),
+    "joint": (200, 90, 0),
 }
 
 

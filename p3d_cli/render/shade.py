@@ -63,13 +63,19 @@ def shade(buffer: DepthBuffer, view_normals: np.ndarray, scale: float) -> np.nda
     -------
     (h, w, 3) uint8
     """
+    # Flat shading: one colour per face (and the background last), looked up per pixel.
+    table = np.empty((len(view_normals) + 1, 3), dtype=np.uint8)
+    table[:-1] = np.clip(face_colours(view_normals) * 255 + 0.5, 0, 255).astype(np.uint8)
+    table[-1] = BACKGROUND
     face = buffer.face
-    covered = face >= 0
-    h, w = face.shape
-    image = np.empty((h, w, 3), dtype=np.float32)
-    image[...] = np.array(BACKGROUND, dtype=np.float32) / 255
-    visible = face[covered]
-    normal = view_normals[visible].astype(np.float32)
+    image = table[np.where(face >= 0, face, len(view_normals))]
+    _outline(image, buffer, scale)
+    return image
+
+
+def face_colours(view_normals: np.ndarray) -> np.ndarray:
+    """(n, 3) float32 colours (0-1) of faces with the given view-space normals."""
+    normal = np.asarray(view_normals, dtype=np.float32).copy()
     outside = normal[:, 2] >= 0
     normal[~outside] *= -1
     key = np.clip(normal @ _KEY.astype(np.float32), 0, None)
@@ -77,16 +83,13 @@ def shade(buffer: DepthBuffer, view_normals: np.ndarray, scale: float) -> np.nda
     glint = np.clip(normal @ _HALF.astype(np.float32), 0, None) ** 24
     light = 0.30 + 0.62 * key + 0.22 * fill
     base = np.where(outside[:, None], OUTSIDE.astype(np.float32), INSIDE.astype(np.float32))
-    colour = base * light[:, None] + 0.18 * glint[:, None]
-    image[covered] = colour
-    _outline(image, buffer, scale)
-    return np.clip(image * 255 + 0.5, 0, 255).astype(np.uint8)
+    return base * light[:, None] + 0.18 * glint[:, None]
 
 
 def _outline(image: np.ndarray, buffer: DepthBuffer, scale: float) -> None:
     """Darken pixels next to a jump in depth of more than a few pixels' worth (or to the
     background): silhouettes and the outlines of parts in front of others."""
-    depth = buffer.depth
+    depth = buffer.depth.astype(np.float32)
     h, w = depth.shape
     jump = 4.0 / scale                       # four pixels' worth of depth
     edge = np.zeros(depth.shape, dtype=bool)
@@ -98,7 +101,7 @@ def _outline(image: np.ndarray, buffer: DepthBuffer, scale: float) -> None:
         edge[here] |= step & (a <= b)        # darken the nearer side only
         edge[there] |= step & (b < a)
     edge &= buffer.face >= 0
-    image[edge] = image[edge] * 0.35 + OUTLINE.astype(np.float32) * 0.65
+    image[edge] = (image[edge] * 0.35 + OUTLINE * 255 * 0.65 + 0.5).astype(np.uint8)
 
 
 def neighbours(h: int, w: int, dy: int, dx: int) -> tuple[tuple[slice, slice], tuple[slice, slice]]:
