@@ -228,6 +228,12 @@ class PropsResult:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
         return tuple(code_of(w) for w in self.warnings)
 
+    def _repr_html_(self) -> str:
+        """In a notebook: the numbers, and the part with its principal frame and inertia box."""
+        from p3d_cli.render.notebook import props_html
+
+        return props_html(self)
+
 
 @dataclass(frozen=True)
 class BoundsResult:
@@ -258,3 +264,9 @@ class BoundsResult:
     def warning_codes(self) -> tuple[str, ...]:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
         return tuple(code_of(w) for w in self.warnings)
+
+    def _repr_html_(self) -> str:
+        """In a notebook: the box's numbers, and the part with its box."""
+        from p3d_cli.render.notebook import bounds_html
+
+        return bounds_html(self)

@@ -73,16 +73,16 @@ def render(source, output, as_svg, view, azimuth, elevation, up, size, show, tit
       p3d render assembly.yaml -o assembly.png --show bounds
     """
     from p3d_cli.render.files import picture_format, write_picture
-    from p3d_cli.render.picture import render as render_picture
+    from p3d_cli.render.picture import picture
 
     if output is None:
         raise UsageError("--output", "no picture file named", "give -o FILE.png or -o FILE.svg")
     kind = picture_format(output, "svg" if as_svg else None)
-    picture = render_picture(source, view=view, azimuth=azimuth, elevation=elevation, up=up, size=size,
+    drawn = picture(source, view=view, azimuth=azimuth, elevation=elevation, up=up, size=size,
                              show=show, format=fmt, placement=placement, title=title, segments=tessellate)
-    written = write_picture(picture, output, format=kind, inputs=[source])
+    written = write_picture(drawn, output, format=kind, inputs=[source])
     if as_json:
-        click.echo(output_record(picture, str(written), kind))
+        click.echo(output_record(drawn, str(written), kind))
 
 
 def output_record(picture, path: str, kind: str) -> str:

@@ -64,6 +64,12 @@ class CheckResult:
     def ok(self) -> bool:
         return not self.failed
 
+    def _repr_html_(self) -> str:
+        """In a notebook: the verdict, the counts, and the mesh with its defects drawn."""
+        from p3d_cli.render.notebook import check_html
+
+        return check_html(self)
+
 
 def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
                  max_faces: int | None = None) -> CheckResult:

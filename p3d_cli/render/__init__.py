@@ -1,6 +1,6 @@
 """Pictures of parts, defects and inertia: headless, numpy only (``p3d render``; docs/render.md).
 
-- ``picture``: ``render(thing, view=..., show=...) -> Picture`` and the ``Picture`` value;
+- ``picture``: ``picture(thing, view=..., show=...) -> Picture`` and the ``Picture`` value;
 - ``geometry``: the triangles of a mesh, shape or assembly in one frame;
 - ``camera``: named views, azimuth/elevation, the orthographic fit;
 - ``raster``: the z-buffer; ``shade``: lighting and outlines;
@@ -18,8 +18,8 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _API = {
-    "render": "p3d_cli.render.picture",
-    "Picture": "p3d_cli.render.picture",
+    "picture": "p3d_cli.render.picture",
+    "Picture": "p3d_cli.render.image",
     "write_picture": "p3d_cli.render.files",
     "VIEWS": "p3d_cli.render.camera",
     "SHOW": "p3d_cli.render.overlays",
@@ -27,7 +27,7 @@ _API = {
     "decode_png": "p3d_cli.render.png",
 }
 
-__all__ = ["render", "Picture", "write_picture", "VIEWS", "SHOW", "encode_png", "decode_png"]
+__all__ = ["picture", "Picture", "write_picture", "VIEWS", "SHOW", "encode_png", "decode_png"]
 
 
 def __getattr__(name: str) -> Any:
@@ -43,5 +43,6 @@ if TYPE_CHECKING:
     from p3d_cli.render.camera import VIEWS
     from p3d_cli.render.files import write_picture
     from p3d_cli.render.overlays import SHOW
-    from p3d_cli.render.picture import Picture, render
+    from p3d_cli.render.image import Picture
+    from p3d_cli.render.picture import picture
     from p3d_cli.render.png import decode_png, encode_png

@@ -8,9 +8,13 @@ from p3d_cli.render import legend
 from p3d_cli.render.camera import Camera, Frame, fit_frame
 from p3d_cli.render.draw import draw_layer, surface_depth
 from p3d_cli.render.font import draw_text
+from p3d_cli.render.image import Picture
 from p3d_cli.render.raster import rasterize
 from p3d_cli.render.shade import BACKGROUND, face_normals, shade, signed_volume_sign
 
+#: Meshes up to this many faces are drawn at twice the size and averaged down (smooth edges);
+#: beyond it faces are about a pixel each, and the time goes to them instead.
+SUPERSAMPLE_FACES = 400_000
 #: Colour of the small world-axes sign in the corner.
 TRIAD = (95, 95, 105)
 
@@ -21,11 +25,9 @@ def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers
 
     The frame fits the triangles and the layers, or ``fit_points`` ((k, 3) world points) when
     given: the frames of an animation share one."""
-    from p3d_cli.render.picture import SUPERSAMPLE_FACES, Picture
-
     width, height = size
     scale = legend.text_scale(width, height)
-    rows = legend.layout(legend_entries(layers), width, scale)
+    rows = legend.layout(legend.legend_entries(layers), width, scale)
     title_height = legend.strip_height(1, scale)
     legend_height = legend.strip_height(len(rows), scale)
     area_height = max(height - title_height - legend_height, 32)
@@ -82,17 +84,6 @@ def compose(triangles: np.ndarray, camera: Camera, size: tuple[int, int], layers
         legend.draw_legend(image, rows, legend_top, scale)
     return Picture(image, surface, tuple(strokes), tuple(layers), title, note, (title_height, area_height),
                    legend_top, scale, len(triangles), camera.azimuth, camera.elevation, camera, frame)
-
-
-def legend_entries(layers) -> list:
-    """The legend's entries for ``layers``."""
-    return [legend.Entry(layer.label, layer.colour, _kind(layer)) for layer in layers]
-
-
-def _kind(layer) -> str:
-    if len(layer.faces):
-        return "patch"
-    return "mark" if len(layer.points) and not len(layer.segments) else "line"
 
 
 def _overlay_points(layers) -> np.ndarray:

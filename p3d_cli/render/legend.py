@@ -28,6 +28,17 @@ class Entry:
     kind: str = "line"
 
 
+def legend_entries(layers) -> list:
+    """The legend's entries for ``layers``."""
+    return [Entry(layer.label, layer.colour, _kind(layer)) for layer in layers]
+
+
+def _kind(layer) -> str:
+    if len(layer.faces):
+        return "patch"
+    return "mark" if len(layer.points) and not len(layer.segments) else "line"
+
+
 def text_scale(width: int, height: int) -> int:
     """The font's scale for a picture: 2 at 800 x 600 and above, 1 for thumbnails."""
     return 2 if min(width / 800, height / 600) >= 0.75 else 1

@@ -64,14 +64,14 @@ def with_picture(row: Row, command: str, size=PICTURE_SIZE) -> Row:
     """``row`` with its input's picture and numbers (a row not done, or skipped, as it is)."""
     from dataclasses import replace
 
-    from p3d_cli.render.picture import render
+    from p3d_cli.render.picture import picture
 
     if row.state in ("errored", "skipped"):
         return row
     try:
         numbers = _numbers(row.source, command)
-        picture = render(row.source, show=OVERLAYS.get(command, ""), size=size, title=os.path.basename(row.source))
-        return replace(row, numbers=numbers, picture=picture.to_png())
+        drawn = picture(row.source, show=OVERLAYS.get(command, ""), size=size, title=os.path.basename(row.source))
+        return replace(row, numbers=numbers, picture=drawn.to_png())
     except P3DError as error:
         return replace(row, note=f"no picture: {error.message}")
 

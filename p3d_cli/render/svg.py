@@ -89,11 +89,9 @@ def _stroke(stroke) -> str:
 
 
 def _legend(picture) -> list[str]:
-    from p3d_cli.render.compose import legend_entries
-
     scale = picture.text_scale
     width = picture.size[0]
-    rows = legend.layout(legend_entries(picture.layers), width, scale)
+    rows = legend.layout(legend.legend_entries(picture.layers), width, scale)
     if not rows:
         return []
     top = picture.legend_top

@@ -8,7 +8,7 @@ from conftest import cube_triangles
 
 import p3d_cli as p3d
 from p3d_cli.render.overlays import COLOURS, equivalent_half_extents
-from p3d_cli.render.picture import render
+from p3d_cli.render.picture import picture as render
 from p3d_cli.render.png import decode_png
 
 CUBE = cube_triangles()
