@@ -102,7 +102,7 @@ def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
             _refuse_nonfinite(pieces[-1], solid.where)
         count += 1
     triangles = np.concatenate(pieces) if pieces else np.zeros((0, 3, 3))
-    options = {"placement": placement}
+    options: dict[str, Any] = {"placement": placement}
     if units is not None:
         options["output_units"] = f"{units},kg"
     return SceneGeometry(triangles, assembly.source, "assembly", assembly, options, count)

@@ -86,7 +86,7 @@ def _numbers(source: str, command: str) -> dict:
         return {heading: getattr(report, key) for key, heading in CHECK_COUNTS}
     result = p3d.props(source)
     props, bounds = result.properties, result.facts.bounds
-    out = {"faces": result.facts.faces, "volume": props.volume, "mass (density 1)": props.mass}
+    out: dict[str, object] = {"faces": result.facts.faces, "volume": props.volume, "mass (density 1)": props.mass}
     if props.center_of_mass is not None:
         out["centre of mass"] = _vector(props.center_of_mass)
         out["principal moments"] = _vector(props.principal_moments)
