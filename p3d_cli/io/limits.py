@@ -64,8 +64,9 @@ def inflate(where: str, data: bytes, size: int, what: str) -> bytes:
     except zlib.error as exc:
         raise FormatError(where, f"{what} cannot be inflated ({exc})", "the file is corrupt; export it again") from None
     if len(out) != size:
-        raise FormatError(where, f"{what} inflates to {'more than' if len(out) > size else len(out)} bytes, not "
-                          f"the {size:,} it declares", "the file is corrupt; export it again")
+        found = "more than the" if len(out) > size else f"{len(out):,} bytes, not the"
+        raise FormatError(where, f"{what} inflates to {found} {size:,} bytes it declares",
+                          "the file is corrupt; export it again")
     return out
 
 
