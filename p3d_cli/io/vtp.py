@@ -351,7 +351,8 @@ def _legacy_cells(cursor: _Legacy, words: list[bytes], version: tuple[int, int])
         if k >= 0 and (table[:, 0] == k).all():
             return table[:, 1:].ravel(), np.arange(1, first + 1, dtype=np.int64) * k
     keep = np.ones(len(flat), dtype=bool)
-    ends, at = [], 0
+    ends: list[int] = []
+    at = 0
     sizes = flat.tolist()
     for _ in range(first):
         if at >= len(sizes):
