@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import io
 import zipfile
+import zlib
 from xml.etree import ElementTree
 
 import numpy as np
@@ -67,7 +68,7 @@ def _xml(raw: RawInput) -> bytes:
             if not chosen:
                 raise zipfile.BadZipFile("the archive is empty")
             return read_member(raw.where, archive, chosen[0], f"the zipped AMF's {chosen[0].filename[:60]!r}")
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError, NotImplementedError, RuntimeError) as exc:
+    except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError, RuntimeError) as exc:
         raise FormatError(raw.where, f"is not a readable zipped AMF ({str(exc)[:120]})", "export it again") from None
 
 

@@ -142,10 +142,12 @@ class _Xml:
         declares for it, and all arrays together to at most ``MAX_INFLATED`` bytes."""
         count = int(header[0])
         block, last = (int(header[1]), int(header[2])) if len(header) >= 3 else (0, 0)
-        sizes = header[3:3 + count].astype(np.int64)
-        if len(sizes) < count:
+        if count > len(header) - 3:
             raise _corrupt(self.where, f"a compressed array declares {count} blocks, but its header ends after "
-                           f"{len(sizes)}")
+                           f"{max(len(header) - 3, 0)}")
+        sizes = header[3:3 + count].astype(np.int64)
+        if len(sizes) and sizes.min() < 0:
+            raise _corrupt(self.where, "a compressed block's size is negative")
         declared = (count - 1) * block + (last or block) if count else 0
         self.inflated += declared
         check_declared(self.where, self.inflated, "its compressed data")
