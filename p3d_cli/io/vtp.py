@@ -208,7 +208,7 @@ class _Xml:
                 raise _corrupt(self.where, f"a DataArray of unknown format {fmt!r}")
             usable = len(data) - len(data) % dtype.itemsize
             return np.frombuffer(data[:usable], dtype).astype(dtype.newbyteorder("="))
-        except (ValueError, binascii.Error, IndexError) as exc:
+        except (ValueError, OverflowError, binascii.Error, IndexError) as exc:
             raise _corrupt(self.where, f"a DataArray cannot be decoded ({exc})") from None
 
 
@@ -330,7 +330,7 @@ class _Legacy:
         try:
             # Decimal text is read at float64 whatever type the writer names.
             return np.array(found, dtype=np.float64 if dtype.kind == "f" else np.int64)
-        except ValueError:
+        except (ValueError, OverflowError):
             raise _corrupt(self.where, "a number cannot be read") from None
 
 
@@ -413,7 +413,7 @@ def _load_legacy(raw: RawInput) -> MeshSource:
                     triangles.append(_cells(connectivity, offsets, bool(_SECTIONS[key]), raw.where))
             else:
                 raise _corrupt(raw.where, f"unexpected section {key[:30].decode(errors='replace')!r}")
-        except (ValueError, IndexError, KeyError) as exc:
+        except (ValueError, OverflowError, IndexError, KeyError) as exc:
             raise _corrupt(raw.where, f"a {key[:30].decode(errors='replace')} section cannot be read ({exc})") from None
     if points is None:
         raise _corrupt(raw.where, "has no POINTS")
