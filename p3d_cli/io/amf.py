@@ -27,7 +27,7 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from p3d_cli.errors import FormatError
+from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.dae_mesh import floats, indices
 from p3d_cli.io.limits import check_instances, read_member
 from p3d_cli.io.raw import RawInput
@@ -207,6 +207,12 @@ def load(raw: RawInput) -> MeshSource:
     objects = {obj.get("id"): obj for obj in _children(root, "object")}
     meshes = {oid: _mesh(obj, f"{raw.where}: object {oid}") for oid, obj in objects.items()}
     placed = _placements(root, objects, meshes, raw.where)
+    if not any(len(meshes[oid][1]) for oid, _ in placed):
+        what = (f"its {len(objects)} objects hold no <triangle> in a <mesh><volume>" if objects
+                else "it holds no <object>")
+        raise InputError(raw.where, what + (f" (and its constellations place {len(placed)} instances of them)"
+                                            if placed and len(placed) != len(objects) else ""),
+                         "export the model with its meshes")
     names = unique_names([_name(objects[oid], oid) for oid, _ in placed])
     scene = [SceneObject(name, *meshes[oid], matrix) for name, (oid, matrix) in zip(names, placed)]
     return scene_source("amf", raw.where, scene, UNITS[unit], "instances")

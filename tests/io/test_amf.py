@@ -165,3 +165,14 @@ def test_constellation_errors(tmp_path, body, words):
     path.write_text(amf(obj("1") + body))
     with pytest.raises(FormatError, match=words):
         p3d.props(path)
+
+
+@pytest.mark.parametrize("body, words", [("", "holds no <object>"),
+                                         ('<object id="1"><mesh><vertices/></mesh></object>', "hold no <triangle>")])
+def test_no_triangles_says_what_is_missing(tmp_path, body, words):
+    from p3d_cli.errors import InputError
+
+    path = tmp_path / "empty.amf"
+    path.write_text(amf(body))
+    with pytest.raises(InputError, match=words):
+        p3d.props(path)
