@@ -63,7 +63,8 @@ def _xml(raw: RawInput) -> bytes:
         return data
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            members = [m for m in archive.infolist() if not m.is_dir()]
+            # (not ZipInfo.is_dir, which fails on an empty member name)
+            members = [m for m in archive.infolist() if m.filename and not m.filename.endswith("/")]
             chosen = [m for m in members if m.filename.lower().endswith(".amf")] or members
             if not chosen:
                 raise zipfile.BadZipFile("the archive is empty")
