@@ -190,16 +190,16 @@ class _Scene:
             if kind == "node":
                 out.append(("node", element))
             elif kind == "instance_node":
-                out.append(("node", self.document.resolve(element.get("url"), self._at(node), "<instance_node>")))
+                out.append(("node", self.document.resolve(element.get("url"), self.at(node), "<instance_node>")))
             elif kind == "instance_geometry":
-                out.append(("geometry", self.document.resolve(element.get("url"), self._at(node),
+                out.append(("geometry", self.document.resolve(element.get("url"), self.at(node),
                                                               "<instance_geometry>")))
             elif kind == "instance_controller":
                 self._refuse_controller(node, element)
         for kind, element in out:
             expected = "node" if kind == "node" else "geometry"
             if local(element.tag) != expected:
-                raise FormatError(self._at(node), f"an instance names <{local(element.tag)}> "
+                raise FormatError(self.at(node), f"an instance names <{local(element.tag)}> "
                                   f"{element.get('id')!r}, not a <{expected}>", _HINT)
         return out
 
@@ -216,15 +216,16 @@ class _Scene:
             found = self.meshes[geometry] = geometry_mesh(geometry, self.document, self.where)
         return found
 
-    def _at(self, node) -> str:
+    def at(self, node) -> str:
+        """How messages name ``node``."""
         return f"{self.where}: node {(node.get('name') or node.get('id') or '(unnamed)')!r}"
 
     def _refuse_controller(self, node, element) -> None:
-        controller = self.document.resolve(element.get("url"), self._at(node), "<instance_controller>")
+        controller = self.document.resolve(element.get("url"), self.at(node), "<instance_controller>")
         kind = next((local(c.tag) for c in controller if local(c.tag) in ("skin", "morph")), "controller")
         what = {"skin": "a skinned mesh (<instance_controller> of a <skin>)",
                 "morph": "a morphed mesh (<instance_controller> of a <morph>)"}.get(kind, "an <instance_controller>")
-        raise FormatError(self._at(node), f"places {what} {controller.get('id')!r}, whose pose p3d does not apply",
+        raise FormatError(self.at(node), f"places {what} {controller.get('id')!r}, whose pose p3d does not apply",
                           "export the mesh with its pose applied (no armature or shape keys), or export its "
                           "geometry on its own")
 
@@ -269,7 +270,7 @@ def placements(document: Document, where: str) -> tuple[list[tuple[str, Geometry
             continue
         factor = document.unit(element) / base
         label = element.get("name") or element.get("id") or ""
-        whole = outer @ node_matrix(element, factor, scene._at(element))
+        whole = outer @ node_matrix(element, factor, scene.at(element))
         entries = scene.entries(element)
         geometries = sum(1 for k, _ in entries if k == "geometry")
         for entry_kind, target in reversed(entries):
