@@ -4,6 +4,8 @@ units and with the same sign, for every kind of file (issue 26, item 4)."""
 from __future__ import annotations
 
 import json
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -72,3 +74,40 @@ def test_problem_locations_of_a_scene_file_are_in_metres(tmp_path):
     check = p3d.check(path)
     points = np.array([p for sample in check.report.boundary_edge_samples for p in sample.points])
     assert points.size and np.abs(points).max() == pytest.approx(1.0)
+
+
+ROBOTS = Path(__file__).resolve().parents[1].parent / "shared" / "real-robots"
+
+
+@pytest.mark.parametrize("relative", [
+    "px4_models/models/omniquad_base/meshes/iris_prop_cw.dae",
+    "px4_models/models/rover_differential/meshes/rover_differential_base.dae",
+    "prius/prius_description/meshes/hybrid_body.obj",
+    "prius/prius_description/meshes/steering_wheel.obj",
+])
+def test_real_open_meshes_get_one_volume_from_every_command(relative):
+    path = ROBOTS / relative
+    if not path.is_file():
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"CI=true but {path} is missing")
+        pytest.skip(f"{path} not found")
+    props = p3d.props(path)
+    check = p3d.check(path)
+    assert check.report.solid_volume == pytest.approx(props.properties.volume, rel=1e-9)
+    assert props.facts.closed is check.report.closed
+    if not check.report.closed:
+        assert any("not closed" in w for w in props.warnings) and "closed" in check.failed
+
+
+def test_ply_extra_properties_and_unknown_elements_are_read(tmp_path):
+    """Readers never refuse a file for a field p3d does not use."""
+    text = ("ply\nformat ascii 1.0\ncomment x\nobj_info y\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nproperty uchar red\nproperty list uchar float uv\nelement face 4\n"
+            "property list uchar int vertex_indices\nproperty float quality\nelement edge 1\nproperty int vertex1\n"
+            "property int vertex2\nelement material 1\nproperty list uchar uchar name\nend_header\n"
+            "0 0 0 1 2 0.5 0.5\n1 0 0 1 0\n0 1 0 1 1 3\n0 0 1 1 0\n3 0 2 1 0.1\n3 0 1 3 0.1\n3 0 3 2 0.1\n"
+            "3 1 2 3 0.1\n0 1\n3 65 66 67\n")
+    path = tmp_path / "extra.ply"
+    path.write_text(text)
+    result = p3d.props(path)
+    assert result.properties.volume == pytest.approx(1 / 6) and result.facts.closed
