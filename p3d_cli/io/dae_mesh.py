@@ -226,8 +226,8 @@ def _primitive_faces(primitive, kind: str, vertices_element, document, where: st
             return corners.reshape(-1, 3)
         sizes = indices(getattr(child(primitive, "vcount"), "text", ""), at, "<vcount>")
         if len(sizes) and sizes.max() > len(corners) or int(sizes.sum(dtype=object)) != len(corners):
-            raise FormatError(at, f"<vcount> adds up to {int(sizes.sum(dtype=object))} vertices, but <p> holds {len(corners)}",
-                              _HINT)
+            raise FormatError(at, f"<vcount> adds up to {int(sizes.sum(dtype=object))} vertices, but <p> holds "
+                              f"{len(corners)}", _HINT)
         return _polygons(corners, sizes)
     lists = [_corners(p, stride, offset, at) for p in children(primitive, "p")]
     if kind == "polygons":
