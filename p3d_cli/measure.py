@@ -199,7 +199,8 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     require : iterable of str, optional
         The checks that must pass (``p3d_cli.mesh.verdicts.CHECKS``; default all).
     min_volume : float, optional
-        Also fail a mesh whose signed volume is below this.
+        Also fail a mesh whose signed volume is below this (in metres³ for a file that
+        declares its unit, as every length and volume of the result is; else mesh units³).
     max_faces : int, optional
         Also fail a mesh with more faces than this.
     format, stdin
@@ -224,12 +225,14 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
                          "check mesh files")
-    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces)
+    # A file that declares its unit is reported in metres, as props and bounds report it.
+    declared = solid.mesh.length_unit
+    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, declared)
     if not solid.mesh.objects:
         return whole
     # A multi-object file: each object is checked on its own, and the whole (where objects
     # that touch or overlap show as shared edges or duplicate faces).
-    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces))
+    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, declared))
                   for name, part in solid.mesh.objects)
     failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
     return dataclasses.replace(whole, failed=failed, parts=parts)

@@ -92,6 +92,12 @@ def seeds(name: str) -> list[bytes]:
         return [(samples / "cube.off").read_bytes()]
     if name == "ply":
         return [_ply("ascii"), _ply("binary_little_endian"), _ply("binary_big_endian")]
+    if name == "dae":
+        return [_dae()]
+    if name == "amf":
+        return [_amf(), _zipped(_amf())]
+    if name == "vtp":
+        return [_vtp(False), _vtp(True), _legacy_vtk()]
     raise KeyError(name)
 
 
@@ -117,11 +123,84 @@ def _ply(fmt: str) -> bytes:
     return head + body
 
 
+def _dae() -> bytes:
+    """A COLLADA scene: the tetrahedron as triangles and as a polylist, a nested unit, every
+    transform element, and an instanced library node."""
+    positions = " ".join(str(x) for x in _TET_V.ravel())
+    return (f"""<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<asset><unit meter="0.0254"/></asset><library_geometries><geometry id="g"><asset><unit meter="0.001"/></asset><mesh>
+<source id="p"><float_array id="pa" count="12">{positions}</float_array><technique_common><accessor source="#pa"
+count="4" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+</accessor></technique_common></source><vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+<triangles material="a" count="2"><input semantic="VERTEX" source="#v" offset="0"/><input semantic="NORMAL"
+source="#p" offset="1"/><p>0 0 2 0 1 0 0 0 1 0 3 0</p></triangles>
+<polylist material="b" count="2"><input semantic="VERTEX" source="#v" offset="0"/><vcount>3 3</vcount>
+<p>0 3 2 1 2 3</p></polylist><tristrips count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 3</p>
+</tristrips></mesh></geometry></library_geometries><library_nodes><node id="lib"><rotate>1 1 0 30</rotate>
+<skew>10 1 0 0 0 1 0</skew><instance_geometry url="#g"/></node></library_nodes><library_visual_scenes>
+<visual_scene id="s"><node id="a"><translate>1 2 3</translate><scale>2 1 1</scale><instance_geometry url="#g"/>
+<node id="b"><matrix>0 -1 0 0 1 0 0 0 0 0 1 0 0 0 0 1</matrix><lookat>0 0 5 0 0 0 0 1 0</lookat>
+<instance_node url="#lib"/></node></node></visual_scene></library_visual_scenes>
+<scene><instance_visual_scene url="#s"/></scene></COLLADA>""").encode()
+
+
+def _amf() -> bytes:
+    vertices = "".join(f"<vertex><coordinates><x>{x}</x><y>{y}</y><z>{z}</z></coordinates></vertex>" for x, y, z in _TET_V)
+    triangles = "".join(f"<triangle><v1>{a}</v1><v2>{b}</v2><v3>{c}</v3></triangle>" for a, b, c in _TET_F)
+    return (f'<?xml version="1.0"?><amf unit="inch"><object id="1"><mesh><vertices>{vertices}</vertices>'
+            f'<volume>{triangles[:len(triangles) // 2]}</volume><volume>{triangles[len(triangles) // 2:]}</volume>'
+            '</mesh></object><constellation id="c"><instance objectid="1"><deltax>2</deltax><rz>30</rz></instance>'
+            '</constellation><constellation id="d"><instance objectid="c"><rx>90</rx></instance>'
+            '<instance objectid="1"><deltay>-3</deltay></instance></constellation></amf>').encode()
+
+
+def _zipped(data: bytes) -> bytes:
+    import io
+    import zipfile
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("model.amf", data)
+    return buffer.getvalue()
+
+
+def _vtp(compressed: bool) -> bytes:
+    import base64
+    import zlib
+
+    def binary(array: np.ndarray) -> bytes:
+        data = array.tobytes()
+        if not compressed:
+            return base64.b64encode(struct.pack("<I", len(data)) + data)
+        block = zlib.compress(data)
+        return base64.b64encode(struct.pack("<4I", 1, len(data), len(data), len(block))) + base64.b64encode(block)
+
+    arrays = [("Float32", "", _TET_V.astype("<f4")), ("Int64", ' Name="connectivity"', _TET_F.astype("<i8")),
+              ("Int64", ' Name="offsets"', np.array([3, 6, 9, 12], dtype="<i8"))]
+    out = [f'<DataArray type="{kind}"{name} NumberOfComponents="{3 if not name else 1}" format="binary">'.encode()
+           + binary(array) + b"</DataArray>" for kind, name, array in arrays]
+    compressor = ' compressor="vtkZLibDataCompressor"' if compressed else ""
+    return (f'<?xml version="1.0"?><VTKFile type="PolyData" byte_order="LittleEndian" header_type="UInt32"'
+            f'{compressor}><PolyData><Piece NumberOfPoints="4" NumberOfPolys="4"><Points>').encode() + out[0] + \
+        b"</Points><Polys>" + out[1] + out[2] + b"</Polys></Piece></PolyData></VTKFile>"
+
+
+def _legacy_vtk() -> bytes:
+    points = " ".join(str(x) for x in _TET_V.ravel())
+    cells = "\n".join("3 " + " ".join(map(str, f)) for f in _TET_F)
+    return (f"# vtk DataFile Version 3.0\ntet\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n{points}\n"
+            "METADATA\nINFORMATION 0\n\n"
+            f"POLYGONS 4 16\n{cells}\nTRIANGLE_STRIPS 1 5\n4 1 2 3 0\nPOINT_DATA 4\n").encode()
+
+
 TARGETS = {
     "stl": lambda data: measure_bytes(data, "stl"),
     "obj": lambda data: measure_bytes(data, "obj"),
     "ply": lambda data: measure_bytes(data, "ply"),
     "off": lambda data: measure_bytes(data, "off"),
+    "dae": lambda data: measure_bytes(data, "dae"),
+    "amf": lambda data: measure_bytes(data, "amf"),
+    "vtp": lambda data: measure_bytes(data, "vtp"),
     "scene": load_scene_bytes,
     "scene_steps": lambda data: load_scene_bytes(data, steps=3),
 }
