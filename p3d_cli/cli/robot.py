@@ -13,7 +13,7 @@ from p3d_cli.errors import P3DError, UsageError
 
 #: The robot library's parameter names as this command's flags (the rest: main.FLAGS).
 _FLAGS = {"package_paths": "--package-path", "density_range": "--density-range", "mass_from": "--mass-from",
-          "masses": "--masses"}
+          "masses": "--masses", "xacro_args": "--xacro-arg"}
 
 
 def _flagged(command):
@@ -25,6 +25,7 @@ def _flagged(command):
             return command(*args, **kwargs)
         except P3DError as exc:
             what, hint = exc.what, exc.hint
+            what, hint = (t.replace("in_place=True", "--in-place") for t in (what, hint))
             for name, flag in _FLAGS.items():
                 what, hint = (t.replace(f"{name}=", f"{flag} ") for t in (what, hint))
             raise type(exc)(_FLAGS.get(exc.where, exc.where), what, hint) from None
@@ -32,9 +33,12 @@ def _flagged(command):
 
 
 def _package_option(f):
+    f = click.option("--xacro-arg", "xacro_args", multiple=True, metavar="NAME:=VALUE",
+                     help="An argument of a xacro file (repeatable), as on xacro's command line.")(f)
     return click.option("--package-path", "package_paths", multiple=True, metavar="NAME=DIR",
                         help="Folder of the package that package://NAME/... (SDF: model://NAME/...) URIs "
-                             "name (repeatable); then ROS_PACKAGE_PATH (GZ_SIM_RESOURCE_PATH) is searched.")(f)
+                             "and xacro's $(find NAME) name (repeatable); then ROS_PACKAGE_PATH "
+                             "(GZ_SIM_RESOURCE_PATH) is searched.")(f)
 
 
 def _from_option(f):
@@ -47,10 +51,10 @@ def robot() -> None:
     """Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.
 
     A link is measured as an assembly of its collision geometry (or --from visual): each
-    mesh (STL, OBJ, PLY, ... at its origin, with its scale, mirrored if negative) and each
-    primitive (box, cylinder, sphere, capsule, ellipsoid) in the link frame. Descriptions are
-    in SI (m, kg). xacro files must be expanded first (xacro robot.urdf.xacro > robot.urdf).
-    See docs/robots.md.
+    mesh (STL, OBJ, PLY, DAE in its declared unit, ... at its origin, with its scale, mirrored
+    if negative) and each primitive (box, cylinder, sphere, capsule, ellipsoid) in the link
+    frame. Descriptions are in SI (m, kg). xacro files are expanded when the xacro package is
+    installed (pip install 'p3d-cli[robots]'). See docs/robots.md.
 
     \b
     Examples:
@@ -74,7 +78,7 @@ def robot() -> None:
                    "of their diagonal.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON record per link.")
 @_flagged
-def check(description, package_paths, role, tolerance, density_range, com_slack, as_json):
+def check(description, package_paths, xacro_args, role, tolerance, density_range, com_slack, as_json):
     """Check every link's declared inertial: possible, and consistent with its geometry.
 
     Rules: mass > 0; the inertia symmetric and positive definite; principal moments obeying
@@ -95,7 +99,7 @@ def check(description, package_paths, role, tolerance, density_range, com_slack,
     from p3d_cli.robots import check_robot, load_robot
 
     low_high = _range(density_range)
-    robot_ = load_robot(description, package_paths)
+    robot_ = load_robot(description, package_paths, xacro_args)
     for note in robot_.notes:
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high)
@@ -143,25 +147,37 @@ def _record(path: str, c) -> dict:
 @click.option("--force", is_flag=True, help="Also fill links whose geometry is open, flat or inward-wound.")
 @click.option("--principal", is_flag=True,
               help="MJCF: write quat + diaginertia (the principal frame) instead of fullinertia.")
-@click.option("-o", "--output", "out", default=None, metavar="OUT", help="Write here (default: stdout).")
+@click.option("-o", "--output", "out", default=None, metavar="OUT",
+              help="Write the filled description here (- or nothing: stdout); never the description itself.")
+@click.option("--in-place", is_flag=True,
+              help="Rewrite the description itself (and the files it includes that hold filled "
+                   "inertials): each through a temporary file renamed over it when complete.")
 @_flagged
-def fill(description, package_paths, role, density, mass_from, masses, force, principal, out):
+def fill(description, package_paths, xacro_args, role, density, mass_from, masses, force, principal, out,
+         in_place):
     """Write the description with each link's <inertial> computed from its geometry.
 
     URDF gets origin xyz (rpy 0) and the full ixx..izz in the link frame; MJCF pos, mass and
     fullinertia in the body frame (--principal: quat and diaginertia); SDF pose and inertia.
-    Every other byte of the file is left as it was. A link whose geometry is open, flat,
+    Every other byte of the file is left as it was (comments, CDATA, entities, encoding, line
+    endings), and a second run changes nothing. A link whose geometry is open, flat,
     inward-wound or missing keeps its declared inertial (reported on stderr) unless --force.
+    MJCF geoms keep their own density or mass (MuJoCo's default density 1000 kg/m^3 when
+    neither they nor --density say one).
+
+    Files are written whole or not at all: to a temporary file in the same folder, renamed
+    over the target when complete, with the target's permissions; a read-only or hard-linked
+    target is refused.
 
     \b
     Examples:
       p3d robot fill robot.urdf --density 2700 -o filled.urdf
-      p3d robot fill robot.urdf --mass-from declared -o filled.urdf
+      p3d robot fill robot.urdf --mass-from declared --in-place
       p3d robot fill scene.xml --masses masses.yaml --density 1.2g/cm^3 > filled.xml
     """
     from p3d_cli.robots import fill_robot, load_masses, load_robot
 
-    robot_ = load_robot(description, package_paths)
+    robot_ = load_robot(description, package_paths, xacro_args)
     for note in robot_.notes:
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     table = load_masses(masses) if masses else None
@@ -173,16 +189,27 @@ def fill(description, package_paths, role, density, mass_from, masses, force, pr
                        f"{link.reason}", err=True)
         elif link.reason:
             click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: {link.reason}", err=True)
-    if out is None or out == "-":
+    written = write_filled(robot_, result, out, in_place)
+    filled = sum(1 for link in result.links if link.status == "filled")
+    where = f" ({', '.join(written)} rewritten in place)" if in_place else ""
+    click.echo(f"p3d robot fill: {robot_.path}: {filled} of {len(result.links)} links filled{where}", err=True)
+    return 0
+
+
+def write_filled(robot_, result, out, in_place: bool) -> list[str]:
+    """Write a fill's result: to stdout, to ``out``, or every changed file in place; returns the
+    paths written."""
+    from p3d_cli.robots.fill import write_fill
+
+    if in_place and out is not None:
+        raise UsageError("--in-place", "given with --output", "give one of them")
+    if not in_place and out in (None, "-"):
+        others = sorted(set(result.files) - {robot_.doc.path})
+        if others:
+            raise UsageError("--output", f"filled inertials are in included files too ({', '.join(others)}), "
+                             "which one output cannot hold", "give --in-place to rewrite each file")
         sys.stdout.flush()
         sys.stdout.buffer.write(result.data)
         sys.stdout.buffer.flush()
-    else:
-        try:
-            with open(out, "wb") as f:
-                f.write(result.data)
-        except OSError as exc:
-            raise UsageError("-o", f"cannot write {out} ({exc.strerror or exc})", "check the path") from None
-    filled = sum(1 for link in result.links if link.status == "filled")
-    click.echo(f"p3d robot fill: {robot_.path}: {filled} of {len(result.links)} links filled", err=True)
-    return 0
+        return []
+    return write_fill(robot_, result, None if in_place else out)

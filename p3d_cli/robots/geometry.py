@@ -15,9 +15,9 @@ from p3d_cli.assembly import Assembly, Part
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
-from p3d_cli.placement import IDENTITY
+from p3d_cli.placement import IDENTITY, Placement
 from p3d_cli.results import MassProperties, PropsResult
-from p3d_cli.robots.model import Link
+from p3d_cli.robots.model import Geom, Link
 
 
 @dataclass(frozen=True)
@@ -41,9 +41,31 @@ class LinkGeometry:
 
 def link_assembly(link: Link, role: str, source: str) -> Assembly:
     """The link's ``role`` geometry as an assembly of parts in the link frame."""
-    parts = tuple(Part(geom.where.rsplit(": ", 1)[-1], geom.thing, geom.placement, where=geom.where)
-                  for geom in link.geoms(role))
+    # A geom of zero mass or density (MJCF: a massless visual) adds nothing to the link's mass.
+    parts = tuple(Part(geom.where.rsplit(": ", 1)[-1], *_in_metres(geom),
+                       density=None if geom.mass is not None else geom.density, mass=geom.mass, where=geom.where)
+                  for geom in link.geoms(role) if geom.mass != 0 and geom.density != 0)
     return Assembly(f"{source}: link {link.name!r}", parts)
+
+
+def _in_metres(geom: Geom) -> tuple[object, Placement]:
+    """The geom's solid and placement with its coordinates in metres, the description's unit: a
+    mesh file that declares its own length unit (COLLADA's ``<unit meter>``, glTF's metres) is
+    scaled from it first, in its own frame, before the geom's scale and placement."""
+    from p3d_cli.solid import as_solid
+    from p3d_cli.units import LENGTHS
+
+    solid = as_solid(geom.thing)
+    unit = solid.mesh.length_unit if solid.mesh is not None else None
+    if unit is None:
+        return solid.mesh if solid.mesh is not None else geom.thing, geom.placement
+    k = LENGTHS[unit] / LENGTHS["m"]
+    mesh = dataclasses.replace(solid.mesh, length_unit=None)  # now in metres, as the description
+    if k == 1:
+        return mesh, geom.placement
+    p = geom.placement
+    scale = np.full(3, k) if p.scale is None else np.asarray(p.scale, dtype=np.float64) * k
+    return mesh, Placement(scale, p.rotation, p.translation)
 
 
 def measure_link(link: Link, role: str, source: str, *, density: float | None = None,
