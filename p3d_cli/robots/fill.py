@@ -12,7 +12,10 @@ declared inertial unless ``force`` (missing geometry always does: there is nothi
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from p3d_cli.errors import InputError, UsageError
 from p3d_cli.robots.emit import inertial_lines
@@ -134,8 +137,10 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         filled = _fill_link(robot, link, role, rho, mass_from, given, force)
         if filled.status == "filled":
             lines = inertial_lines(robot.format, filled.mass, filled.center, filled.inertia, principal)
-            edit = _edit(link, lines)
-            if isinstance(edit, str):
+            edit = None if _already(link, filled, lines) else _edit(link, lines)
+            if edit is None:
+                pass  # the element already says this (to rounding): left byte for byte, so a second run changes nothing
+            elif isinstance(edit, str):
                 filled = FilledLink(link.name, "kept", edit)
             else:
                 # A replicated body (MJCF <replicate>) is one element for all its copies: one edit.
@@ -166,6 +171,30 @@ def _fill_link(robot: Robot, link: Link, role: str, rho, mass_from, given, force
     p = geometry.result.properties
     return FilledLink(link.name, "filled", "" if geometry.solid else "forced: " + "; ".join(geometry.problems),
                       p.mass, p.center_of_mass, p.inertia)
+
+
+#: Numbers in an element's text, for comparing its form with what fill writes.
+_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+#: How close declared numbers must be to the computed ones to be left as they are: a few
+#: roundings (the same inertial reached by another road, e.g. from its declared mass).
+SAME = 1e-12
+
+
+def _already(link: Link, filled: FilledLink, lines: list[str]) -> bool:
+    """Whether the link's inertial element is already what fill would write: the same form
+    (element, attributes, layout, numbers aside) and the same numbers to ``SAME``."""
+    node, declared = link.inertial_node, link.inertial
+    if node is None or declared is None or node.expanded:
+        return False
+    old = node.doc.text[node.start:node.end]
+    new = "\n".join(lines).encode()
+    if b"".join(_NUMBER.sub(b"#", old).split()) != b"".join(_NUMBER.sub(b"#", new).split()):
+        return False
+    inertia = np.asarray(filled.inertia, dtype=np.float64)
+    scale = float(np.abs(inertia).max()) or 1.0
+    return bool(abs(declared.mass - filled.mass) <= SAME * abs(filled.mass)
+                and np.all(np.abs(declared.center - np.asarray(filled.center)) <= SAME * (1 + np.abs(declared.center)))
+                and np.all(np.abs(declared.inertia - inertia) <= SAME * scale))
 
 
 def _indent_of(data: bytes, offset: int) -> bytes:

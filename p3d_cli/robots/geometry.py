@@ -41,10 +41,16 @@ class LinkGeometry:
 
 def link_assembly(link: Link, role: str, source: str) -> Assembly:
     """The link's ``role`` geometry as an assembly of parts in the link frame."""
-    # A geom of zero mass or density (MJCF: a massless visual) adds nothing to the link's mass.
+    geoms = link.geoms(role)
+    # A geom of zero mass or density (MJCF: a massless visual) adds nothing to the link's mass;
+    # but when every geom is massless (MuJoCo menagerie's visual class, density="0"), they are
+    # the shape asked for, and weigh alike.
+    massive = [g for g in geoms if g.mass != 0 and g.density != 0]
+    weights = bool(massive)
     parts = tuple(Part(geom.where.rsplit(": ", 1)[-1], *_in_metres(geom),
-                       density=None if geom.mass is not None else geom.density, mass=geom.mass, where=geom.where)
-                  for geom in link.geoms(role) if geom.mass != 0 and geom.density != 0)
+                       density=geom.density if weights and geom.mass is None else None,
+                       mass=geom.mass if weights else None, where=geom.where)
+                  for geom in (massive or geoms))
     return Assembly(f"{source}: link {link.name!r}", parts)
 
 

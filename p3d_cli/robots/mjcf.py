@@ -292,7 +292,9 @@ def _replicas(context: _Context, node: Node) -> list[Placement]:
 def _body(context: _Context, node: Node, outer_class: str, suffix: str, links: list[Link]) -> list:
     """The body's link (appended to ``links``); returns its child bodies, to be read next."""
     name = node.attrib.get("name")
-    name = name + suffix if name else f"body@line{node.line}" + (f"#{suffix}" if suffix else "")
+    # An unnamed body is named by its MuJoCo body id (world 0, then depth first, as compiled): a
+    # line number would change when fill inserts an inertial above it.
+    name = name + suffix if name else f"body#{len(links) + 1}"
     where = f"{context.path}: body {name!r}"
     childclass = node.attrib.get("childclass", outer_class)
     link = Link(name, node)
