@@ -30,7 +30,6 @@ Which geoms are a body's collision geometry: those that can collide (``contype``
 
 from __future__ import annotations
 
-import copy
 import math
 import os
 
@@ -76,15 +75,17 @@ class _Context:
             for mesh in asset.findall("mesh"):
                 self._read_mesh(mesh)
 
-    def _read_defaults(self, node: Node, inherited: dict, name: str) -> None:
-        name = node.attrib.get("class", name)
-        own = copy.deepcopy(inherited)
-        for child in node.children:
-            if child.tag != "default":
-                own.setdefault(child.tag, {}).update(child.attrib)
-        self.defaults[name] = own
-        for child in node.findall("default"):
-            self._read_defaults(child, own, "")
+    def _read_defaults(self, top: Node, inherited: dict, name: str) -> None:
+        """Each default class's attributes, nested classes inheriting (a stack, not recursion)."""
+        stack = [(top, inherited, name)]
+        while stack:
+            node, outer, fallback = stack.pop()
+            own = {tag: dict(values) for tag, values in outer.items()}
+            for child in node.children:
+                if child.tag != "default":
+                    own.setdefault(child.tag, {}).update(child.attrib)
+            self.defaults[node.attrib.get("class", fallback)] = own
+            stack.extend((child, own, "") for child in reversed(node.findall("default")))
 
     def attributes(self, node: Node, childclass: str) -> dict[str, str]:
         """``node``'s attributes over those of its default class."""
