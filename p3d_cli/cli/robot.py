@@ -67,7 +67,10 @@ def robot() -> None:
 @robot.command()
 @click.argument("description", metavar="FILE")
 @_package_option
-@_from_option
+@click.option("--from", "role", type=click.Choice(["auto", "collision", "visual"]), default="auto",
+              show_default=True, help="Which geometry to compare each inertial with; auto: the closer match of "
+                                      "the two (said in the verdict).")
+@click.option("--require-inertial", is_flag=True, help="Fail links that have geometry but declare no inertial.")
 @click.option("--tolerance", type=click.FloatRange(min=1, min_open=True), default=2.0, show_default=True,
               metavar="FACTOR", help="Allowed factor between each declared principal moment and the "
                                      "geometry's at the declared mass (real links are not uniform).")
@@ -78,14 +81,17 @@ def robot() -> None:
                    "of their diagonal.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON record per link.")
 @_flagged
-def check(description, package_paths, xacro_args, role, tolerance, density_range, com_slack, as_json):
+def check(description, package_paths, xacro_args, role, require_inertial, tolerance, density_range, com_slack,
+          as_json):
     """Check every link's declared inertial: possible, and consistent with its geometry.
 
     Rules: mass > 0; the inertia symmetric and positive definite; principal moments obeying
     the triangle inequality (I1 + I2 >= I3); the centre of mass inside the geometry's bounds;
-    and, where the geometry is a closed solid, each principal moment within --tolerance of the
-    geometry's at the declared mass and the implied density within --density-range (this
-    catches mm/m and g/kg slips). One line per problem on stdout.
+    and, where the geometry is a closed solid, the declared moment about each of the
+    geometry's principal axes within --tolerance of the geometry's at the declared mass (so a
+    tensor about the wrong axis fails) and the implied density within --density-range (this
+    catches mm/m and g/kg slips). Links of at most 1 g are massless frames: reported, not
+    failed. One line per problem on stdout, with the geometry, density and tolerance used.
 
     \b
     Exit statuses: 0 every link passes; 1 some link fails; 2 the description (or a mesh it
@@ -102,16 +108,19 @@ def check(description, package_paths, xacro_args, role, tolerance, density_range
     robot_ = load_robot(description, package_paths, xacro_args)
     for note in robot_.notes:
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
-    checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high)
+    checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high,
+                         require_inertial=require_inertial)
     for c in checks:
         if as_json:
             click.echo(output.dumps(_record(robot_.path, c)))
             continue
         for p in c.problems:
-            click.echo(f"{robot_.path}: link {c.link!r}: {p.message} (rule: {p.rule})")
+            click.echo(f"{robot_.path}: link {c.link!r}: {p.message} (rule: {p.rule}; from {c.basis})")
     failed = [c.link for c in checks if not c.ok]
+    frames = sum(1 for c in checks if c.status == "frame")
     if not as_json:
-        tally = f"{len(checks)} links, {len(failed)} failed" + (f": {', '.join(failed)}" if failed else "")
+        tally = f"{len(checks)} links, {len(failed)} failed" + (f", {frames} massless frames" if frames else "") \
+            + (f": {', '.join(failed)}" if failed else "")
         click.echo(f"p3d robot check: {robot_.path}: {tally}", err=True)
     return 1 if failed else 0
 
@@ -128,9 +137,10 @@ def _range(text: str) -> tuple[float, float]:
 
 
 def _record(path: str, c) -> dict:
-    return {"source": path, "link": c.link, "ok": c.ok,
+    return {"source": path, "link": c.link, "ok": c.ok, "status": c.status,
             "problems": [{"rule": p.rule, "value": p.value, "message": p.message} for p in c.problems],
-            "notes": c.notes, "implied_density": c.implied_density, "moment_ratios": c.moment_ratios}
+            "notes": c.notes, "geometry": c.geometry, "implied_density": c.implied_density,
+            "tolerance": c.tolerance, "moment_ratios": c.moment_ratios}
 
 
 @robot.command()
