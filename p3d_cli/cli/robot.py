@@ -12,7 +12,8 @@ from p3d_cli.cli.options import Quantity
 from p3d_cli.errors import P3DError, UsageError
 
 #: The robot library's parameter names as this command's flags (the rest: main.FLAGS).
-_FLAGS = {"package_paths": "--package-path", "density_range": "--density-range", "mass_from": "--mass-from",
+_FLAGS = {"open_mesh": "--open-mesh",
+          "package_paths": "--package-path", "density_range": "--density-range", "mass_from": "--mass-from",
           "masses": "--masses", "xacro_args": "--xacro-arg"}
 
 
@@ -24,12 +25,16 @@ def _flagged(command):
         try:
             return command(*args, **kwargs)
         except P3DError as exc:
-            what, hint = exc.what, exc.hint
-            what, hint = (t.replace("in_place=True", "--in-place") for t in (what, hint))
-            for name, flag in _FLAGS.items():
-                what, hint = (t.replace(f"{name}=", f"{flag} ") for t in (what, hint))
-            raise type(exc)(_FLAGS.get(exc.where, exc.where), what, hint) from None
+            raise type(exc)(_FLAGS.get(exc.where, exc.where), _as_flags(exc.what), _as_flags(exc.hint)) from None
     return run
+
+
+def _as_flags(text: str) -> str:
+    """The library's parameter names in ``text`` (``open_mesh=hull``) as this command's flags."""
+    text = text.replace("in_place=True", "--in-place").replace("force fills", "--force fills")
+    for name, flag in _FLAGS.items():
+        text = text.replace(f"{name}=", f"{flag} ")
+    return text
 
 
 def _package_option(f):
@@ -39,6 +44,14 @@ def _package_option(f):
                         help="Folder of the package that package://NAME/... (SDF: model://NAME/...) URIs "
                              "and xacro's $(find NAME) name (repeatable); then ROS_PACKAGE_PATH "
                              "(GZ_SIM_RESOURCE_PATH) is searched.")(f)
+
+
+def _open_mesh_option(f):
+    return click.option("--open-mesh", "open_mesh", type=click.Choice(["refuse", "shell", "hull"]), default="refuse",
+                        show_default=True,
+                        help="What stands in for a mesh that bounds no solid (open, non-manifold, inward): "
+                             "nothing; a thin shell of the link's mass over its surface; or the mesh's "
+                             "convex hull (needs scipy: pip install 'p3d-cli[robots]').")(f)
 
 
 def _from_option(f):
@@ -71,6 +84,7 @@ def robot() -> None:
               show_default=True, help="Which geometry to compare each inertial with; auto: the closer match of "
                                       "the two (said in the verdict).")
 @click.option("--require-inertial", is_flag=True, help="Fail links that have geometry but declare no inertial.")
+@_open_mesh_option
 @click.option("--tolerance", type=click.FloatRange(min=1, min_open=True), default=2.0, show_default=True,
               metavar="FACTOR", help="Allowed factor between each declared principal moment and the "
                                      "geometry's at the declared mass (real links are not uniform).")
@@ -81,8 +95,8 @@ def robot() -> None:
                    "of their diagonal.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON record per link.")
 @_flagged
-def check(description, package_paths, xacro_args, role, require_inertial, tolerance, density_range, com_slack,
-          as_json):
+def check(description, package_paths, xacro_args, role, require_inertial, open_mesh, tolerance, density_range,
+          com_slack, as_json):
     """Check every link's declared inertial: possible, and consistent with its geometry.
 
     Rules: mass > 0; the inertia symmetric and positive definite; principal moments obeying
@@ -109,7 +123,7 @@ def check(description, package_paths, xacro_args, role, require_inertial, tolera
     for note in robot_.notes:
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high,
-                         require_inertial=require_inertial)
+                         require_inertial=require_inertial, open_mesh=open_mesh)
     for c in checks:
         if as_json:
             click.echo(output.dumps(_record(robot_.path, c)))
@@ -140,7 +154,7 @@ def _record(path: str, c) -> dict:
     return {"source": path, "link": c.link, "ok": c.ok, "status": c.status,
             "problems": [{"rule": p.rule, "value": p.value, "message": p.message} for p in c.problems],
             "notes": c.notes, "geometry": c.geometry, "implied_density": c.implied_density,
-            "tolerance": c.tolerance, "moment_ratios": c.moment_ratios}
+            "tolerance": c.tolerance, "open_mesh": c.stand_in, "moment_ratios": c.moment_ratios}
 
 
 @robot.command()
@@ -155,6 +169,7 @@ def _record(path: str, c) -> dict:
               help="A YAML mapping of link names to masses (kg bare, or with a unit: 500 g); wins "
                    "over --mass-from and --density.")
 @click.option("--force", is_flag=True, help="Also fill links whose geometry is open, flat or inward-wound.")
+@_open_mesh_option
 @click.option("--principal", is_flag=True,
               help="MJCF: write quat + diaginertia (the principal frame) instead of fullinertia.")
 @click.option("-o", "--output", "out", default=None, metavar="OUT",
@@ -163,8 +178,8 @@ def _record(path: str, c) -> dict:
               help="Rewrite the description itself (and the files it includes that hold filled "
                    "inertials): each through a temporary file renamed over it when complete.")
 @_flagged
-def fill(description, package_paths, xacro_args, role, density, mass_from, masses, force, principal, out,
-         in_place):
+def fill(description, package_paths, xacro_args, role, density, mass_from, masses, force, open_mesh, principal,
+         out, in_place):
     """Write the description with each link's <inertial> computed from its geometry.
 
     URDF gets origin xyz (rpy 0) and the full ixx..izz in the link frame; MJCF pos, mass and
@@ -192,11 +207,11 @@ def fill(description, package_paths, xacro_args, role, density, mass_from, masse
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     table = load_masses(masses) if masses else None
     result = fill_robot(robot_, role=role, density=density, mass_from=mass_from, masses=table, force=force,
-                        principal=principal)
+                        principal=principal, open_mesh=open_mesh)
     for link in result.links:
         if link.status == "kept":
             click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: left as it was: "
-                       f"{link.reason}", err=True)
+                       f"{_as_flags(link.reason)}", err=True)
         elif link.reason:
             click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: {link.reason}", err=True)
     written = write_filled(robot_, result, out, in_place)

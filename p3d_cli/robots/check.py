@@ -77,7 +77,10 @@ class LinkCheck:
         Declared over geometric moments about each principal axis of the geometry (ascending
         geometric moments).
     geometry : str or None
-        The geometry compared with (``collision`` or ``visual``), None when none was.
+        The geometry compared with (``collision`` or ``visual``, with its stand-in for an open
+        mesh), None when none was.
+    stand_in : str or None
+        What stood in for an open mesh (``open_mesh``): ``thin shell``, ``convex hull of ...``.
     tolerance : float
         The factor allowed between declared and geometric moments.
     frame : bool
@@ -92,6 +95,7 @@ class LinkCheck:
     geometry: str | None = None
     tolerance: float = 2.0
     frame: bool = False
+    stand_in: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -114,7 +118,7 @@ class LinkCheck:
 
 def check_robot(robot: Robot, *, tolerance: float = 2.0, role: str = "auto", com_slack: float = 0.05,
                 density_range: tuple[float, float] = DENSITY_RANGE,
-                require_inertial: bool = False) -> list[LinkCheck]:
+                require_inertial: bool = False, open_mesh: str = "refuse") -> list[LinkCheck]:
     """Check every link's declared inertial (see the module's rules).
 
     Parameters
@@ -130,6 +134,10 @@ def check_robot(robot: Robot, *, tolerance: float = 2.0, role: str = "auto", com
         Plausible implied densities, kg/m³.
     require_inertial : bool
         Fail links that have geometry but declare no inertial.
+    open_mesh : {"refuse", "hull", "shell"}
+        What stands in for geometry that bounds no solid: nothing (its moments and density
+        are not compared; default), each open mesh's convex hull, or a thin shell of the
+        declared mass over the link's surface (no density compared).
 
     Raises
     ------
@@ -145,6 +153,10 @@ def check_robot(robot: Robot, *, tolerance: float = 2.0, role: str = "auto", com
     if not 0 < density_range[0] < density_range[1]:
         raise UsageError("density_range", f"{density_range!r} is not LOW < HIGH, both positive",
                          "give e.g. 50,25000 (kg/m^3)")
+    from p3d_cli.robots.open_mesh import OPEN_MESH
+
+    if open_mesh not in OPEN_MESH:
+        raise UsageError("open_mesh", f"{open_mesh!r} is none of {', '.join(OPEN_MESH)}", "give shell, hull or refuse")
     if role not in ROLES:
         raise UsageError("role", f"{role!r} is none of {', '.join(ROLES)}", "give collision, visual or auto")
     out = []
@@ -154,13 +166,14 @@ def check_robot(robot: Robot, *, tolerance: float = 2.0, role: str = "auto", com
         done = seen.get(id(link.node))
         if done is None:
             done = seen[id(link.node)] = check_link(link, robot.path, tolerance, role, com_slack, density_range,
-                                                    require_inertial)
+                                                    require_inertial, open_mesh)
         out.append(done if done.link == link.name else dataclasses.replace(done, link=link.name))
     return out
 
 
 def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: float,
-               density_range: tuple[float, float], require_inertial: bool = False) -> LinkCheck:
+               density_range: tuple[float, float], require_inertial: bool = False,
+               open_mesh: str = "refuse") -> LinkCheck:
     """One link's verdict."""
     out = LinkCheck(link.name, notes=list(link.problems), tolerance=tolerance)
     inertial = link.inertial
@@ -183,13 +196,14 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
     best: tuple[float, LinkCheck] | None = None
     for r in roles:
         try:
-            geometry = measure_link(link, r, source, mass=mass if positive else None)
+            geometry = measure_link(link, r, source, mass=mass if positive else None, open_mesh=open_mesh)
         except RangeError as exc:
             out.problems.append(Problem("density", mass, f"{exc.what}: no link is that heavy"))
             return out
         if geometry is None:
             continue
-        trial = LinkCheck(link.name, tolerance=tolerance, geometry=r)
+        trial = LinkCheck(link.name, tolerance=tolerance, geometry=r if geometry.stand_in is None else
+                          f"{r} ({geometry.stand_in})", stand_in=geometry.stand_in)
         _geometry_rules(trial, inertial, principal if positive else None, geometry, tolerance, com_slack,
                         density_range)
         distance = _distance(trial)
@@ -202,6 +216,7 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
     out.problems += trial.problems
     out.notes += trial.notes
     out.geometry, out.implied_density, out.moment_ratios = trial.geometry, trial.implied_density, trial.moment_ratios
+    out.stand_in = trial.stand_in
     if role == "auto" and all(link.geoms(r) for r in roles):
         out.notes.append(f"compared with its {trial.geometry} geometry, the closer match")
     return out
@@ -276,19 +291,24 @@ def _geometry_rules(out: LinkCheck, inertial, principal, geometry: LinkGeometry,
                                         f"(widened by {com_slack:g} of the diagonal)"))
     if not geometry.solid:
         out.notes.append("geometry is not a closed solid, so its moments and density are not compared: "
-                         + "; ".join(geometry.problems))
+                         + "; ".join(geometry.problems) + " (open_mesh=hull or open_mesh=shell compares with a "
+                         "stand-in)")
         return
+    if geometry.stand_in:
+        out.notes.append(f"the geometry is not a closed solid ({'; '.join(geometry.problems)}): compared with its "
+                         f"{geometry.stand_in}")
     if principal is None:
         return
     volume = result.properties.volume
+    shell = out.stand_in == "thin shell"  # a surface: no volume, so no density to compare
     with np.errstate(all="ignore"):  # extreme declared numbers: inf or nan ratios fail below
-        density = inertial.mass / volume
+        density = None if shell else inertial.mass / volume
         expected, axes = _principal(result.properties.inertia)
         declared = np.einsum("ki,ij,kj->k", axes, inertial.inertia, axes)  # uᵀ I u for each axis u
         ratios = declared / expected
     out.implied_density = density
     lo, hi = density_range
-    if not lo <= density <= hi:  # nan fails too
+    if density is not None and not lo <= density <= hi:  # nan fails too
         out.problems.append(Problem("density", density, f"mass {inertial.mass:g} kg over the geometry's volume "
                                     f"{volume:.6g} m^3 is {density:.6g} kg/m^3, outside {lo:g}..{hi:g} "
                                     "(a unit slip: grams for kg, or a mesh in mm without its scale?)"))

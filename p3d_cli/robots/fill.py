@@ -27,7 +27,8 @@ from p3d_cli.robots.xmltree import Document
 @dataclass
 class FilledLink:
     """What ``fill_robot`` did with one link: ``status`` is ``filled`` or ``kept``; ``reason``
-    says why a link was kept; ``mass``, ``center`` and ``inertia`` are what was written."""
+    says why a link was kept; ``mass``, ``center`` and ``inertia`` are what was written;
+    ``stand_in`` what stood in for an open mesh (``open_mesh``: a thin shell, a convex hull)."""
 
     link: str
     status: str
@@ -35,6 +36,7 @@ class FilledLink:
     mass: float | None = None
     center: object = None
     inertia: object = None
+    stand_in: str | None = None
 
 
 @dataclass
@@ -93,7 +95,8 @@ def load_masses(path: str) -> dict[str, float]:
 
 
 def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from: str | None = None,
-               masses: dict | None = None, force: bool = False, principal: bool = False) -> FillResult:
+               masses: dict | None = None, force: bool = False, principal: bool = False,
+               open_mesh: str = "refuse") -> FillResult:
     """The description with each link's inertial computed from its ``role`` geometry.
 
     Parameters
@@ -111,6 +114,10 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         Also fill links whose geometry is open, flat or inward-wound.
     principal : bool
         MJCF: write ``quat`` + ``diaginertia`` rather than ``fullinertia``.
+    open_mesh : {"refuse", "hull", "shell"}
+        What stands in for geometry that bounds no solid (``p3d_cli.robots.open_mesh``): the
+        link is kept (default), or filled from each open mesh's convex hull, or as a thin shell
+        (which needs its mass: declared with ``mass_from``, or in ``masses``).
 
     Raises
     ------
@@ -119,6 +126,10 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
     InputError
         A mesh that cannot be read.
     """
+    from p3d_cli.robots.open_mesh import OPEN_MESH
+
+    if open_mesh not in OPEN_MESH:
+        raise UsageError("open_mesh", f"{open_mesh!r} is none of {', '.join(OPEN_MESH)}", "give shell, hull or refuse")
     if mass_from not in (None, "declared"):
         raise UsageError("mass_from", f"{mass_from!r} is not a mass source", "give mass_from=declared")
     rho = None if density is None else _quantity(density, "density", "density")
@@ -134,7 +145,7 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
     edits: dict[Document, dict[int, tuple[int, int, bytes]]] = {}
     report = []
     for link in robot.links:
-        filled = _fill_link(robot, link, role, rho, mass_from, given, force)
+        filled = _fill_link(robot, link, role, rho, mass_from, given, force, open_mesh)
         if filled.status == "filled":
             lines = inertial_lines(robot.format, filled.mass, filled.center, filled.inertia, principal)
             edit = None if _already(link, filled, lines) else _edit(link, lines)
@@ -150,7 +161,7 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
     return FillResult(files.get(robot.doc.path, robot.data), report, files)
 
 
-def _fill_link(robot: Robot, link: Link, role: str, rho, mass_from, given, force) -> FilledLink:
+def _fill_link(robot: Robot, link: Link, role: str, rho, mass_from, given, force, open_mesh) -> FilledLink:
     if not link.geoms(role):
         return FilledLink(link.name, "kept", f"has no {role} geometry")
     mass = given.get(link.name)
@@ -163,14 +174,20 @@ def _fill_link(robot: Robot, link: Link, role: str, rho, mass_from, given, force
     if mass is None and rho is None:
         raise UsageError(f"{robot.path}: link {link.name!r}", "has no mass: no density, no declared mass kept "
                          "and no entry in masses", "give density=D, mass_from=declared or masses=TABLE")
-    geometry = measure_link(link, role, robot.path, density=rho if mass is None else None, mass=mass)
+    geometry = measure_link(link, role, robot.path, density=rho if mass is None else None, mass=mass,
+                            open_mesh=open_mesh)
     if geometry.result is None or (not geometry.solid and not force):
         what = "; ".join(geometry.problems)
-        return FilledLink(link.name, "kept", f"geometry is not a closed solid ({what})" +
+        options = "" if open_mesh != "refuse" else "; open_mesh=shell (a thin shell) or open_mesh=hull (the " \
+                                                   "convex hull) gives an answer"
+        return FilledLink(link.name, "kept", f"geometry is not a closed solid ({what})" + options +
                           ("" if geometry.result is None else "; force fills it anyway"))
     p = geometry.result.properties
-    return FilledLink(link.name, "filled", "" if geometry.solid else "forced: " + "; ".join(geometry.problems),
-                      p.mass, p.center_of_mass, p.inertia)
+    if geometry.stand_in:
+        reason = f"open mesh: filled from its {geometry.stand_in} ({'; '.join(geometry.problems)})"
+    else:
+        reason = "" if geometry.solid else "forced: " + "; ".join(geometry.problems)
+    return FilledLink(link.name, "filled", reason, p.mass, p.center_of_mass, p.inertia, geometry.stand_in)
 
 
 #: Numbers in an element's text, for comparing its form with what fill writes.
