@@ -87,6 +87,14 @@ class _Context:
             self.defaults[node.attrib.get("class", fallback)] = own
             stack.extend((child, own, "") for child in reversed(node.findall("default")))
 
+    def childclass(self, node: Node, outer: str) -> str:
+        """The class a ``<body>``'s or ``<frame>``'s children take (MuJoCo refuses an undefined one)."""
+        name = node.attrib.get("childclass", outer)
+        if name not in self.defaults and name != "main":
+            raise InputError(f"{node.where}", f"<{node.tag}> names childclass {name!r}, which is not defined",
+                             "define it under <default>")
+        return name
+
     def attributes(self, node: Node, childclass: str) -> dict[str, str]:
         """``node``'s attributes over those of its default class."""
         name = node.attrib.get("class", childclass)
@@ -254,7 +262,7 @@ def _contents(context: _Context, node: Node, childclass: str, frame: Placement |
             where = f"{context.path}: frame line {child.line}"
             pos = numbers(child.attrib.get("pos"), 3, f"{where}: pos")
             own = Placement(None, context.rotation(child.attrib, where), None if pos is None else np.array(pos))
-            inner = child.attrib.get("childclass", cls)
+            inner = context.childclass(child, cls)
             placed = own if outer is None else then(own, outer)
             stack.extend((c, inner, placed, tail) for c in reversed(child.children))
         elif child.tag == "replicate":
@@ -296,8 +304,8 @@ def _body(context: _Context, node: Node, outer_class: str, suffix: str, links: l
     # An unnamed body is named by its MuJoCo body id (world 0, then depth first, as compiled): a
     # line number would change when fill inserts an inertial above it.
     name = name + suffix if name else f"body#{len(links) + 1}"
-    where = f"{context.path}: body {name!r}"
-    childclass = node.attrib.get("childclass", outer_class)
+    where = f"{node.doc.path if node.doc else context.path}:{node.line}: body {name!r}"
+    childclass = context.childclass(node, outer_class)
     link = Link(name, node)
     links.append(link)
     counts = {"collision": 0, "visual": 0}

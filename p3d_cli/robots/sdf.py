@@ -179,7 +179,7 @@ def _model(path: str, model: Node, prefix: str, packages: dict[str, str], links:
         name = node.attrib.get("name")
         if not name:
             raise InputError(f"{path}: line {node.line}", "a <link> has no name", "name every link")
-        where = f"{path}: link {prefix + name!r}"
+        where = f"{node.doc.path if node.doc else path}:{node.line}: link {prefix + name!r}"
         link = Link(prefix + name, node)
         for role in ("collision", "visual"):
             for i, element in enumerate(node.findall(role)):

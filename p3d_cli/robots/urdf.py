@@ -51,7 +51,7 @@ def read_urdf(path: str, root: Node, packages: dict[str, str]) -> Robot:
         name = node.attrib.get("name")
         if not name:
             raise InputError(f"{path}: line {node.line}", "a <link> has no name", "name every link")
-        where = f"{path}: link {name!r}"
+        where = f"{path}:{node.line}: link {name!r}"
         link = Link(name, node)
         for role in ("collision", "visual"):
             for i, element in enumerate(node.findall(role)):
