@@ -12,6 +12,7 @@ declared inertial unless ``force`` (missing geometry always does: there is nothi
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass, field
 
@@ -144,8 +145,14 @@ def fill_robot(robot: Robot, *, role: str = "collision", density=None, mass_from
         raise UsageError("masses", f"names no link {unknown[0]!r}", "give the masses of links of this description")
     edits: dict[Document, dict[int, tuple[int, int, bytes]]] = {}
     report = []
+    seen: dict[int, FilledLink] = {}
     for link in robot.links:
-        filled = _fill_link(robot, link, role, rho, mass_from, given, force, open_mesh)
+        # The copies of a replicated MJCF body share their element and geometry: measured once.
+        filled = seen.get(id(link.node))
+        if filled is None or link.name in given:
+            filled = seen[id(link.node)] = _fill_link(robot, link, role, rho, mass_from, given, force, open_mesh)
+        elif filled.link != link.name:
+            filled = dataclasses.replace(filled, link=link.name)
         if filled.status == "filled":
             lines = inertial_lines(robot.format, filled.mass, filled.center, filled.inertia, principal)
             edit = None if _already(link, filled, lines) else _edit(link, lines)
