@@ -167,7 +167,9 @@ def _hulled(assembly: Assembly, link: Link, role: str, source: str, density, mas
     if not hulled:
         return first
     again = _measured(dataclasses.replace(assembly, parts=tuple(parts)), link, role, source, density, mass)
-    return dataclasses.replace(again, stand_in=f"convex hull of {', '.join(hulled)}")
+    # The problems stay those of the geometry itself: they say why a stand-in was used.
+    return dataclasses.replace(again, problems=first.problems + again.problems,
+                               stand_in=f"convex hull of {', '.join(hulled)}")
 
 
 def _shell(assembly: Assembly, link: Link, source: str, mass, first: LinkGeometry) -> LinkGeometry:
