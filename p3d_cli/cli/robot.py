@@ -216,7 +216,8 @@ def fill(description, package_paths, xacro_args, role, density, mass_from, masse
             click.echo(f"p3d: warning: {robot_.path}: link {link.link!r}: {link.reason}", err=True)
     written = write_filled(robot_, result, out, in_place)
     filled = sum(1 for link in result.links if link.status == "filled")
-    where = f" ({', '.join(written)} rewritten in place)" if in_place else ""
+    where = "" if not in_place else f" ({', '.join(written)} rewritten in place)" if written else \
+        " (nothing changed, nothing rewritten)"
     click.echo(f"p3d robot fill: {robot_.path}: {filled} of {len(result.links)} links filled{where}", err=True)
     return 0
 

@@ -287,6 +287,9 @@ def test_in_place_keeps_permissions_and_refuses_output_over_the_input(arm, tmp_p
     assert _run("robot", "fill", path, "--package-path", f"arm_description={arm.package}", "--density", "2700",
                 "--in-place").exit_code == 0
     assert path.read_bytes() == once  # idempotent
+    assert "nothing changed, nothing rewritten" in _run("robot", "fill", path, "--package-path",
+                                                        f"arm_description={arm.package}", "--density", "2700",
+                                                        "--in-place").stderr
     assert not [p for p in path.parent.iterdir() if p.name.endswith(".p3d-tmp")]
 
 
