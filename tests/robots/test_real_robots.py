@@ -197,7 +197,10 @@ def test_filled_real_sdf_parses_with_p3ds_numbers(case, tmp_path):
 
 def test_collada_visuals_are_read_in_their_unit():
     """kuka's visual meshes are COLLADA (<unit meter="1">, several meshes a file): each link's
-    visual geometry is its DAE's, as trimesh reads it, in metres."""
+    visual geometry is its DAE's, as trimesh reads it, in metres. trimesh's COLLADA reader
+    (pycollada) rounds the file's decimal positions to float32 where p3d keeps float64, so the
+    two agree to float32's precision (1.5e-6 on link_6's 12 mm thin flange), not to the last
+    digit; a unit slip would be a factor of 1e3 or more."""
     pytest.importorskip("collada")
     trimesh = pytest.importorskip("trimesh")
     root = folder("kuka_kr16_2")
@@ -210,4 +213,4 @@ def test_collada_visuals_are_read_in_their_unit():
         (geom,) = link.visual
         visual = measure_link(link, "visual", robot.path).result.properties
         peer = trimesh.load(geom.thing, force="mesh")
-        assert visual.volume == pytest.approx(peer.volume, rel=1e-9), link.name
+        assert visual.volume == pytest.approx(peer.volume, rel=1e-5), link.name
