@@ -293,6 +293,10 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
         found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}
+    from p3d_cli.bounding import checked_bounds
+
+    with np.errstate(over="ignore"):
+        union = _union([r.bounds for r in found])
     return BoundsResult(assembly.source, "assembly", methods.pop() if len(methods) == 1 else "mixed",
-                        _union([r.bounds for r in found]), sum(r.faces for r in found),
+                        checked_bounds(assembly.source, union), sum(r.faces for r in found),
                         tuple(w for r in found for w in r.warnings))

@@ -52,7 +52,22 @@ def finish(result: PropsResult, system, user_placement: Placement, density_given
 
 
 def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = None) -> BoundsResult:
-    """Exact bounds of ``solid`` after ``placement`` (closed forms or vertex projection)."""
+    """Exact bounds of ``solid`` after ``placement`` (closed forms or vertex projection).
+
+    Raises
+    ------
+    RangeError
+        The bounds overflow float64 (``p3d_cli.bounding.checked_bounds``).
+    """
+    from p3d_cli.bounding import checked_bounds
+
+    with np.errstate(over="ignore", invalid="ignore"):     # refused below, in one error
+        result = _solid_bounds(solid, placement, tessellate)
+    checked_bounds(solid.where, result.bounds)
+    return result
+
+
+def _solid_bounds(solid: Solid, placement: Placement, tessellate: int | None) -> BoundsResult:
     if solid.shape is not None:
         if tessellate is not None:
             from p3d_cli.exact import shape_triangles
