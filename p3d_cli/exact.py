@@ -29,7 +29,8 @@ COARSE_FLOAT32 = 1e-6
 
 
 def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: int | None = None,
-                density: float | None = None, mass: float | None = None, about=None) -> PropsResult:
+                density: float | None = None, mass: float | None = None, about=None,
+                density_error: float = 0.0) -> PropsResult:
     """Mass properties of a shape (closed forms, or its tessellated stand-in) or of a mesh.
 
     Parameters
@@ -45,6 +46,9 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
         Exclusive; default density 1.
     about : (3,) array_like, optional
         Extra reference point for the inertia.
+    density_error : float, optional
+        Relative error of ``density`` or ``mass`` (a unit conversion's rounding,
+        ``p3d_cli.units.DENSITY_ROUNDING``), carried into the bounds.
 
     Raises
     ------
@@ -52,7 +56,34 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
         ``RangeError`` (an ``InputError``) when a result would overflow or underflow float64.
     """
     with np.errstate(all="ignore"):  # out-of-range results are caught by check_range instead
-        return _exact_props(solid, placement, tessellate, density, mass, about)
+        result = _exact_props(solid, placement, tessellate, density, mass, about)
+    if result.uncertainty is None or (density_error == 0 and mass is None):
+        return result
+    moments_error = result.uncertainty["volume"]
+    return dataclasses.replace(result, uncertainty=material_errors(
+        result.uncertainty, result.properties, density_error, moments_error if mass is not None else None))
+
+
+def material_errors(uncertainty: dict, props: MassProperties, density_error: float,
+                    volume_error: float | None = None) -> dict:
+    """Bounds grown by the density's relative error: ``density_error`` (a converted density or
+    mass), plus, when the density follows from a given mass (``volume_error`` is then the
+    volume's bound), the volume's relative error and the division's rounding. Mass and every
+    moment of mass are linear in the density, so each grows by that fraction of itself."""
+    rel = density_error
+    if volume_error is not None and props.volume != 0:
+        rel += volume_error / abs(props.volume) + _UNIT
+    if rel == 0 or uncertainty.get("mass") is None:
+        return uncertainty
+    out = {**uncertainty, "mass": uncertainty["mass"] + rel * abs(props.mass) * _UP}
+    if uncertainty.get("inertia") is not None and props.inertia is not None:
+        out["inertia"] = uncertainty["inertia"] + rel * np.abs(props.inertia) * _UP
+    return out
+
+
+#: Unit roundoff, and a factor that rounds a bound's own arithmetic upward.
+_UNIT = 2.0 ** -53
+_UP = 1.0 + 2.0 ** -40
 
 
 def _exact_props(solid: Solid, placement: Placement, tessellate, density, mass, about) -> PropsResult:
