@@ -16,7 +16,7 @@ from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_mome
 from p3d_cli.mesh.analysis import MeshAnalysis, analyze
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.moments import check_range, shape_moments
-from p3d_cli.placement import IDENTITY, Placement, watch_bounds
+from p3d_cli.placement import IDENTITY, Placement, prescaled, watch_bounds
 from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
 from p3d_cli.solid import Solid
@@ -115,7 +115,7 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     placed_bounds = None
     if not placement.is_identity:
         mesh, placed_bounds = watch_bounds(mesh, placement)
-    found = analyze(mesh, mesh.where)
+    found = analyze(mesh, mesh.where, rescale=True)
     check_range(solid.source, found.moments, found.moments)
     facts = mesh_facts(solid, found)
     warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
@@ -130,10 +130,15 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
         warnings.append(CodedWarning(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed "
                                      "inside out (negative orientation); each was counted with its positive "
                                      "volume", "inverted-tetrahedra"))
-    if placed_bounds is not None:
-        unplaced, moments = moments, placement.moments(moments)
+    if placed_bounds is not None or found.scale_exponent:
+        # A part integrated scaled by 2ᵏ (too small or too large for float64's comfortable
+        # range) is scaled back together with the placement, so that a tiny part scaled up
+        # (or a huge one down) never passes through an under- or overflowing value.
+        total = prescaled(placement, -found.scale_exponent, solid.source)
+        unplaced, moments = moments, total.moments(moments)
         check_range(solid.source, unplaced, moments)
-        facts = dataclasses.replace(facts, bounds=placed_bounds())
+        if placed_bounds is not None:
+            facts = dataclasses.replace(facts, bounds=placed_bounds())
     props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
 

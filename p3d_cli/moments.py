@@ -155,8 +155,8 @@ def check_range(where: str, before: Moments | None, after: Moments) -> None:
     """Refuse moments that a shape's size or a placement pushed out of float64's range.
 
     A volume or second moment that was non-zero ``before`` (``before=None`` for a shape, whose
-    are never zero) and is zero ``after`` underflowed; an infinite or NaN one overflowed. Either
-    would print a silently wrong number.
+    are never zero) and is zero or subnormal ``after`` underflowed (a subnormal keeps only a
+    few bits); an infinite or NaN one overflowed. Either would print a silently wrong number.
 
     Raises
     ------
@@ -167,12 +167,14 @@ def check_range(where: str, before: Moments | None, after: Moments) -> None:
         if not all(np.isfinite(v).all() for v in values):
             raise RangeError(where, "the volume or its moments overflow float64",
                              "measure in a larger unit (e.g. km instead of mm)")
+        # Below float64's normal range (2**-1022) a value keeps only a few bits: as lost as 0.
+        tiny = np.finfo(np.float64).tiny
         if before is None:  # a shape
-            lost = after.volume == 0 or after.is_empty or bool(np.any(np.diag(after.central) == 0))
+            lost = abs(after.volume) < tiny or after.is_empty or bool(np.any(np.abs(np.diag(after.central)) < tiny))
         else:
-            lost = before.volume != 0 and after.volume == 0
+            lost = before.volume != 0 and abs(after.volume) < tiny
             if not before.is_empty and not after.is_empty:
-                lost = lost or bool(np.any((np.diag(before.central) != 0) & (np.diag(after.central) == 0)))
+                lost = lost or bool(np.any((np.diag(before.central) != 0) & (np.abs(np.diag(after.central)) < tiny)))
     if lost:
         raise RangeError(where, "the volume or its second moments underflow float64 (the part is too small)",
                          "measure in a smaller unit (e.g. mm instead of m)")
