@@ -37,7 +37,6 @@ from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.exact import mesh_facts, mesh_warnings
 from p3d_cli.inertia import density_for, inertia_from_second_moments, mass_properties
 from p3d_cli.mesh.analysis import analyze
-from p3d_cli.moments import check_range
 from p3d_cli.montecarlo_bounds import _PAIRS, ALPHA, _central, clopper_pearson, conservative_errors  # noqa: F401
 from p3d_cli.placement import IDENTITY, Placement
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
@@ -106,7 +105,7 @@ class Estimate:
         # (size³) and second moments (size⁵) are formed without passing through an underflow.
         scaled, length = self._scaled_half()
         box = float(np.prod(2.0 * scaled))
-        volume = math.ldexp(box * m[0], 3 * length)
+        volume = float(np.ldexp(box * m[0], 3 * length))   # inf past float64: refused by the caller
         if not m[0] > 0:
             return Moments(0.0, None, None)
         center = centre + half * m[1:4] / m[0]      # in the sampled frame, then moved once
@@ -158,6 +157,19 @@ class Estimate:
             out["volume"] = max(out["volume"], bounds["volume"])
             out["mass"] = max(out["mass"], bounds["mass"])
         return out
+
+    def underflows(self) -> bool:
+        """True when the estimated volume or a second moment, non-zero in box units, falls
+        below float64's normal range in world units (a part too small: a few bits left)."""
+        m = self.mean
+        if not m[0] > 0:
+            return False
+        scaled, length = self._scaled_half()
+        box = float(np.prod(2.0 * scaled))
+        tiny = np.finfo(np.float64).tiny
+        moments = self.moments()
+        central = np.diag(_central(m, box) * np.outer(scaled, scaled))
+        return abs(moments.volume) < tiny or bool(np.any((central != 0) & (np.abs(np.diag(moments.central)) < tiny)))
 
     def _scaled_half(self) -> tuple[np.ndarray, int]:
         """The box's half-size in units of ``2**length`` (a power of two near it), and ``length``."""
@@ -342,8 +354,9 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
         estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance,
                                       origin=origin)
         moments = estimate.moments()
-        if not moments.is_empty:
-            check_range(solid.source, None, moments)      # a volume or moment below float64's range
+        if estimate.underflows():
+            raise RangeError(solid.source, "the volume or its second moments underflow float64 (the part is too "
+                             "small)", "measure in a smaller unit (e.g. mm instead of m)")
     if moments.is_empty and mass is not None:
         raise UsageError("mass", "the Monte Carlo estimate found no volume, so no density "
                          "follows from a mass", "give density=, or more samples=")
