@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from fractions import Fraction
 from typing import Iterator
 
 import numpy as np
@@ -19,7 +20,7 @@ from p3d_cli.assembly import Assembly, Part
 from p3d_cli.errors import InputError, P3DError, UsageError
 from p3d_cli.placement import Placement, converted, scaling, then
 from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
-from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, length_factor, parse_output_units
+from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, exact_length, length_factor, parse_output_units
 
 
 def _system(assembly: Assembly, units: str | None, output_units: str | None) -> UnitSystem | None:
@@ -35,11 +36,11 @@ def _system(assembly: Assembly, units: str | None, output_units: str | None) -> 
     return UnitSystem(top, length, mass)
 
 
-def _factor(units: str | None, system: UnitSystem | None) -> tuple[float, float]:
-    """The length factor from ``units`` to the output unit, and its rounding (``length_factor``)."""
+def _factor(units: str | None, system: UnitSystem | None) -> Fraction:
+    """The exact length factor from ``units`` to the output unit (1 when either is unknown)."""
     if system is None or units is None:
-        return 1.0, 0.0
-    return length_factor(units, system.length)
+        return Fraction(1)
+    return exact_length(units) / exact_length(system.length)
 
 
 @dataclass(frozen=True)
@@ -80,13 +81,13 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
     or a ``mass`` (its parts' total, which then may not give their own).
     """
     units = assembly.units or units
-    factor, factor_error = _factor(units, system)
+    factor = _factor(units, system)
     if system is None and assembly.units is not None:
         raise InputError(f"{assembly.source}: units", "a nested assembly has units, its parent none",
                          "give the top assembly its units: too")
     for part in assembly.parts:
         name = f"{path}{part.name}"
-        own = converted(part.placement, factor, factor_error)
+        own = converted(part.placement, factor)
         if group is not None and (part.density is not None or part.mass is not None):
             raise InputError(part.where, f"gives its own {'mass' if part.mass is not None else 'density'}, "
                              f"and {group[0]} gives the mass of the parts it holds",
@@ -98,7 +99,7 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
                 yield from leaves(part.thing, then(own, outer), system, units, name + "/",
                                   density if d is None else d, inner)
                 continue
-            total = then(converted(part.placement, factor, factor_error, coordinates=True), outer)
+            total = then(converted(part.placement, factor, coordinates=True), outer)
         except InputError:
             raise
         except P3DError as exc:
@@ -137,7 +138,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
 
     system = _system(assembly, units, output_units)
     factor = 1.0 if system is None else system.factor
-    outer = placement if system is None else converted(placement, factor, system.factor_error)
+    outer = converted(placement, _factor(system.mesh_length if system else None, system))
     about_out = None if about is None else np.asarray(about, dtype=np.float64) * factor
     whole_mass = mass
     if whole_mass is not None and density is not None:
@@ -306,7 +307,7 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
     from p3d_cli.solid import as_solid
 
     system = _system(assembly, units, output_units)
-    outer = placement if system is None else converted(placement, system.factor, system.factor_error)
+    outer = converted(placement, _factor(system.mesh_length if system else None, system))
     found = []
     for leaf in leaves(assembly, outer, system, None if system is None else system.mesh_length):
         solid = as_solid(leaf.part.thing)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -378,28 +379,37 @@ def scaling(factor: float, error: float = 0.0) -> Placement:
     return Placement(scale=np.full(3, factor), errors=errors)
 
 
-def converted(placement: Placement, factor: float, error: float = 0.0, *, coordinates: bool = False) -> Placement:
-    """``placement`` written in a length unit ``factor`` times the output unit (``error`` off its
-    exact value), carried into the output unit: the translation becomes ``f t``; with
-    ``coordinates``, the solid's own coordinates are in that unit too, so the scale becomes
-    ``f S`` (a uniform scale commutes with rotations, so nothing else changes). Each product is
-    rounded once, and its rounding enters ``errors``.
+def converted(placement: Placement, factor: Fraction, *, coordinates: bool = False) -> Placement:
+    """``placement`` written in a length unit ``factor`` times the output unit (the exact ratio
+    of the units, ``p3d_cli.units.exact_length``), carried into the output unit: the translation
+    becomes ``f t``; with ``coordinates``, the solid's own coordinates are in that unit too, so
+    the scale becomes ``f S`` (a uniform scale commutes with rotations, so nothing else changes).
+    Each product is the exact one rounded once (``0.3 mm`` is the float nearest 0.0003 m), and
+    its rounding, known exactly, enters ``errors`` with the inputs' own errors times ``f``.
     """
-    if factor == 1.0 and error == 0.0:
+    factor = Fraction(factor)
+    if factor == 1:
         return placement
     e = PlacementErrors.of(placement)
+    f = abs(float(factor)) * _UP
     translation, translation_error = placement.translation, e.translation
     if translation is not None:
-        translation, rounding = _rounded_array([[(x, factor)] for x in translation.tolist()])
-        translation_error = rounding + _UP * (np.abs(placement.translation) * error
-                                              + e.translation * (abs(factor) + error))
+        translation, rounding = _exact_products(translation, factor)
+        translation_error = rounding + e.translation * f
     scale, scale_error = placement.scale, e.scale
     if coordinates:
-        s = np.ones(3) if scale is None else scale
-        scale, rounding = _rounded_array([[(x, factor)] for x in s.tolist()])
-        scale_error = rounding + _UP * (np.abs(s) * error + e.scale * (abs(factor) + error))
+        scale, rounding = _exact_products(np.ones(3) if scale is None else scale, factor)
+        scale_error = rounding + e.scale * f
     return _placement(scale, placement.rotation, translation,
                       PlacementErrors(scale_error, e.rotation, translation_error))
+
+
+def _exact_products(values: np.ndarray, factor: Fraction) -> tuple[np.ndarray, np.ndarray]:
+    """``values · factor`` each rounded once from the exact product, and the roundings."""
+    from p3d_cli.units import rounding_error
+
+    exact = [Fraction(x) * factor for x in values.tolist()]
+    return np.array([float(v) for v in exact]), np.array([rounding_error(v) for v in exact])
 
 
 def prescaled(placement: Placement, exponent: int, where: str = "placement") -> Placement:
