@@ -280,7 +280,10 @@ def whole_uncertainty(results, whole: MassProperties) -> dict | None:
                       + (m + dm) * ((dd @ dd) * np.eye(3) + np.outer(dd, dd)) + dm * (
                           2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
                       + rounding * (np.abs(p.inertia) + m * size))
-    return {"volume": d_volume, "mass": d_mass, "center_of_mass": d_center, "inertia": d_inertia}
+    # Rounded up: the parts' bounds can be all but reached (a composed placement's rounding is
+    # known exactly), so the float sums above must not round the whole's below its error.
+    up = 1.0 + 2.0 ** -40
+    return {"volume": d_volume * up, "mass": d_mass * up, "center_of_mass": d_center * up, "inertia": d_inertia * up}
 
 
 def _closed(results) -> bool | None:

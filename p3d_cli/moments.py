@@ -124,7 +124,9 @@ def translate_moments(moments: Moments, offset, offset_error=None) -> Moments:
         # the final centre's own ulp no longer covers.
         center_error = errors.center + np.spacing(np.abs(moments.center)) + np.spacing(np.abs(center))
         if offset_error is not None:
-            center_error = center_error + np.asarray(offset_error, dtype=np.float64)
+            # Rounded up: a composed translation's rounding is known exactly, so this bound can
+            # be all but reached, and its own additions must not round it below the error.
+            center_error = (center_error + np.asarray(offset_error, dtype=np.float64)) * _UP
         errors = MomentErrors(errors.volume, center_error, errors.central)
     return Moments(moments.volume, center, moments.central, errors)
 

@@ -17,7 +17,6 @@ inward-wound input stays inward-wound (its volume stays negative), as it should.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Callable, Iterator
@@ -27,6 +26,7 @@ import numpy as np
 from p3d_cli.bounding import triangles_bounds
 from p3d_cli.errors import UsageError
 from p3d_cli.io.source import MeshSource
+from p3d_cli.mesh.expansions import rounded_sums
 from p3d_cli.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
 
@@ -352,14 +352,14 @@ def then(first: Placement, second: Placement) -> Placement:
     rotation, rotation_error = (m1, np.zeros((3, 3))) if second.rotation is None else (r2, np.zeros((3, 3)))
     if first.rotation is not None and second.rotation is not None:
         r2l, m1l = r2.tolist(), m1.tolist()
-        rotation, rotation_error = _rounded_array([[[(r2l[i][k], m1l[k][j]) for k in range(3)] for j in range(3)]
+        rotation, rotation_error = rounded_sums([[[(r2l[i][k], m1l[k][j]) for k in range(3)] for j in range(3)]
                                                    for i in range(3)])
-    scale, scale_error = _rounded_array([[(a, b)] for a, b in zip(s2.tolist(), s1.tolist())])
+    scale, scale_error = rounded_sums([[(a, b)] for a, b in zip(s2.tolist(), s1.tolist())])
     r2l, s2l, t1l, t2l = r2.tolist(), s2.tolist(), t1.tolist(), t2.tolist()
     if second.rotation is None:
-        translation, translation_error = _rounded_array([[(s2l[i], t1l[i]), (t2l[i],)] for i in range(3)])
+        translation, translation_error = rounded_sums([[(s2l[i], t1l[i]), (t2l[i],)] for i in range(3)])
     else:
-        translation, translation_error = _rounded_array([[(r2l[i][k], s2l[k], t1l[k]) for k in range(3)]
+        translation, translation_error = rounded_sums([[(r2l[i][k], s2l[k], t1l[k]) for k in range(3)]
                                                          + [(t2l[i],)] for i in range(3)])
     # The inputs' own errors, carried through the products (first order and the product of
     # errors, so nothing is dropped), rounded up by _UP.
@@ -387,6 +387,8 @@ def converted(placement: Placement, factor: Fraction, *, coordinates: bool = Fal
     Each product is the exact one rounded once (``0.3 mm`` is the float nearest 0.0003 m), and
     its rounding, known exactly, enters ``errors`` with the inputs' own errors times ``f``.
     """
+    from p3d_cli.units import exact_products
+
     factor = Fraction(factor)
     if factor == 1:
         return placement
@@ -394,22 +396,14 @@ def converted(placement: Placement, factor: Fraction, *, coordinates: bool = Fal
     f = abs(float(factor)) * _UP
     translation, translation_error = placement.translation, e.translation
     if translation is not None:
-        translation, rounding = _exact_products(translation, factor)
+        translation, rounding = exact_products(translation, factor)
         translation_error = rounding + e.translation * f
     scale, scale_error = placement.scale, e.scale
     if coordinates:
-        scale, rounding = _exact_products(np.ones(3) if scale is None else scale, factor)
+        scale, rounding = exact_products(np.ones(3) if scale is None else scale, factor)
         scale_error = rounding + e.scale * f
     return _placement(scale, placement.rotation, translation,
                       PlacementErrors(scale_error, e.rotation, translation_error))
-
-
-def _exact_products(values: np.ndarray, factor: Fraction) -> tuple[np.ndarray, np.ndarray]:
-    """``values · factor`` each rounded once from the exact product, and the roundings."""
-    from p3d_cli.units import rounding_error
-
-    exact = [Fraction(x) * factor for x in values.tolist()]
-    return np.array([float(v) for v in exact]), np.array([rounding_error(v) for v in exact])
 
 
 def prescaled(placement: Placement, exponent: int, where: str = "placement") -> Placement:
@@ -450,48 +444,3 @@ def _placement(scale, rotation, translation, errors: PlacementErrors) -> Placeme
         translation = None
     none = exact(errors.scale) and exact(errors.rotation) and exact(errors.translation)
     return Placement(scale, rotation, translation, None if none else errors)
-
-
-def _rounded_array(sums) -> tuple[np.ndarray, np.ndarray]:
-    """``rounded_sum`` of each entry of a nested list of product lists: values and errors."""
-    pairs = np.array([[rounded_sum(terms) for terms in row] for row in sums]
-                     if isinstance(sums[0][0], list) else [rounded_sum(terms) for terms in sums])
-    return pairs[..., 0].copy(), pairs[..., 1].copy()
-
-
-def rounded_sum(terms) -> tuple[float, float]:
-    """``Σ Π term`` for ``terms``, a list of tuples of floats (products of a few factors),
-    computed exactly and rounded once, and ``|rounded - exact|`` rounded up (0 when exact).
-
-    Every finite float is an integer times a power of two, so the sum is a Python integer over
-    a power of two; Python's integer division rounds it correctly (subnormals too). A non-finite
-    factor gives the float sum with an infinite error.
-    """
-    num, shift = 0, 0
-    try:
-        for term in terms:
-            n, e = 1, 0
-            for x in term:
-                a, b = float(x).as_integer_ratio()
-                n *= a
-                e += b.bit_length() - 1
-            if n == 0:
-                continue
-            if e > shift:
-                num <<= e - shift
-                shift = e
-            num += n << (shift - e)
-    except (OverflowError, ValueError):   # inf or nan
-        return float(sum(math.prod(t) for t in terms)), math.inf
-    if num == 0:
-        return 0.0, 0.0
-    den = 1 << shift
-    try:
-        value = num / den
-    except OverflowError:
-        return (math.inf if num > 0 else -math.inf), math.inf
-    a, b = value.as_integer_ratio()
-    diff = abs(num * b - a * den)
-    if diff == 0:
-        return value, 0.0
-    return value, math.nextafter(diff / (den * b), math.inf)

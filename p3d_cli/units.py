@@ -112,6 +112,26 @@ def rounding_error(exact: Fraction) -> float:
     return bound if Fraction(bound) >= error else math.nextafter(bound, math.inf)
 
 
+def exact_products(values, factor: Fraction):
+    """``values · factor`` each rounded once from the exact product, and the roundings.
+
+    Parameters
+    ----------
+    values : (k,) float64
+    factor : Fraction
+        An exact unit ratio (``exact_length``).
+
+    Returns
+    -------
+    products, roundings : (k,) float64
+        ``|products - exact|`` rounded up (``rounding_error``).
+    """
+    import numpy as np
+
+    exact = [Fraction(x) * factor for x in values.tolist()]
+    return np.array([float(v) for v in exact]), np.array([rounding_error(v) for v in exact])
+
+
 def parse_output_units(text: str | None) -> tuple[str, str]:
     """``"mm,g"`` -> ``("mm", "g")``; ``"mm"`` -> ``("mm", "kg")``; None -> SI ``("m", "kg")``.
 
