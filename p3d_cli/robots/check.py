@@ -246,7 +246,9 @@ def _frame(out: LinkCheck, mass: float, tensor: np.ndarray) -> LinkCheck:
         out.problems.append(Problem("positive definite", tensor.tolist(), "the inertia is not finite"))
         return out
     scale = max(float(np.abs(tensor).max()), 1e-300)
-    principal = np.linalg.eigvalsh(0.5 * (tensor + tensor.T) / scale) * scale
+    unit = tensor / scale  # scaled before the sum: 1e308 + 1e308 would overflow
+    with np.errstate(over="ignore"):
+        principal = np.linalg.eigvalsh(0.5 * (unit + unit.T)) * scale
     if principal[0] < -1e-9 * scale:
         out.problems.append(Problem("positive definite", principal.tolist(),
                                     f"principal moments {_vec(principal)}: one is negative"))
