@@ -39,6 +39,9 @@ SHAPES = ("box", "ellipsoid")
 #: Line widths (pixels at 800 x 600): the declared box under the computed one, wider, so that
 #: where the two coincide both show.
 DECLARED_WIDTH, COMPUTED_WIDTH = 7, 3
+#: A box is left out of a picture that would have to span more than this many times its size and
+#: the geometry's (a centre of mass at 1e300 m: the picture would show neither).
+FAR = 1e6
 #: A box smaller than this part of everything drawn is circled (a mass in grams declares one
 #: about 30 times too small).
 SMALL = 1 / 25
@@ -68,8 +71,11 @@ def declared_inertia(inertial) -> _Inertia | None:
     if not (np.isfinite(mass) and mass > 0 and np.all(np.isfinite(tensor)) and np.all(np.isfinite(inertial.center))):
         return None
     scale = max(float(np.abs(tensor).max()), 1e-300)
-    moments, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T) / scale)
-    return _Inertia(float(mass), np.asarray(inertial.center, dtype=np.float64), moments * scale, vectors.T)
+    unit = tensor / scale  # scaled before the sum, which would overflow near float64's limit
+    moments, vectors = np.linalg.eigh(0.5 * (unit + unit.T))
+    with np.errstate(over="ignore"):  # inf moments: no box is drawn (inertia_layers)
+        moments = moments * scale
+    return _Inertia(float(mass), np.asarray(inertial.center, dtype=np.float64), moments, vectors.T)
 
 
 def computed_inertia(check):
@@ -85,17 +91,21 @@ def computed_inertia(check):
     return properties
 
 
-def inertia_layers(declared, computed, shape: str = "box") -> list[Layer]:
-    """The declared and the computed layer (either may be None: left out), in drawing order."""
+def inertia_layers(declared, computed, shape: str = "box", triangles=None) -> list[Layer]:
+    """The declared and the computed layer (either may be None: left out), in drawing order; a
+    box whose size overflows float64, or that lies too far (``FAR``) from the link frame's origin
+    and the geometry (``triangles``), is left out too."""
     from p3d_cli.render.overlays import equivalent_half_extents, inertia_layer, number
 
     layers = []
     for key, properties, width, name in (("declared", declared, DECLARED_WIDTH, "declared"),
                                          ("inertia", computed, COMPUTED_WIDTH, "computed")):
-        layer = None if properties is None else inertia_layer(properties, shape)
-        if layer is None:
+        with np.errstate(all="ignore"):
+            layer = None if properties is None else inertia_layer(properties, shape)
+            half = None if properties is None else equivalent_half_extents(properties, shape)
+        if layer is None or half is None or not np.all(np.isfinite(layer.segments)) \
+                or _too_far(layer.segments, triangles):
             continue
-        half = equivalent_half_extents(properties, shape)
         size = " x ".join(number(2 * h) for h in half)
         label = f"{name}: {shape} {size} m"
         layers.append(dataclasses.replace(layer, key=key, label=label, width=width, xray=True,
@@ -103,16 +113,26 @@ def inertia_layers(declared, computed, shape: str = "box") -> list[Layer]:
     return layers
 
 
+def _size(points: np.ndarray) -> float:
+    points = points.reshape(-1, 3)
+    return float((points.max(axis=0) - points.min(axis=0)).max()) if len(points) else 0.0
+
+
+def _too_far(segments: np.ndarray, triangles) -> bool:
+    reference = np.zeros((1, 3)) if triangles is None else np.concatenate([np.zeros((1, 3)),
+                                                                           triangles.reshape(-1, 3)])
+    with np.errstate(all="ignore"):
+        span = _size(np.concatenate([reference, segments.reshape(-1, 3)]))
+        own = max(_size(segments), _size(reference), 1e-300)
+    return not span <= FAR * own
+
+
 def _circled(layers: list[Layer], triangles: np.ndarray) -> list[Layer]:
     """``layers`` with a ring around each box too small to find at a glance."""
-    points = [triangles.reshape(-1, 3)] + [layer.segments.reshape(-1, 3) for layer in layers]
-    everything = np.concatenate(points)
-    span = float((everything.max(axis=0) - everything.min(axis=0)).max()) if len(everything) else 0.0
+    span = _size(np.concatenate([triangles.reshape(-1, 3)] + [layer.segments.reshape(-1, 3) for layer in layers]))
     out = []
     for layer in layers:
-        corners = layer.segments.reshape(-1, 3)
-        size = float((corners.max(axis=0) - corners.min(axis=0)).max())
-        out.append(dataclasses.replace(layer, ring=True) if size < SMALL * span else layer)
+        out.append(dataclasses.replace(layer, ring=True) if _size(layer.segments) < SMALL * span else layer)
     return out
 
 
@@ -154,7 +174,11 @@ def link_picture(robot, link, check, *, shape: str = "box", role: str = "auto", 
         notes.append(f"no declared {shape}: the mass is not positive, or a number is not finite")
     if computed is None and check.measured is not None and not check.measured.solid:
         notes.append(f"no computed {shape}: the geometry is not a closed solid")
-    layers = _circled(inertia_layers(declared, computed, shape), triangles)
+    layers = _circled(inertia_layers(declared, computed, shape, triangles), triangles)
+    for key, name, properties in (("declared", "declared", declared), ("inertia", "computed", computed)):
+        if properties is not None and not any(layer.key == key for layer in layers):
+            notes.append(f"the {name} {shape} is not drawn: it is too large, or too far from the link frame's "
+                         "origin and its geometry, to show in one picture with them")
     if not len(triangles) and not layers:
         return None, "; ".join(notes + ["nothing to draw: no geometry and no declared inertia"])
     title = f"{link.name}  ({drawn}, {len(triangles):,} triangles)" if len(triangles) else f"{link.name}  (no geometry)"
@@ -190,8 +214,9 @@ def link_numbers(link, check, shape: str = "box") -> dict:
                 of_computed(computed) if computed is not None else "")
 
     def box(principal) -> str:
-        half = None if principal is None else equivalent_half_extents(principal, shape)
-        return "" if half is None else _vector(2 * half, 4)
+        with np.errstate(all="ignore"):  # moments near float64's limit: shown as inf
+            half = None if principal is None else equivalent_half_extents(principal, shape)
+            return "" if half is None else _vector(2 * half, 4)
 
     out: dict[str, object] = {
         "mass (kg)": pair(lambda d: d.mass, lambda c: c.mass),

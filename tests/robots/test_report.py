@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -224,3 +225,27 @@ def test_real_descriptions(case, tmp_path):
     assert_stands_alone(page, out)
     area = drawing(picture(out, failing.replace(":", "_")))
     assert mask(area, DECLARED).sum() > 200 and mask(area, COMPUTED).sum() > 200
+
+
+def test_hostile_declared_numbers_give_a_page_and_say_what_is_not_drawn(tmp_path):
+    """Moments near float64's limit, a centre of mass at 1e300 m, a tensor no body has: every
+    link gets its row, nothing overflows into a warning or an internal error."""
+    links = {"huge": ('0 0 0', '2', '1e308 1e308 1e308'), "far": ('1e300 0 0', '2', '0.01 0.01 0.01'),
+             "impossible": ('0 0 0', '2', '-0.01 0.01 0.05'), "zero": ('0 0 0', '0', '0 0 0')}
+    body = "".join(f'<link name="{name}"><collision><geometry><box size="0.1 0.2 0.3"/></geometry></collision>'
+                   f'<inertial><origin xyz="{com}"/><mass value="{mass}"/><inertia ixx="{i.split()[0]}" ixy="0" '
+                   f'ixz="0" iyy="{i.split()[1]}" iyz="0" izz="{i.split()[2]}"/></inertial></link>'
+                   for name, (com, mass, i) in links.items())
+    description = tmp_path / "hostile.urdf"
+    description.write_text(f'<robot name="r">{body}</robot>')
+    out = tmp_path / "report"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)       # numpy's overflow warnings fail the run
+        result = run("robot", "check", description, "--report", f"html:{out}")
+    assert result.exit_code == 1, result.output
+    page = (out / "index.html").read_text()
+    assert sorted(rows_of(page)) == sorted(links)
+    assert page.count("too far from the link frame") == 2            # huge, far
+    for name in links:
+        area = drawing(picture(out, name))
+        assert mask(area, COMPUTED).sum() > 100, name      # the box's own, at 2 kg (zero: at 1 kg/m^3)
