@@ -135,7 +135,7 @@ body{font:14px/1.45 system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;margin:
 h1{font-size:20px;margin:0 0 4px} p.tally{color:#555;margin:0 0 18px}
 table.rows{border-collapse:collapse;width:100%} table.rows>tbody>tr{border-top:1px solid #ddd}
 td{vertical-align:top;padding:10px 12px} td.picture img{max-width:100%;height:auto;border:1px solid #e4e4ea}
-td.picture{min-width:min(640px,50vw)} td.side{white-space:nowrap}
+td.picture{width:50%} td.side{white-space:nowrap}
 table.numbers th{font-weight:600;color:#555;padding:1px 10px 1px 0}
 .state{display:inline-block;padding:1px 8px;border-radius:10px;font-weight:600;font-size:12px;color:#fff}
 .ok{background:#2e7d32}.warned{background:#b26a00}.failed{background:#c62828}.errored{background:#6a1b9a}

@@ -228,7 +228,7 @@ def link_numbers(link, check, shape: str = "box") -> dict:
         f"equivalent {shape} (m)": (box(declared), box(computed)),
     }
     if check.moment_ratios is not None:
-        out["declared / computed moments, about the geometry's axes"] = _vector(check.moment_ratios, 4)
+        out["moment ratios, declared / computed"] = _vector(check.moment_ratios, 4)
     if check.implied_density is not None:
         out["implied density (kg/m^3)"] = check.implied_density
     out["compared with"] = check.basis
