@@ -57,8 +57,13 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
     root = os.path.abspath(root or os.getcwd())
     limits = functools.partial(_tolerances, settings.config, rtol, atol)
     limits(None)   # refuse bad tolerances before any input is read
+    run = Batch("p3d diff", inputs, batch, also_read=[baseline_file])
+    if update:   # refused before any input is read: a baseline path that names one of the meshes
+        from p3d_cli.io import atomic
+
+        atomic.destination(baseline_file, inputs=[x for x in run.items if isinstance(x, str) and x != "-"],
+                           what="the baseline")
     old = bl.read_baseline(baseline_file, root) if not (update and not os.path.exists(baseline_file)) else {}
-    run = Batch("p3d diff", inputs, batch)
     work = functools.partial(props_report, style="json", fields=(), strict=False, settings=settings,
                              density=density, mass=mass, format=fmt, placement=None, method="exact")
     current: dict[str, dict] = {}
@@ -79,7 +84,7 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
         if key not in current:
             _report(run, key, [bl.Change(key, "file", "present", "vanished")], as_json)
     if update:
-        _write_baseline(baseline_file, current, root)
+        _write_baseline(baseline_file, current, root, run.items)
         run.status = 0
     return run.finish("changed")
 
@@ -153,12 +158,11 @@ def _relative(relative) -> str:
     return f" ({relative * 100:+.3g}%)"
 
 
-def _write_baseline(path: str, records: dict[str, dict], root: str) -> None:
-    from p3d_cli.errors import InputError
+def _write_baseline(path: str, records: dict[str, dict], root: str, inputs=()) -> None:
+    """The baseline, replaced whole (``p3d_cli.io.atomic``): a full disk or a kill part way leaves
+    the old one; never written over one of the meshes."""
+    from p3d_cli.io import atomic
 
     text = "".join(output.dumps({**record, "source": key}) + "\n" for key, record in sorted(records.items()))
-    try:
-        with open(path, "w", encoding="utf-8", errors="surrogateescape") as f:
-            f.write(text)
-    except OSError as exc:
-        raise InputError(path, f"cannot be written ({exc.strerror or exc})", "check the path") from None
+    atomic.write_bytes(path, text.encode("utf-8", "surrogateescape"),
+                       inputs=[x for x in inputs if isinstance(x, str) and x != "-"], what="the baseline")

@@ -18,7 +18,7 @@ from p3d_cli.batch import Outcome, run_each
 from p3d_cli.batch.inputs import collect, extension_counts
 from p3d_cli.cli.main import error_message, exit_status, import_frozen
 from p3d_cli.cli.output import shown_name
-from p3d_cli.cli.reports import Entry, ReportOptions, write_reports
+from p3d_cli.cli.reports import Entry, ReportOptions, prepare_reports, write_reports
 from p3d_cli.errors import UsageError
 
 #: Batches with more inputs than this get a progress bar, when stderr is a terminal.
@@ -81,15 +81,23 @@ class Batch:
     inputs : sequence of str
         The command's arguments.
     options : BatchOptions
+    also_read : sequence of str
+        Other files the command reads (``p3d diff``'s baseline): no report may overwrite them.
+
+    Reports asked for are checked (none may overwrite an input) and marked incomplete here,
+    before any input is read (``p3d_cli.cli.reports.prepare_reports``).
     """
 
-    def __init__(self, command: str, inputs, options: BatchOptions) -> None:
+    def __init__(self, command: str, inputs, options: BatchOptions, also_read=()) -> None:
         if options.dask is not None and options.jobs is not None:
             raise UsageError("--jobs/--dask", "both given",
                              "--dask runs on the cluster's workers; drop --jobs")
         self.command = command
         self.items, self.skipped = collect(inputs, options.files_from, command, null=options.null)
         self.options = options
+        self.read = [*self.items, *also_read, *([options.files_from] if options.files_from else [])]
+        if options.reports.wanted:
+            prepare_reports(options.reports, command, self.read)
         self.ok = self.warned = self.failed = self.errors = 0
         self.status = 0
         self.entries: list[Entry] = []
@@ -207,7 +215,7 @@ class Batch:
             click.echo(f"p3d: {self.summary(failed_label)}", err=True)
         if self.options.reports.wanted:
             write_reports(self.options.reports, self.command, self.entries, self.skipped, self.status,
-                          time.monotonic() - self._started)
+                          time.monotonic() - self._started, self.read)
         return self.status
 
 

@@ -50,7 +50,7 @@ def solve(scene, steps, dt, trajectory, as_json):
     if trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)
     else:
-        with trajectory_writer(trajectory) as record:
+        with trajectory_writer(trajectory, inputs=[scene]) as record:
             result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
     if as_json:
         click.echo(output.dumps(solve_record(result)))
