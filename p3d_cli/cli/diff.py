@@ -58,6 +58,8 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
     limits = functools.partial(_tolerances, settings.config, rtol, atol)
     limits(None)   # refuse bad tolerances before any input is read
     run = Batch("p3d diff", inputs, batch, also_read=[baseline_file])
+    if not as_json:
+        run.note_settings(settings.config, "diff", {"density": density, "mass": mass, "units": None})
     if update:   # refused before any input is read: a baseline path that names one of the meshes
         from p3d_cli.io import atomic
 
@@ -65,7 +67,8 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
                            what="the baseline")
     old = bl.read_baseline(baseline_file, root) if not (update and not os.path.exists(baseline_file)) else {}
     work = functools.partial(props_report, style="json", fields=(), strict=False, settings=settings,
-                             density=density, mass=mass, format=fmt, placement=None, method="exact")
+                             density=density, mass=mass, format=fmt, placement=None, method="exact",
+                             units=None)
     current: dict[str, dict] = {}
     for outcome in run.outcomes(work):
         if outcome.error is not None:
@@ -93,10 +96,12 @@ def _tolerances(config, rtol, atol, source: str | None) -> tuple[dict, dict]:
     """``(rtol, atol)`` per quantity for ``source``: p3d's defaults, then the project settings
     (the top level, then the matching ``[[paths]]``), then the command line."""
     settings = config.settings if source is None else config.for_source(source)
-    rtols = bl.tolerances([*(x for x in [settings.get("rtol")] if x is not None), *rtol], bl.QUANTITIES, "--rtol")
-    atols = bl.tolerances([*(x for x in [settings.get("atol")] if x is not None), *atol],
-                          dict.fromkeys(bl.QUANTITIES, 0.0), "--atol")
-    return rtols, atols
+    out = []
+    for name, given, default in (("rtol", rtol, bl.QUANTITIES), ("atol", atol, dict.fromkeys(bl.QUANTITIES, 0.0))):
+        if settings.get(name) is not None:   # a setting's errors name the file and the key
+            default = bl.tolerances([settings[name]], default, config.where(name, source))
+        out.append(bl.tolerances(given, default, f"--{name}"))
+    return out[0], out[1]
 
 
 def _report(run: Batch, key: str, changes: list, as_json: bool) -> None:

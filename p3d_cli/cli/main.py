@@ -219,6 +219,7 @@ class _Commands(MutableMapping):
 cli.commands = _Commands({
     "bounds": "p3d_cli.cli.bounds",
     "check": "p3d_cli.cli.check",
+    "config": "p3d_cli.cli.config",
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "robot": "p3d_cli.cli.robot",

@@ -278,7 +278,8 @@ def make_warning_filter(ignore, thresholds, no_config: bool):
     from p3d_cli.config import Config, load_config
 
     config = Config() if no_config else load_config()
-    limits = parse_thresholds(f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items())
+    limits = parse_thresholds((f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items()),
+                              where=config.where("warning-thresholds"))
     limits.update(parse_thresholds(thresholds))
     return WarningFilter(frozenset(ignore), limits, config)
 

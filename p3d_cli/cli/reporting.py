@@ -104,6 +104,24 @@ class Batch:
         self._bar = None
         self._started = time.monotonic()
 
+    def note_settings(self, config, command: str, options: dict | None = None) -> None:
+        """One stderr line naming the settings file, if any of its settings apply to an input
+        (``p3d_cli.cli.settings.settings_for``); the text outputs' counterpart of JSON's
+        ``settings`` key. Inconsistent settings are left for the inputs' own errors."""
+        from p3d_cli.cli.settings import settings_for, settings_line
+        from p3d_cli.errors import P3DError
+
+        keys: dict[str, None] = {}
+        for item in self.items:
+            if isinstance(item, str):
+                try:
+                    used = settings_for(config, command, item, dict(options or {}))
+                except P3DError:
+                    continue
+                keys.update(dict.fromkeys(used["keys"] if used else ()))
+        if keys:
+            self.note(settings_line({"file": config.path, "keys": list(keys)}) or "")
+
     def outcomes(self, work: Callable[[str], object]) -> Generator[Outcome, None, None]:
         """``run_each`` over the inputs, with a progress bar on a terminal's stderr."""
         if self.options.dask is not None:
