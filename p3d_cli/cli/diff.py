@@ -30,11 +30,16 @@ from p3d_cli.errors import UsageError
               help="Absolute tolerance (default 0), for every quantity or one. Repeatable.")
 @click.option("--root", type=click.Path(file_okay=False), default=None,
               help="Baseline paths are relative to this directory (default: the working directory).")
-@click.option("--update", is_flag=True, help="Rewrite BASELINE with the current state (exit 0).")
+@click.option("--all", "whole_set", is_flag=True,
+              help="The inputs are the whole set: every baseline entry not among them is reported "
+                   "as vanished (by default only entries under a directory given as an input are).")
+@click.option("--update", is_flag=True,
+              help="Rewrite BASELINE with the current state of the inputs (exit 0); entries of "
+                   "files not among the inputs are kept, unless they vanished.")
 @json_option
 @warning_options
 @batch_options
-def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as_json, settings, batch):
+def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set, update, as_json, settings, batch):
     """Compare meshes with a baseline of their mass properties; exit 1 if anything changed.
 
     The baseline is the output of p3d props --json (one record per line), keyed by each
@@ -42,14 +47,19 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
     that moved beyond |new - old| <= atol + rtol * scale (scale: the largest magnitude of the
     old value, of the whole vector or matrix), a different face count, a mesh that is no
     longer closed (or now is), a new warning code, a file that appeared, vanished or can no
-    longer be read. Each change is one line on stdout (--json: one record).
+    longer be read. A difference within the two results' stated rounding bounds (their
+    uncertainty) is never a change; a flipped winding is a change of signed_volume. Each
+    change is one line on stdout (--json: one record).
+
+    The inputs may be a part of the baseline: an entry is reported as vanished only when it
+    lies under a directory given as an input, or with --all (the inputs are the whole set).
 
     \b
     Examples:
       p3d props parts/ --json > baseline.ndjson
       p3d diff baseline.ndjson parts/
       p3d diff baseline.ndjson parts/ --rtol volume=1e-6 --report junit:p3d.xml
-      git ls-files -z '*.stl' | p3d diff baseline.ndjson --files-from - -0
+      git ls-files -z '*.stl' | p3d diff baseline.ndjson --files-from - -0 --all
       p3d diff baseline.ndjson parts/ --update
     """
     if batch.csv:
@@ -83,11 +93,13 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, update, as
         changes = bl.compare(key, old[key], record, *limits(outcome.source)) if key in old else \
             [bl.Change(key, "file", None, "appeared")]
         _report(run, key, changes, as_json)
-    for key in old:
-        if key not in current:
-            _report(run, key, [bl.Change(key, "file", "present", "vanished")], as_json)
+    searched = [bl.baseline_key(x, root) for x in inputs if x != "-" and os.path.isdir(x)]
+    vanished = [key for key in old if key not in current and (whole_set or bl.covered(key, searched))]
+    for key in vanished:
+        _report(run, key, [bl.Change(key, "file", "present", "vanished")], as_json)
     if update:
-        _write_baseline(baseline_file, current, root, run.items)
+        kept = {key: record for key, record in old.items() if key not in current and key not in vanished}
+        _write_baseline(baseline_file, {**kept, **current}, root, run.items)
         run.status = 0
     return run.finish("changed")
 
