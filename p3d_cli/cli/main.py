@@ -76,8 +76,11 @@ FLAGS = {
 
 
 def error_line(text: str) -> None:
-    """Print one diagnostic line to stderr in p3d's format: ``p3d: error: <text>``."""
-    click.echo(f"p3d: error: {text}", err=True)
+    """Print one diagnostic line to stderr in p3d's format: ``p3d: error: <text>`` (control
+    characters of a file name escaped: one line, whatever the name)."""
+    from p3d_cli.cli.output import one_line
+
+    click.echo(f"p3d: error: {one_line(text)}", err=True)
 
 
 _PARAMETER = re.compile(r"\b([a-z_]+)=(\S?)")

@@ -165,3 +165,20 @@ def shown_name(name: str, keep: str = "") -> str:
         else:
             out.append(ch)
     return "".join(out)
+
+
+def one_line(text: str) -> str:
+    """``text`` with its control characters (a file name's NUL, newline, escape) and undecodable
+    bytes as ``\\xNN`` escapes: a diagnostic stays one line and cannot drive the terminal."""
+    if text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:
+            out.append(f"\\x{code - 0xDC00:02x}")
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\x{code:02x}")
+        else:
+            out.append(ch)
+    return "".join(out)

@@ -17,7 +17,7 @@ import click
 from p3d_cli.batch import Outcome, run_each
 from p3d_cli.batch.inputs import collect, extension_counts
 from p3d_cli.cli.main import error_message, exit_status, import_frozen
-from p3d_cli.cli.output import shown_name
+from p3d_cli.cli.output import one_line, shown_name
 from p3d_cli.cli.reports import Entry, ReportOptions, prepare_reports, write_reports
 from p3d_cli.errors import UsageError
 
@@ -189,7 +189,7 @@ class Batch:
     def error(self, outcome: Outcome) -> None:
         """Report an input that could not be done, and count it."""
         message = error_message(outcome.error)
-        self.note(f"p3d: error: {message}")
+        self.note(f"p3d: error: {one_line(message)}")
         self.errors += 1
         self.status = max(self.status, exit_status(outcome.error))
         self.entries.append(Entry(outcome.source, "errored", (("error", message),)))
