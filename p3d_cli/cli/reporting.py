@@ -14,7 +14,7 @@ from typing import Callable, Generator
 
 import click
 
-from p3d_cli.batch import Outcome, run_each
+from p3d_cli.batch import ClusterLost, Outcome, run_each
 from p3d_cli.batch.inputs import collect, extension_counts
 from p3d_cli.cli.main import error_message, exit_status, import_frozen
 from p3d_cli.cli.output import one_line, shown_name
@@ -101,6 +101,10 @@ class Batch:
         self.ok = self.warned = self.failed = self.errors = 0
         self.status = 0
         self.entries: list[Entry] = []
+        #: The error that ended the batch part way (a lost Dask scheduler), and how many
+        #: inputs had their outcome by then.
+        self.lost: ClusterLost | None = None
+        self.done = 0
         self._bar = None
         self._started = time.monotonic()
 
@@ -130,9 +134,12 @@ class Batch:
         self._bar = _progress_bar(len(self.items))
         try:
             for outcome in results:
+                self.done += 1
                 yield outcome
                 if self._bar is not None:
                     self._bar.update(1)
+        except ClusterLost as exc:   # every outcome that arrived is out; finish() counts the rest
+            self.lost = exc
         finally:
             results.close()
             if self._bar is not None:
@@ -202,6 +209,13 @@ class Batch:
         self.failed += 1
         self.status = max(self.status, 1)
 
+    @property
+    def not_done(self) -> list[str]:
+        """The inputs a batch ended part way (``lost``) did not reach, in input order."""
+        if self.lost is None:
+            return []
+        return [item if isinstance(item, str) else item.where for item in self.items[self.done:]]
+
     def summary(self, failed_label: str = "failed check") -> str:
         n = max(len(self.items), len(self.entries))   # p3d diff adds the files that vanished
         parts = [f"{self.ok + self.warned} ok"]
@@ -209,6 +223,8 @@ class Batch:
             parts.append(f"{self.failed} {failed_label}")
         if self.errors:
             parts.append(f"{self.errors} error{'s' if self.errors != 1 else ''}")
+        if self.lost is not None:
+            parts.append(f"{len(self.not_done)} not done")
         line = f"{n} file{'s' if n != 1 else ''}: " + ", ".join(parts)
         if self.warned:
             codes: dict[str, int] = {}
@@ -229,7 +245,12 @@ class Batch:
         The status is the worst seen: 3 a bug on some input, 2 some input could not be read,
         1 some input failed a requirement, 0 all passed.
         """
-        if len(self.items) > 1 or self.skipped:
+        if self.lost is not None:
+            self.note(f"p3d: error: {one_line(error_message(self.lost))}")
+            self.status = max(self.status, exit_status(self.lost))
+            reason = (("not-done", f"not done: {self.lost.what}"),)
+            self.entries += [Entry(source, "errored", reason) for source in self.not_done]
+        if len(self.items) > 1 or self.skipped or self.lost is not None:
             click.echo(f"p3d: {self.summary(failed_label)}", err=True)
         if self.options.reports.wanted:
             write_reports(self.options.reports, self.command, self.entries, self.skipped, self.status,

@@ -10,8 +10,10 @@ A command's run (``p3d_cli.cli.reporting.Batch``) records one ``Entry`` per inpu
   in its ``<system-out>``. The layout of the JUnit schema Jenkins and GitLab read.
 - ``--report github`` (standard output) or ``github:FILE``: workflow commands, one line each,
   ``::error file=PATH,title=p3d check::MESSAGE`` and ``::warning file=...::``.
-- ``--summary json:FILE``: ``{"command", "inputs", "ok", "warned", "failed", "errored",
-  "skipped", "skipped_by_extension", "warnings_by_code", "exit_status", "complete"}``.
+- ``--summary json:FILE``: ``{"schema_version", "command", "inputs", "ok", "warned", "failed",
+  "errored", "not_done", "skipped", "skipped_by_extension", "warnings_by_code", "exit_status",
+  "complete"}``; ``not_done`` counts the errored inputs a batch ended part way never reached (a
+  lost Dask scheduler), and ``complete`` is false then.
 
 Every report file is written whole or not at all (``p3d_cli.io.atomic``), and a report that
 would overwrite one of the run's inputs is refused before any input is read. Before the run
@@ -171,11 +173,12 @@ def summary_record(command: str, entries, skipped: dict[str, list[str]], status:
     for entry in entries:
         for code, _ in entry.warnings:
             by_code[code] = by_code.get(code, 0) + 1
+    not_done = sum(1 for entry in entries if entry.failures[:1] and entry.failures[0][0] == "not-done")
     return {"schema_version": SUMMARY_SCHEMA_VERSION, "command": command, "inputs": len(entries),
-            **{k: tally[k] for k in STATES[:-1]},
+            **{k: tally[k] for k in STATES[:-1]}, "not_done": not_done,
             "skipped": sum(len(p) for p in skipped.values()),
             "skipped_by_extension": {ext: len(p) for ext, p in sorted(skipped.items())},
-            "warnings_by_code": dict(sorted(by_code.items())), "exit_status": status, "complete": True}
+            "warnings_by_code": dict(sorted(by_code.items())), "exit_status": status, "complete": not not_done}
 
 
 def junit_xml(command: str, entries, seconds: float = 0.0) -> str:

@@ -314,7 +314,7 @@ def test_dask_losing_a_task_is_that_input_error(monkeypatch):
         def __init__(self, fn, task):
             self.fn, self.task = fn, task
 
-        def result(self):
+        def result(self, timeout=None):
             if "b" in self.task[-1]:  # a chunk holding "b", or "b" alone: every worker that tried it died
                 raise distributed.KilledWorker("run-b", None, 3)
             return self.fn(self.task)
