@@ -30,8 +30,34 @@ def dumps(record: object) -> str:
     A path's bytes that are not UTF-8 (held by Python as surrogate escapes, ``U+DC80``-
     ``U+DCFF``) are written as ``\\udcNN`` escapes: valid JSON that Python's ``json.loads``
     and ``os.fsencode`` turn back into the original bytes."""
-    text = json.dumps(jsonable(record), ensure_ascii=False, allow_nan=False)
+    value = jsonable(record)
+    try:
+        text = json.dumps(value, ensure_ascii=False, allow_nan=False)
+    except ValueError:
+        raise _not_finite(value) from None
     return _SURROGATE.sub(lambda m: f"\\u{ord(m.group(0)):04x}", text)
+
+
+def _not_finite(value):
+    """The error for a record holding a number JSON cannot write (``inf``, ``nan``): the
+    computation overflowed float64. Named by the record's source and the first such field."""
+    from p3d_cli.errors import RangeError
+
+    def first(v, path: str) -> str | None:
+        if isinstance(v, float) and not math.isfinite(v):
+            return path
+        items = v.items() if isinstance(v, dict) else enumerate(v) if isinstance(v, list) else ()
+        for key, inner in items:
+            found = first(inner, f"{path}.{key}" if path else str(key))
+            if found is not None:
+                return found
+        return None
+
+    source = value.get("source", "") if isinstance(value, dict) else ""
+    return RangeError(str(source), f"{first(value, '') or 'a result'} is not a finite number (float64 overflowed: the "
+                      "coordinates or the placement are too large to compute with)",
+                      "scale the input down (--scale, or --units with a larger unit) or check its coordinates")
+
 
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
