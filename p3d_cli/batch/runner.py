@@ -157,7 +157,8 @@ def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, N
         from dask.distributed import Client
     except ImportError:
         raise MissingExtraError("dask", "needs dask.distributed, which is not installed",
-                                "pip install 'p3d-cli[dask]'") from None
+                                "install p3d's extra 'dask': pip install 'dask[distributed]>=2023.1' "
+                                "(or pip install '.[dask]' in a clone of p3d)") from None
     _quiet_dask_logs()
     client = _connect(Client, address)
     lost = False
