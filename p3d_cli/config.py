@@ -158,7 +158,7 @@ def load_config(path: str | None = None, start: str | None = None) -> Config:
     if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
         raise FormatError(path, "paths must be an array of tables ([[paths]] entries)",
                           'write [[tool.p3d.paths]] with glob = "..." and settings')
-    paths = []
+    paths: list[tuple[str, dict]] = []
     for entry in entries:
         entry = dict(entry)
         pattern = entry.pop("glob", None)

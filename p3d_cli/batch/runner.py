@@ -262,7 +262,7 @@ def _result(future, client, address: str):
         except (TimeoutError, asyncio.TimeoutError):   # one class from Python 3.11 on
             if not _alive(client):
                 raise _lost(address) from None
-        except (OSError,) as exc:   # the connection to the scheduler closed under the wait
+        except OSError as exc:   # the connection to the scheduler closed under the wait
             raise _lost(address, exc) from None
 
 

@@ -95,7 +95,7 @@ def bounds_report(source: str, *, style: str, fields: tuple[str, ...] = (), prec
     if style == "fields":
         text = "\t".join(output.bare(field(record, name)) for name in fields)
     elif style == "json":
-        text = output.dumps(record)
+        text = output.record_line("bounds", record)
     else:
         text = csv_row(record, precision or output.CSV_PRECISION)
     return Report(text, source=result.source, warnings=kept)
@@ -118,7 +118,7 @@ def error_line(outcome, *, style: str) -> str | None:
     record = {"source": outcome.source, "error": error_message(outcome.error)}
     if style in ("table", "fields"):
         return None if style == "table" else ""
-    return output.dumps(record) if style == "json" else csv_row(record)
+    return output.record_line("bounds", record) if style == "json" else csv_row(record)
 
 
 def bounds_record(result) -> dict:

@@ -58,7 +58,7 @@ def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), confi
         if style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record) if style == "json" else check_csv_line(record)
+            text = output.record_line("check", record) if style == "json" else check_csv_line(record)
     return Report(text, passed=result.ok, source=result.source, failures=failure_messages(result))
 
 
@@ -92,7 +92,7 @@ def error_line(outcome, *, style: str) -> str | None:
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
     if style in ("text", "fields"):
         return None if style == "text" else ""
-    return output.dumps(record) if style == "json" else check_csv_line(record)
+    return output.record_line("check", record) if style == "json" else check_csv_line(record)
 
 
 def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:

@@ -24,6 +24,27 @@ def jsonable(value):
     return value
 
 
+#: The layout version of every --json record (``schema_version``); the schemas of each kind of
+#: record are the package's ``p3d_cli/schemas/KIND.json`` (JSON Schema, draft 2020-12).
+SCHEMA_VERSION = 1
+
+#: The kinds of record, each with its schema file.
+RECORD_KINDS = ("props", "bounds", "check", "diff", "solve", "summary", "config")
+
+
+def record_line(kind: str, record: dict) -> str:
+    """One ``--json`` record of ``kind`` (``RECORD_KINDS``) as a line of JSON, with its
+    ``schema_version`` first. Every record p3d prints or writes goes through here."""
+    return dumps({"schema_version": SCHEMA_VERSION, **{k: v for k, v in record.items() if k != "schema_version"}})
+
+
+def schema(kind: str) -> dict:
+    """The JSON Schema of records of ``kind`` (shipped in the package)."""
+    from importlib.resources import files
+
+    return json.loads(files("p3d_cli").joinpath("schemas").joinpath(f"{kind}.json").read_text(encoding="utf-8"))
+
+
 def dumps(record: object) -> str:
     """One line of JSON; floats keep full precision (Python's repr round-trips float64).
 

@@ -189,7 +189,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record)
+            text = output.record_line("props", record)
     failed = strict and bool(kept)
     return Report(text, passed=not failed, source=result.facts.source, warnings=kept,
                   failures=kept if failed else ())
@@ -212,7 +212,7 @@ def error_line(outcome, *, style: str, about: bool = False) -> str | None:
         return output.csv_line(props_row(record, about))
     if style == "fields":
         return ""
-    return output.dumps(record) if style == "json" else None
+    return output.record_line("props", record) if style == "json" else None
 
 
 INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"

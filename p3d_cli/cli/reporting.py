@@ -69,6 +69,7 @@ class BatchOptions:
     csv: bool = False
     null: bool = False
     reports: ReportOptions = ReportOptions()
+    quiet: bool = False
 
 
 class Batch:
@@ -123,7 +124,7 @@ class Batch:
                 except P3DError:
                     continue
                 keys.update(dict.fromkeys(used["keys"] if used else ()))
-        if keys:
+        if keys and not self.options.quiet:
             self.note(settings_line({"file": config.path, "keys": list(keys)}) or "")
 
     def outcomes(self, work: Callable[[str], object]) -> Generator[Outcome, None, None]:
@@ -131,7 +132,7 @@ class Batch:
         if self.options.dask is not None:
             import_frozen("dask.distributed")  # the client's import, ahead and faster (see there)
         results = run_each(self.items, work, jobs=self.options.jobs, dask=self.options.dask)
-        self._bar = _progress_bar(len(self.items))
+        self._bar = None if self.options.quiet else _progress_bar(len(self.items))
         try:
             for outcome in results:
                 self.done += 1
@@ -166,14 +167,22 @@ class Batch:
                 text = report.text
                 self.record(report, outcome.source)
             if text is not None:
-                click.echo(text)
+                self.out(text)
+
+    def out(self, text: str) -> None:
+        """One result on stdout. With a progress bar on the terminal that stdout also goes to,
+        the bar is cleared first and drawn again below the line, so the two never share a line."""
+        if self._bar is not None and _is_terminal(sys.stdout):
+            self._bar.write(text, file=sys.stdout)
+        else:
+            click.echo(text)
 
     def record(self, report: Report, source: str) -> None:
         """Write a report's notes and warnings to stderr, and count and record its verdict."""
         source = report.source if report.source is not None else source
-        for line in report.notes:
+        for line in () if self.options.quiet else report.notes:
             self.note(line)
-        for code, text in report.warnings:
+        for code, text in () if self.options.quiet else report.warnings:
             self.note(f"p3d: warning: [{code}] {shown_name(source)}: {text}")
         if not report.passed:
             self.fail()
@@ -250,7 +259,7 @@ class Batch:
             self.status = max(self.status, exit_status(self.lost))
             reason = (("not-done", f"not done: {self.lost.what}"),)
             self.entries += [Entry(source, "errored", reason) for source in self.not_done]
-        if len(self.items) > 1 or self.skipped or self.lost is not None:
+        if (len(self.items) > 1 or self.skipped or self.lost is not None) and not self.options.quiet:
             click.echo(f"p3d: {self.summary(failed_label)}", err=True)
         if self.options.reports.wanted:
             write_reports(self.options.reports, self.command, self.entries, self.skipped, self.status,
@@ -258,13 +267,21 @@ class Batch:
         return self.status
 
 
+def _is_terminal(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):   # no isatty, or a closed stream
+        return False
+
+
 def _progress_bar(total: int):
-    """A tqdm bar on stderr when stderr is a terminal and the batch is big; else None."""
-    if total <= PROGRESS_ABOVE or not sys.stderr.isatty():
+    """A tqdm bar on stderr when stderr is a terminal and the batch is big; else None (a pipe,
+    a file, a CI log). Results on stdout go through ``Batch.out``, never onto the bar's line."""
+    if total <= PROGRESS_ABOVE or not _is_terminal(sys.stderr):
         return None
     try:
         from tqdm import tqdm
-    except ImportError:  # optional extra (p3d-cli[progress]): no bar, nothing else changes
+    except ImportError:  # tqdm is a dependency; a broken install loses the bar, nothing else
         return None
     # No monitor thread: a thread would make the worker pool avoid the fast fork start.
     tqdm.monitor_interval = 0

@@ -25,12 +25,12 @@ to publish. The finished run replaces it with the real report.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass
 
 import click
 
+from p3d_cli.cli import output
 from p3d_cli.errors import UsageError
 
 #: The states of one input, in the order of the summary.
@@ -126,8 +126,7 @@ def prepare_reports(options: ReportOptions, command: str, inputs=()) -> None:
         elif kind == "github":
             text = "".join(line + "\n" for line in github_lines(command, [entry]))
         else:
-            text = json.dumps({"schema_version": SUMMARY_SCHEMA_VERSION, "command": command,
-                               "complete": False, "exit_status": None}) + "\n"
+            text = output.record_line("summary", {"command": command, "complete": False, "exit_status": None}) + "\n"
         _write(path, text, kind, inputs)
 
 
@@ -139,10 +138,6 @@ def _files(options: ReportOptions) -> list[tuple[str, str]]:
 
 def _what(kind: str) -> str:
     return {"junit": "the JUnit report", "github": "the GitHub report", "summary": "the summary"}[kind]
-
-
-#: The version of the ``--summary`` record's layout (``p3d_cli/schemas/summary.json``).
-SUMMARY_SCHEMA_VERSION = 1
 
 
 def write_reports(options: ReportOptions, command: str, entries, skipped: dict[str, list[str]],
@@ -162,7 +157,7 @@ def write_reports(options: ReportOptions, command: str, entries, skipped: dict[s
             else:
                 _write(path, text, kind, inputs)
     if options.summary is not None:
-        _write(options.summary, json.dumps(summary_record(command, entries, skipped, status)) + "\n",
+        _write(options.summary, output.record_line("summary", summary_record(command, entries, skipped, status)) + "\n",
                "summary", inputs)
 
 
@@ -174,7 +169,7 @@ def summary_record(command: str, entries, skipped: dict[str, list[str]], status:
         for code, _ in entry.warnings:
             by_code[code] = by_code.get(code, 0) + 1
     not_done = sum(1 for entry in entries if entry.failures[:1] and entry.failures[0][0] == "not-done")
-    return {"schema_version": SUMMARY_SCHEMA_VERSION, "command": command, "inputs": len(entries),
+    return {"schema_version": output.SCHEMA_VERSION, "command": command, "inputs": len(entries),
             **{k: tally[k] for k in STATES[:-1]}, "not_done": not_done,
             "skipped": sum(len(p) for p in skipped.values()),
             "skipped_by_extension": {ext: len(p) for ext, p in sorted(skipped.items())},

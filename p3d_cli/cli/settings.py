@@ -98,7 +98,8 @@ def settings_for(config: Config, command: str, source, options: dict) -> dict | 
             where = config.where("density", key)
             if has_unit(density) and options.get("units") is None:
                 raise FormatError(where, f"{density!r} has a unit, but no length unit is set for the meshes",
-                                  'add units = "mm" (the unit of the meshes\' coordinates) to the file, or pass --units')
+                                  'add units = "mm" (the unit of the meshes\' coordinates) to the file, '
+                                  "or pass --units")
             if not has_unit(density) and options.get("units") is not None:
                 raise FormatError(where, f"{density!r} has no unit, and the meshes' length unit is set "
                                   f"({options['units']})", 'write it with its unit: density = "7850 kg/m^3"')
