@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import os
@@ -33,13 +34,18 @@ from p3d_cli.errors import UsageError
 @click.option("--all", "whole_set", is_flag=True,
               help="The inputs are the whole set: every baseline entry not among them is reported "
                    "as vanished (by default only entries under a directory given as an input are).")
+@click.option("--require", "require", multiple=True, metavar="CHECK[,CHECK...]",
+              help="Also apply p3d check's checks (repeatable or comma-separated; all for every "
+                   "check), on the same read of each file: the CI gate in one command. A failed "
+                   "check is a change (quantity check:NAME).")
 @click.option("--update", is_flag=True,
               help="Rewrite BASELINE with the current state of the inputs (exit 0); entries of "
                    "files not among the inputs are kept, unless they vanished.")
 @json_option
 @warning_options
 @batch_options
-def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set, update, as_json, settings, batch):
+def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set, require, update, as_json, settings,
+         batch):
     """Compare meshes with a baseline of their mass properties; exit 1 if anything changed.
 
     The baseline is the output of p3d props --json (one record per line), keyed by each
@@ -60,7 +66,11 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set,
       p3d diff baseline.ndjson parts/
       p3d diff baseline.ndjson parts/ --rtol volume=1e-6 --report junit:p3d.xml
       git ls-files -z '*.stl' | p3d diff baseline.ndjson --files-from - -0 --all
+      p3d diff baseline.ndjson parts/ --require all --report junit:gate.xml
       p3d diff baseline.ndjson parts/ --update
+
+    With --require, each file is read once and both compared and checked (as p3d check
+    --require would): the gate of a CI job in one command and one read.
     """
     if batch.csv:
         raise UsageError("--csv", "not an output of p3d diff", "use the default lines or --json")
@@ -79,6 +89,10 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set,
     work = functools.partial(props_report, style="json", fields=(), strict=False, settings=settings,
                              density=density, mass=mass, format=fmt, placement=None, method="exact",
                              units=None)
+    if require:
+        from p3d_cli.cli.check import parse_require
+
+        work = functools.partial(gate_report, work, parse_require(require))
     current: dict[str, dict] = {}
     for outcome in run.outcomes(work):
         if outcome.error is not None:
@@ -92,6 +106,8 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set,
         current[key] = record
         changes = bl.compare(key, old[key], record, *limits(outcome.source)) if key in old else \
             [bl.Change(key, "file", None, "appeared")]
+        if outcome.error is None:
+            changes += [bl.Change(key, f"check:{name}", None, text) for name, text in outcome.result.failures]
         _report(run, key, changes, as_json)
     if run.lost is not None:   # a batch ended part way: what vanished is unknown; the baseline stays
         return run.finish("changed")
@@ -104,6 +120,29 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set,
         _write_baseline(baseline_file, {**kept, **current}, root, run.items)
         run.status = 0
     return run.finish("changed")
+
+
+def gate_report(work, require: tuple[str, ...], source) -> Report:
+    """``work`` (the props record of ``source``) and ``p3d check``'s verdict on the same read of
+    the file: the mesh is loaded once and both are measured from it. Failed checks come back
+    as the report's ``failures``. A shape spec is a clean solid by construction (not checked);
+    an assembly file is checked part by part (``p3d_cli.assembly_check``)."""
+    from p3d_cli import measure
+    from p3d_cli.cli.check import failure_messages
+    from p3d_cli.shapes import parse_spec
+    from p3d_cli.solid import names_assembly_file
+
+    fmt = work.keywords.get("format")
+    thing = source
+    if source == "-" or (parse_spec(source) is None and (fmt is not None or not names_assembly_file(source))):
+        from p3d_cli.io import load_mesh
+
+        thing = load_mesh(source, fmt)
+    report = work(thing)
+    if parse_spec(source) is not None:
+        return report
+    verdict = measure.check(thing, require=require)
+    return dataclasses.replace(report, passed=verdict.ok, failures=failure_messages(verdict))
 
 
 def _tolerances(config, rtol, atol, source: str | None) -> tuple[dict, dict]:

@@ -81,7 +81,7 @@ def settings_for(config: Config, command: str, source, options: dict) -> dict | 
     from p3d_cli.errors import FormatError
     from p3d_cli.units import has_unit
 
-    key = source if isinstance(source, str) else None
+    key = source if isinstance(source, str) else getattr(source, "where", None)   # a loaded mesh: its path
     used = config.used(command, key)
     if used is None:
         return None

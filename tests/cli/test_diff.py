@@ -222,3 +222,27 @@ def test_a_change_within_the_two_results_bounds_is_not_a_change(tmp_path, monkey
     write_binary_stl(tmp_path / "ball.stl", triangles + [1e-9, 0, 0])
     result = run("diff", "base.ndjson", "ball.stl")
     assert result.exit_code == 1 and "center_of_mass[0]" in result.stdout
+
+
+def test_the_gate_checks_and_compares_on_one_read_of_each_file(project, monkeypatch):
+    """Issue 24.6: `p3d diff --require` is p3d check and p3d diff in one command, one load a file."""
+    write_binary_stl(project / "parts" / "p3.stl", part(3)[2:])          # now open: a change and a failed check
+    import p3d_cli.io as io
+
+    loads = []
+    real = io.load_mesh
+    monkeypatch.setattr(io, "load_mesh", lambda *a, **k: loads.append(a[0]) or real(*a, **k))
+    gate = run("diff", "baseline.ndjson", "parts", "--require", "closed,outward", "--jobs", "1", "--json")
+    assert gate.exit_code == 1
+    assert sorted(loads) == [f"parts/p{i}.stl" for i in range(4)]      # each file read once
+    changes = [json.loads(line) for line in gate.stdout.splitlines()]
+    assert {c["source"] for c in changes} == {"parts/p3.stl"}
+    assert any(c["quantity"] == "check:closed" and "boundary edge" in c["new"] for c in changes)
+    separate = {(c["source"], c["quantity"]) for c in map(json.loads, run("diff", "baseline.ndjson", "parts",
+                                                                              "--json").stdout.splitlines())}
+    assert separate == {(c["source"], c["quantity"]) for c in changes if not c["quantity"].startswith("check:")}
+    check = json.loads(run("check", "parts/p3.stl", "--require", "closed,outward", "--json").stdout)
+    assert [c["quantity"] for c in changes if c["quantity"].startswith("check:")] == \
+        [f"check:{name}" for name in check["failed"]]
+    clean = run("diff", "baseline.ndjson", "parts/p0.stl", "--require", "all")
+    assert clean.exit_code == 0 and clean.stdout == ""
