@@ -129,8 +129,41 @@ Errors are one line on stderr: p3d: error: <where>: <what>; <how to fix>.
 """
 
 
+#: Each command's one-line summary, as ``p3d --help`` lists it: the first sentence of the
+#: command's docstring (tests/cli/test_startup.py checks that they agree). Kept here so that
+#: listing the commands imports none of them (numpy, the solver, yaml): ``p3d --help`` loads
+#: click and this module, not the ~270 modules of every command.
+SUMMARIES = {
+    "bounds": "Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation and --translate.",
+    "check": "Check that meshes are clean solids: one verdict per file, and an exit status.",
+    "config": "Show the project settings file p3d would use here, and what it sets.",
+    "diff": "Compare meshes with a baseline of their mass properties; exit 1 if anything changed.",
+    "props": "Volume, mass, centre of mass and inertia of meshes and shapes.",
+    "robot": "Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.",
+    "solve": "Solve ball, hinge and bar constraints between rigid bodies.",
+}
+
+
 class P3DGroup(click.Group):
     """A click group that turns every failure into one stderr line and a documented status."""
+
+    def format_commands(self, ctx, formatter):
+        """The command list of ``p3d --help``, from ``SUMMARIES`` where it can (no import)."""
+        rows = []
+        width = formatter.width - 6 - max((len(name) for name in self.list_commands(ctx)), default=0)
+        for name in self.list_commands(ctx):
+            summary = SUMMARIES.get(name)
+            if summary is None:       # a command added without a summary here: ask it
+                command = self.get_command(ctx, name)
+                if command is None or command.hidden:
+                    continue
+                summary = command.get_short_help_str(width)
+            else:
+                summary = click.utils.make_default_short_help(summary, width)
+            rows.append((name, summary))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if standalone_mode and hasattr(signal, "SIGPIPE"):
