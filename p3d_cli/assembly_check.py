@@ -12,7 +12,7 @@ are the parts' sums; it fails where any part fails (``NAME:CHECK``), and the lim
 from __future__ import annotations
 
 import dataclasses
-from typing import Iterable, Iterator
+from typing import Callable, Iterable, Iterator
 
 from p3d_cli.assembly import Assembly
 from p3d_cli.errors import InputError, P3DError
@@ -30,9 +30,10 @@ def mesh_parts(assembly: Assembly, path: str = "") -> Iterator[tuple[str, str, s
             yield name, part.thing, part.where
 
 
-def check_assembly(assembly: Assembly, required: Iterable[str], min_volume: float | None = None,
+def check_assembly(assembly: Assembly, check: Callable, required: Iterable[str], min_volume: float | None = None,
                    max_faces: int | None = None):
-    """The ``CheckResult`` of an assembly: its mesh parts' verdicts as ``parts``.
+    """The ``CheckResult`` of an assembly: its mesh parts' verdicts as ``parts``, each made by
+    ``check(path, require=, min_volume=, max_faces=)`` (``p3d_cli.measure.check``).
 
     Raises
     ------
@@ -40,7 +41,6 @@ def check_assembly(assembly: Assembly, required: Iterable[str], min_volume: floa
         A part's mesh cannot be read (named by the part: ``link.yaml: parts[1]``), or the
         assembly has no mesh part at all.
     """
-    from p3d_cli.measure import check
     from p3d_cli.mesh.report import TopologyReport
     from p3d_cli.mesh.verdicts import CheckResult
 

@@ -224,7 +224,7 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if assembly is not None:   # each mesh part on its own (p3d_cli.assembly_check)
         from p3d_cli.assembly_check import check_assembly
 
-        return check_assembly(assembly, required, min_volume, max_faces)
+        return check_assembly(assembly, check, required, min_volume, max_faces)
     solid = as_solid(thing, format=format, stdin=stdin)
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",

@@ -9,7 +9,7 @@ Where the work runs:
 - in ``jobs`` worker processes on this machine, in chunks, results in order: forked
   workers (``p3d_cli.batch.workers``), or ``multiprocessing.Pool`` where fork is unsafe; the
   default is the number of cores this process may use;
-- on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``p3d-cli[dask]``;
+- on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``dask``;
   the workers need p3d installed and must see the same paths), in chunks of files sized from
   the files' sizes (``p3d_cli.batch.chunks``), a chunk's results delivered when it is done.
 
