@@ -144,6 +144,11 @@ SUMMARIES = {
 }
 
 
+#: Click 8.2's error for a command given no arguments where that means "show the help" (click
+#: 8.1, the declared minimum, prints the help and exits by itself): one name for both.
+_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", None)
+
+
 class P3DGroup(click.Group):
     """A click group that turns every failure into one stderr line and a documented status."""
 
@@ -177,11 +182,12 @@ class P3DGroup(click.Group):
         except click.Abort:
             error_line("interrupted")
             status = 130
-        except click.exceptions.NoArgsIsHelpError as exc:
-            click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
-            status = EXIT_OK
         except click.ClickException as exc:
-            status = _usage_error(exc)
+            if _NO_ARGS_IS_HELP is not None and isinstance(exc, _NO_ARGS_IS_HELP):
+                click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
+                status = EXIT_OK
+            else:
+                status = _usage_error(exc)
         except P3DError as exc:
             error_line(error_message(exc))
             status = exit_status(exc)
@@ -201,7 +207,7 @@ class P3DGroup(click.Group):
 def _usage_error(exc: click.ClickException) -> int:
     ctx = getattr(exc, "ctx", None)
     command = ctx.command_path if ctx is not None else "p3d"
-    message = exc.format_message()
+    message = exc.format_message().rstrip(".")   # click ends some sentences with a full stop; ours go on
     if isinstance(exc, click.UsageError):
         error_line(f"{command}: {message}; see '{command} --help'")
         return EXIT_USAGE
