@@ -106,7 +106,7 @@ def diff(baseline_file, inputs, fmt, density, mass, rtol, atol, root, whole_set,
         current[key] = record
         changes = bl.compare(key, old[key], record, *limits(outcome.source)) if key in old else \
             [bl.Change(key, "file", None, "appeared")]
-        if outcome.error is None:
+        if isinstance(outcome.result, Report):   # with --require: the checks that failed
             changes += [bl.Change(key, f"check:{name}", None, text) for name, text in outcome.result.failures]
         _report(run, key, changes, as_json)
     if run.lost is not None:   # a batch ended part way: what vanished is unknown; the baseline stays

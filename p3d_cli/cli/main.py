@@ -146,7 +146,7 @@ SUMMARIES = {
 
 #: Click 8.2's error for a command given no arguments where that means "show the help" (click
 #: 8.1, the declared minimum, prints the help and exits by itself): one name for both.
-_NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", None)
+_NO_ARGS_IS_HELP: type | None = getattr(click.exceptions, "NoArgsIsHelpError", None)
 
 
 class P3DGroup(click.Group):
@@ -154,6 +154,8 @@ class P3DGroup(click.Group):
 
     def format_commands(self, ctx, formatter):
         """The command list of ``p3d --help``, from ``SUMMARIES`` where it can (no import)."""
+        from click.utils import make_default_short_help
+
         rows = []
         width = formatter.width - 6 - max((len(name) for name in self.list_commands(ctx)), default=0)
         for name in self.list_commands(ctx):
@@ -164,7 +166,7 @@ class P3DGroup(click.Group):
                     continue
                 summary = command.get_short_help_str(width)
             else:
-                summary = click.utils.make_default_short_help(summary, width)
+                summary = make_default_short_help(summary, width)
             rows.append((name, summary))
         if rows:
             with formatter.section("Commands"):
@@ -184,7 +186,8 @@ class P3DGroup(click.Group):
             status = 130
         except click.ClickException as exc:
             if _NO_ARGS_IS_HELP is not None and isinstance(exc, _NO_ARGS_IS_HELP):
-                click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
+                context = getattr(exc, "ctx", None)
+                click.echo(context.get_help() if context else exc.format_message())
                 status = EXIT_OK
             else:
                 status = _usage_error(exc)
