@@ -166,7 +166,7 @@ class P3DGroup(click.Group):
                     continue
                 summary = command.get_short_help_str(width)
             else:
-                summary = make_default_short_help(summary, width)
+                summary = make_default_short_help(summary, width)  # type: ignore[operator]
             rows.append((name, summary))
         if rows:
             with formatter.section("Commands"):
