@@ -149,13 +149,24 @@ SUMMARIES = {
 _NO_ARGS_IS_HELP: type | None = getattr(click.exceptions, "NoArgsIsHelpError", None)
 
 
+def _shortened(text: str, width: int) -> str:
+    """``text`` cut after a whole word to fit ``width`` columns, with ``...``, as click shortens."""
+    if len(text) <= width:
+        return text
+    words, used = [], 0
+    for word in text.split():
+        if used + len(word) + (1 if words else 0) > width - 3:
+            break
+        used += len(word) + (1 if words else 0)
+        words.append(word)
+    return " ".join(words).rstrip(",;:") + "..."
+
+
 class P3DGroup(click.Group):
     """A click group that turns every failure into one stderr line and a documented status."""
 
     def format_commands(self, ctx, formatter):
         """The command list of ``p3d --help``, from ``SUMMARIES`` where it can (no import)."""
-        from click.utils import make_default_short_help
-
         rows = []
         width = formatter.width - 6 - max((len(name) for name in self.list_commands(ctx)), default=0)
         for name in self.list_commands(ctx):
@@ -166,7 +177,7 @@ class P3DGroup(click.Group):
                     continue
                 summary = command.get_short_help_str(width)
             else:
-                summary = make_default_short_help(summary, width)  # type: ignore[operator]
+                summary = _shortened(summary, width)
             rows.append((name, summary))
         if rows:
             with formatter.section("Commands"):
