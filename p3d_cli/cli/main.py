@@ -153,7 +153,8 @@ def _shortened(text: str, width: int) -> str:
     """``text`` cut after a whole word to fit ``width`` columns, with ``...``, as click shortens."""
     if len(text) <= width:
         return text
-    words, used = [], 0
+    words: list[str] = []
+    used = 0
     for word in text.split():
         if used + len(word) + (1 if words else 0) > width - 3:
             break
