@@ -140,11 +140,9 @@ def combined(run: Batch, work) -> int:
             parts.append(dataclasses.replace(part, density=own))
         assembly = dataclasses.replace(assembly, parts=tuple(parts))
     report = work(assembly)
-    for line in report.notes:
-        click.echo(line, err=True)
-    for code, text in report.warnings:
-        click.echo(f"p3d: warning: [{code}] {report.source}: {text}", err=True)
+    run.record(report, "combined")      # its notes and warnings to stderr, its verdict for the reports
     click.echo(report.text)
+    run.write_reports()
     if not report.passed:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")

@@ -261,10 +261,14 @@ class Batch:
             self.entries += [Entry(source, "errored", reason) for source in self.not_done]
         if (len(self.items) > 1 or self.skipped or self.lost is not None) and not self.options.quiet:
             click.echo(f"p3d: {self.summary(failed_label)}", err=True)
+        self.write_reports()
+        return self.status
+
+    def write_reports(self) -> None:
+        """Write the reports asked for (replacing the incomplete ones written at the start)."""
         if self.options.reports.wanted:
             write_reports(self.options.reports, self.command, self.entries, self.skipped, self.status,
                           time.monotonic() - self._started, self.read)
-        return self.status
 
 
 def _is_terminal(stream) -> bool:

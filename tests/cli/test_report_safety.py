@@ -122,3 +122,12 @@ def test_a_killed_run_leaves_an_incomplete_report(parts, tmp_path):
         child.wait()
     assert json.loads(summary.read_text()) == {"schema_version": 1, "command": "p3d check", "complete": False,
                                                "exit_status": None}
+
+
+def test_combine_writes_its_report_and_summary(parts, tmp_path):
+    """--combine is one result: its report replaces the incomplete one written at the start."""
+    summary = tmp_path / "s.json"
+    result = run("props", parts / "a.stl", parts / "b.stl", "--combine", "--summary", f"json:{summary}")
+    assert result.exit_code == 0, result.output
+    record = json.loads(summary.read_text())
+    assert (record["complete"], record["inputs"], record["ok"], record["exit_status"]) == (True, 1, 1, 0)
