@@ -174,6 +174,8 @@ def change_line(change: bl.Change) -> str:
         if change.old not in (None, "present", "read") and change.new == "read":
             what = "can be read now (the baseline has an error)"
         return f"{name}: {what}"
+    if change.quantity.startswith("check:"):     # --require: the check's own sentence
+        return f"{name}: {change.new}"
     quantity, old, new = change.quantity, change.old, change.new
     if isinstance(old, list) and isinstance(new, list) and _shape(old) == _shape(new) and old:
         # A vector or matrix: the component that moved most stands for it (the JSON has all).
