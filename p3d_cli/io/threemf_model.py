@@ -202,8 +202,8 @@ class _Parser:
         # np.fromstring with a separator stops at the first word that is not a number: a
         # count short of the strings' means a malformed value (empty, "1 2", "1e", "x").
         dtype = np.float64 if element == "vertex" else np.int64
-        values = np.fromstring(text, dtype=dtype, sep=",") if text else np.zeros(0, dtype)
-        if len(values) != count:
+        values = _parsed(text, dtype) if text else np.zeros(0, dtype)
+        if values is None or len(values) != count:
             raise self.error(f"a <{element}> attribute is not a number")
         self.blocks.append(values)
 
@@ -268,8 +268,20 @@ def _numbers(span: bytes, kind: str) -> np.ndarray | None:
     if text.translate(None, _NUMBER_BYTES[kind] + _WHITESPACE) or not text.startswith(b"," if count else b""):
         return None
     dtype = np.float64 if kind == "vertex" else np.int64
-    values = np.fromstring(text[1:], dtype=dtype, sep=",") if count else np.zeros(0, dtype)
-    return values if len(values) == 3 * count else None
+    values = _parsed(text[1:], dtype) if count else np.zeros(0, dtype)
+    return values if values is not None and len(values) == 3 * count else None
+
+
+def _parsed(text: bytes | str, dtype) -> np.ndarray | None:
+    """Comma-separated numbers; None where numpy stops early (it warns, or raises, by version)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            return np.fromstring(text, dtype=dtype, sep=",")
+        except (ValueError, DeprecationWarning):
+            return None
 
 
 def _extract(data: bytes) -> tuple[bytes, list[np.ndarray]]:
@@ -320,16 +332,11 @@ def parse(stream: BinaryIO, declared: int, where: str, part: str) -> Model:
     if declared > limits.MODEL_PART_BYTES:
         raise FormatError(where, f"{part} inflates to {declared:,} bytes, more than p3d reads "
                           f"({limits.MODEL_PART_BYTES:,})", "split the model into several files")
-    import warnings
-
-    with warnings.catch_warnings():
-        # np.fromstring warns (DeprecationWarning) where it stops early; that case is an error here.
-        warnings.simplefilter("ignore", DeprecationWarning)
-        parser = _Parser(where, part)
-        if declared > FAST_PART_BYTES:
-            return parser.feed(stream, declared)
-        data = stream.read(declared + 1)
-        if len(data) > declared:
-            raise parser.error(f"inflates past the {declared:,} bytes the archive declares")
-        data, parser.fast = _extract(data)
-        return parser.feed(io.BytesIO(data), len(data))
+    parser = _Parser(where, part)
+    if declared > FAST_PART_BYTES:
+        return parser.feed(stream, declared)
+    data = stream.read(declared + 1)
+    if len(data) > declared:
+        raise parser.error(f"inflates past the {declared:,} bytes the archive declares")
+    data, parser.fast = _extract(data)
+    return parser.feed(io.BytesIO(data), len(data))
