@@ -230,6 +230,8 @@ class _Parser:
                 self.parser.Parse(chunk, not chunk)
             except expat.ExpatError as exc:
                 raise FormatError(self.where, f"{self.part} is not well-formed XML ({exc})", CORRUPT) from None
+            except LookupError as exc:   # an XML declaration naming an encoding Python lacks
+                raise FormatError(self.where, f"{self.part} is in an unknown encoding ({exc})", CORRUPT) from None
             if not chunk:
                 break
         if self.parser.StartElementHandler != self.start and self.object is not None:

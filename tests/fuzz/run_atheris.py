@@ -5,7 +5,7 @@ Usage::
     python tests/fuzz/run_atheris.py TARGET [libFuzzer options]
     python tests/fuzz/run_atheris.py ply -max_total_time=3600 -rss_limit_mb=2048 corpus-ply/
 
-TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, scene, scene_steps). The run starts from the
+TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, gltf, glb, 3mf, scene, scene_steps). The run starts from the
 target's seeds (written to the corpus folder if it is empty); any exception other than a
 P3DError, a crash, a timeout or a memory blow-up stops it with the input that caused it, which
 then belongs in ``tests/fuzz/corpus/TARGET/`` (docs/fuzzing.md).
@@ -19,6 +19,7 @@ import sys
 import atheris
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))   # tests/: helpers
 
 with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.exact  # noqa: F401 - instrumented before the targets import them
