@@ -248,12 +248,12 @@ def load(raw: RawInput) -> MeshSource:
     notes = [note] if note else []
     found: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = []
     total = 0
+    entries: list[tuple] = []
     if not scene.nodes and "scene" not in document and not doc.items("scenes"):
         entries = [(f"mesh {m}", m, f"meshes[{m}]", None, np.eye(4), None) for m in range(len(doc.items("meshes")))]
         if entries:
             notes.append("the file has no nodes: each of its meshes is measured once, unplaced")
     else:
-        entries = []
         for index, node in scene.walk(roots):
             if "mesh" not in node:
                 continue

@@ -33,8 +33,8 @@ _JSON_CHUNK, _BIN_CHUNK = 0x4E4F534A, 0x004E4942
 CORRUPT = "the file is corrupt or was cut short; export it again"
 
 #: componentType -> numpy dtype (little-endian, §3.6.2.2).
-COMPONENTS = {5120: np.dtype("<i1"), 5121: np.dtype("<u1"), 5122: np.dtype("<i2"), 5123: np.dtype("<u2"),
-              5125: np.dtype("<u4"), 5126: np.dtype("<f4")}
+COMPONENTS: dict[int, np.dtype] = {5120: np.dtype("<i1"), 5121: np.dtype("<u1"), 5122: np.dtype("<i2"),
+                                   5123: np.dtype("<u2"), 5125: np.dtype("<u4"), 5126: np.dtype("<f4")}
 #: Integer component types that may be normalized, and the divisor (§3.11: signed types clamp at -1).
 _NORMALIZED = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
 WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
@@ -52,7 +52,7 @@ def corrupt(where: str, what: str) -> FormatError:
     return FormatError(where, what, CORRUPT)
 
 
-def read_container(raw: RawInput) -> tuple[dict, bytes | None]:
+def read_container(raw: RawInput) -> tuple[dict, memoryview | None]:
     """The JSON document, and a GLB's binary chunk (None for a ``.gltf``).
 
     Raises
@@ -61,7 +61,8 @@ def read_container(raw: RawInput) -> tuple[dict, bytes | None]:
         Not glTF: a bad GLB header or chunk, JSON that does not parse (or nests too deep for
         the parser), or a document that is not a JSON object.
     """
-    binary = None
+    binary: memoryview | None = None
+    text: bytes | memoryview
     if is_glb(raw.head(4)):
         data = raw.read_all()
         if len(data) < 20:

@@ -228,7 +228,8 @@ def _load(raw: RawInput, package: _Package) -> MeshSource:
     _check_required(raw.where, [model])
     unit = model.unit.strip().lower()
     if unit not in UNITS:
-        raise FormatError(raw.where, f"declares unit {unit!r}, which 3MF does not define", "use one of " + ", ".join(UNITS))
+        raise FormatError(raw.where, f"declares unit {unit!r}, which 3MF does not define",
+                          "use one of " + ", ".join(UNITS))
     build = _Build(package, root)
     items = [((part_name(path) if path else root, oid), matrix) for oid, path, matrix in model.items]
     faces = vertices = 0
@@ -238,7 +239,9 @@ def _load(raw: RawInput, package: _Package) -> MeshSource:
     if faces > limits.PLACED_TRIANGLES or vertices > 3 * limits.PLACED_TRIANGLES:
         raise FormatError(raw.where, limits.too_many_triangles(faces), "split the model into several files")
     _check_required(raw.where, list(package.models.values()))
-    found, kinds, lowres = [], {}, 0
+    found: list[tuple[str, Object, np.ndarray]] = []
+    kinds: dict[str, int] = {}
+    lowres = 0
     for item, partnumber in zip(items, model.partnumbers):
         for key, obj, matrix in build.placed(*item):
             if obj.refused:

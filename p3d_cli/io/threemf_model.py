@@ -16,7 +16,7 @@ from __future__ import annotations
 import io
 import re
 from dataclasses import dataclass, field
-from typing import BinaryIO
+from typing import IO
 
 import numpy as np
 from xml.parsers import expat
@@ -218,7 +218,7 @@ class _Parser:
         else:
             self.object.faces = values.astype(np.int64, copy=False).reshape(-1, 3)
 
-    def feed(self, stream: BinaryIO, declared: int) -> Model:
+    def feed(self, stream: IO[bytes], declared: int) -> Model:
         """Parse ``stream`` (at most ``declared`` bytes, the zip's size of the part)."""
         read = 0
         while True:
@@ -293,7 +293,9 @@ def _extract(data: bytes) -> tuple[bytes, list[np.ndarray]]:
     (anywhere else a literal ``<`` is markup: XML escapes it in text and attributes)."""
     if b"<!--" in data or b"<![CDATA[" in data or data.count(b"<?") > 1:
         return data, []
-    pieces, blocks, at = [], [], 0
+    pieces: list[bytes] = []
+    blocks: list[np.ndarray] = []
+    at = 0
     while True:
         found = [(data.find(open_tag, at), open_tag, close_tag, kind) for open_tag, close_tag, kind in _BLOCK_TAGS]
         found = [f for f in found if f[0] >= 0]
@@ -315,7 +317,7 @@ def _extract(data: bytes) -> tuple[bytes, list[np.ndarray]]:
     return b"".join(pieces), blocks
 
 
-def parse(stream: BinaryIO, declared: int, where: str, part: str) -> Model:
+def parse(stream: IO[bytes], declared: int, where: str, part: str) -> Model:
     """Read one model part.
 
     Parameters

@@ -233,7 +233,8 @@ def test_skin_in_bind_pose_is_measured_and_a_posed_one_refused(tmp_path):
     moved = Gltf()
     joint_a, joint_b = moved.node(root=True), moved.node(translation=[0.0, 4.0, 0.0], root=True)
     identity = np.eye(4, dtype=np.float32).reshape(1, 16)
-    moved.json["skins"] = [{"joints": [joint_a, joint_b], "inverseBindMatrices": moved.accessor(np.repeat(identity, 2, 0))}]
+    inverse = moved.accessor(np.repeat(identity, 2, 0))
+    moved.json["skins"] = [{"joints": [joint_a, joint_b], "inverseBindMatrices": inverse}]
     moved.node(moved.mesh(moved.primitive(TET_VERTICES, TET_FACES)), skin=0)
     assert_exact(p3d.props(save(posed, tmp_path)), placed(TET_VERTICES, TET_FACES, trs((0.0, 0.0, 6.0))))
     with pytest.raises(FormatError, match="skinned mesh posed away from its bind pose"):

@@ -132,7 +132,8 @@ def test_deep_node_chain_is_measured(tmp_path):
     assert json.loads(run.output)["center_of_mass"][0] == pytest.approx(20.0 + 0.75, rel=1e-9)
 
 
-@pytest.mark.parametrize("header", [b"glTF\x01\x00\x00\x00" + bytes(12), b"glTF\x02\x00\x00\x00\xff\xff\x00\x00" + bytes(8),
+@pytest.mark.parametrize("header", [b"glTF\x01\x00\x00\x00" + bytes(12),
+                                    b"glTF\x02\x00\x00\x00\xff\xff\x00\x00" + bytes(8),
                                     b"glTF\x02\x00\x00\x00" + bytes(4)])
 def test_bad_glb_header_is_one_error(tmp_path, header):
     path = tmp_path / "bad.glb"

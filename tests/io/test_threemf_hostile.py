@@ -74,7 +74,8 @@ def test_component_cycle_and_depth(tmp_path, monkeypatch):
     itself = model([component_object(1, [(1, None, None)])], [(1, None, None)])
     one_error(package(tmp_path / "self.3mf", itself), "cycle")
     monkeypatch.setattr(limits, "NESTING_DEPTH", 50)
-    chain = [mesh_object(1, TET_VERTICES, TET_FACES)] + [component_object(i, [(i - 1, None, None)]) for i in range(2, 60)]
+    chain = [mesh_object(1, TET_VERTICES, TET_FACES)]
+    chain += [component_object(i, [(i - 1, None, None)]) for i in range(2, 60)]
     one_error(package(tmp_path / "deep.3mf", model(chain, [(59, None, None)])), "deeper than p3d follows (50)")
 
 
