@@ -13,6 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from helpers.gltf_writer import TET_FACES, TET_VERTICES, Gltf, glb_bytes
+from helpers.cli_errors import one_error
 from p3d_cli.cli.main import cli
 
 
@@ -20,15 +21,6 @@ def tet() -> Gltf:
     doc = Gltf()
     doc.node(doc.mesh(doc.primitive(TET_VERTICES, TET_FACES)), name="tet")
     return doc
-
-
-def one_error(path, match: str) -> str:
-    run = CliRunner().invoke(cli, ["props", str(path)])
-    lines = [line for line in run.output.splitlines() if line.strip()]
-    assert run.exit_code == 2, run.output
-    assert len(lines) == 1 and lines[0].startswith("p3d: error:") and "Traceback" not in run.output, run.output
-    assert match in lines[0], lines[0]
-    return lines[0]
 
 
 def changed(change) -> bytes:

@@ -13,17 +13,9 @@ from click.testing import CliRunner
 
 from helpers.gltf_writer import CUBE_FACES, CUBE_VERTICES, TET_FACES, TET_VERTICES, trs
 from helpers.threemf_writer import component_object, mesh_object, model, package
+from helpers.cli_errors import one_error
 from p3d_cli.cli.main import cli
 from p3d_cli.io import limits, threemf_model
-
-
-def one_error(path, match: str) -> str:
-    run = CliRunner().invoke(cli, ["props", str(path)])
-    lines = [line for line in run.output.splitlines() if line.strip()]
-    assert run.exit_code == 2, run.output
-    assert len(lines) == 1 and lines[0].startswith("p3d: error:") and "Traceback" not in run.output, run.output
-    assert match in lines[0], lines[0]
-    return lines[0]
 
 
 def tet_model(**kwargs) -> str:
