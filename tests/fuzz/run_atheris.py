@@ -24,6 +24,8 @@ sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) 
 with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.exact  # noqa: F401 - instrumented before the targets import them
     import p3d_cli.io.formats  # noqa: F401
+    import p3d_cli.io.gltf  # noqa: F401 - readers are imported on first use: instrument them here
+    import p3d_cli.io.threemf  # noqa: F401
     import p3d_cli.constraints.scene  # noqa: F401 - the scene targets' code, instrumented too
     import p3d_cli.constraints.simulation  # noqa: F401
     from targets import TARGETS, seeds
