@@ -96,6 +96,7 @@ class _Parser:
         self.text: list[str] = []
         self.blocks: list[np.ndarray] = []
         self.element = ""
+        self.rooted = False
         #: Blocks ``_extract`` read ahead, named by the ``FAST_MARK`` attribute it leaves.
         self.fast: list[np.ndarray] = []
 
@@ -113,6 +114,11 @@ class _Parser:
 
     def start(self, name: str, attrs: dict) -> None:
         namespace, _, local = name.rpartition(" ")
+        if not self.rooted:
+            self.rooted = True
+            if local != "model" or namespace not in (CORE, ""):
+                raise FormatError(self.where, f"{self.part} is not a 3MF model (its root element is <{local}> "
+                                  f"in namespace {namespace or 'none'!r})", "export it again as 3MF")
         if namespace not in (CORE, ""):
             # An empty beam lattice adds nothing; its beams and balls would add volume.
             refused = "beamlattice" if local in ("beam", "ball") else local if local != "beamlattice" else ""
@@ -258,6 +264,8 @@ def _numbers(span: bytes, kind: str) -> np.ndarray | None:
     order or quoting, entities, extension attributes), which expat then reads element by
     element. Each value must read as exactly one number: a value that is empty, holds a
     space or is malformed changes the count or stops the parse, and the list goes to expat."""
+    if b"," in span:   # the separator below: a value holding one is not a number anyway
+        return None
     element = b"<" + kind.encode()
     keys = (b"x", b"y", b"z") if kind == "vertex" else (b"v1", b"v2", b"v3")
     count = span.count(element)

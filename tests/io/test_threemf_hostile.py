@@ -105,6 +105,8 @@ CASES = {
                             '<!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">]>' + tet_model().split("?>", 1)[1],
                             "DOCTYPE"),
     "not xml": ("<model><resources>", "not well-formed XML"),
+    "not a 3mf model": ('<model xmlns="http://example.com/other"><resources/><build><item objectid="1"/></build>'
+                        "</model>", "is not a 3MF model"),
     "duplicate id": (model([mesh_object(1, TET_VERTICES, TET_FACES), mesh_object(1, TET_VERTICES, TET_FACES)],
                            [(1, None, None)]), "used twice"),
     "vertices outside an object": ('<model xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
