@@ -236,8 +236,13 @@ class _Parser:
                 self.parser.Parse(chunk, not chunk)
             except expat.ExpatError as exc:
                 raise FormatError(self.where, f"{self.part} is not well-formed XML ({exc})", CORRUPT) from None
-            except LookupError as exc:   # an XML declaration naming an encoding Python lacks
-                raise FormatError(self.where, f"{self.part} is in an unknown encoding ({exc})", CORRUPT) from None
+            except (LookupError, ValueError) as exc:
+                # The XML declaration names an encoding Python lacks (LookupError) or one expat
+                # cannot read ("multi-byte encodings are not supported": UTF-7, Shift-JIS).
+                if isinstance(exc, ValueError) and "encoding" not in str(exc):
+                    raise
+                raise FormatError(self.where, f"{self.part} is in an encoding p3d cannot read ({exc})",
+                                  CORRUPT) from None
             if not chunk:
                 break
         if self.parser.StartElementHandler != self.start and self.object is not None:
