@@ -18,8 +18,9 @@ PLACED_TRIANGLES = 100_000_000
 #: checked before anything is inflated, and the inflated bytes are counted as they come.
 MODEL_PART_BYTES = 1 << 31
 
-#: Depth of nested elements in a 3MF model part, of nested components, and of a glTF node tree:
-#: deeper than any real file, and every walk of them is iterative anyway.
+#: Depth of nested 3MF components (an object made of objects made of objects...): deeper than
+#: any real file. The walks are iterative; glTF node trees and XML elements are walked without
+#: recursion too, and need no depth limit (a 20,000-deep node chain reads).
 NESTING_DEPTH = 1000
 
 #: Bytes of a ``.gltf`` file's JSON (a GLB's JSON chunk is bounded by the file itself).
