@@ -43,6 +43,11 @@ class Meshes:
     def triangles(self, index: int, path: str, weights=None) -> tuple[np.ndarray, np.ndarray]:
         """Mesh ``index``: its vertices ``(m, 3)`` (float32 as stored when nothing changes them,
         else float64) and faces ``(n, 3)`` int64, over all its primitives."""
+        self.doc.entry("meshes", index, path)      # an index that is no index fails here, by name
+        if weights is not None:
+            if not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in weights):
+                raise self.doc.error(path.rsplit(".", 1)[0] + ".weights", "are not all finite numbers")
+            weights = [float(w) for w in weights]
         key = (index, None if weights is None else tuple(weights))
         if key not in self._cache:
             self._cache[key] = self._build(index, path, weights)
@@ -55,6 +60,8 @@ class Meshes:
         primitives = doc.items("primitives", mesh, where + ".")
         if weights is None and "weights" in mesh:
             weights = doc.items("weights", mesh, where + ".")
+            if not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in weights):
+                raise doc.error(f"{where}.weights", "are not all finite numbers")
         vertex_sets, face_sets, offset = [], [], 0
         for p, primitive in enumerate(primitives):
             here = f"{where}.primitives[{p}]"
