@@ -199,3 +199,28 @@ def test_gltf_and_3mf_runs_import_no_scene_library(tmp_path):
     out = subprocess.run([sys.executable, "-c", code, str(glb), str(tmp_path / "t.3mf")], capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_other_extension_geometry_and_encryption_are_refused(tmp_path):
+    boolean = ('<object id="3" type="model"><bo:booleanshape objectid="1" operation="difference">'
+               '<bo:boolean objectid="2"/></bo:booleanshape></object>')
+    ns = ' xmlns:bo="http://schemas.3mf.io/3dmanufacturing/booleanoperations/2023/07"'
+    root = model([mesh_object(1, CUBE_VERTICES, CUBE_FACES), mesh_object(2, TET_VERTICES, TET_FACES), boolean],
+                 [(3, None, None)], namespaces=ns)
+    with pytest.raises(FormatError, match="boolean shape"):
+        p3d.props(package(tmp_path / "bool.3mf", root))
+    ns = ' xmlns:sc="http://schemas.microsoft.com/3dmanufacturing/securecontent/2019/04"'
+    secure = model([mesh_object(1, TET_VERTICES, TET_FACES)], [(1, None, None)], required="sc", namespaces=ns)
+    with pytest.raises(FormatError, match="Secure Content"):
+        p3d.props(package(tmp_path / "secure.3mf", secure))
+
+
+def test_low_resolution_meshes_and_mixed_units_are_said(tmp_path):
+    ns = ' xmlns:s="http://schemas.microsoft.com/3dmanufacturing/slice/2015/07"'
+    lowres = mesh_object(5, TET_VERTICES, TET_FACES).replace('type="model"', 'type="model" s:meshresolution="lowres"')
+    external = model([lowres], [], unit="inch", namespaces=ns)
+    root = model([], [(5, None, "/3D/low.model")])
+    result = p3d.props(package(tmp_path / "low.3mf", root, {"3D/low.model": external}), output_units="mm")
+    assert any("low resolution" in w for w in result.warnings)
+    assert any("different units (inch, millimeter)" in w for w in result.warnings)
+    assert_exact(result, placed(TET_VERTICES, TET_FACES))   # the root part's millimetres
