@@ -87,7 +87,7 @@ class Meshes:
             if mode == 4 and len(corners) % 3:
                 self.ragged += 1
             vertex_sets.append(vertices)
-            face_sets.append(faces + offset)
+            face_sets.append(faces + offset if offset else faces)
             offset += len(vertices)
         if not vertex_sets:
             return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int64)
@@ -139,11 +139,12 @@ class Meshes:
         values, component, _ = self.doc.accessor(primitive["indices"], f"{here}.indices", ("SCALAR",))
         if component not in (5121, 5123, 5125):
             raise self.doc.error(f"{here}.indices", "are not of an unsigned integer type")
-        corners = values[:, 0].astype(np.int64)
-        if len(corners) and corners.max() >= vertex_count:
-            raise self.doc.error(f"{here}.indices", f"name vertex {int(corners.max())}, but the primitive has "
+        corners = values[:, 0]
+        top = int(corners.max()) if len(corners) else 0
+        if top >= vertex_count:
+            raise self.doc.error(f"{here}.indices", f"name vertex {top}, but the primitive has "
                                  f"{vertex_count} vertices")
-        return corners
+        return corners.astype(np.int64)
 
 
 def _faces(corners: np.ndarray, mode: int) -> np.ndarray:
