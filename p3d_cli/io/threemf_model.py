@@ -137,7 +137,7 @@ class _Parser:
             # the slices, which are the part's real geometry.
             self.object.lowres = any(k.endswith("meshresolution") and v == "lowres" for k, v in attrs.items())
             self.model.objects[oid] = self.object
-        elif local in ("vertices", "triangles") and FAST_MARK in attrs:
+        elif local in ("vertices", "triangles") and self.fast and FAST_MARK in attrs:
             self._take(local, attrs[FAST_MARK])
         elif local == "vertices":
             self._collect(local, "vertex", ("x", "y", "z"))
@@ -303,8 +303,9 @@ def _extract(data: bytes) -> tuple[bytes, list[np.ndarray]]:
     """``data`` with the content of each ``<vertices>`` and ``<triangles>`` that ``_numbers``
     reads replaced by a ``FAST_MARK`` naming its block, and the blocks. Not done in a part
     with comments, CDATA or processing instructions, where such a tag might not be markup
-    (anywhere else a literal ``<`` is markup: XML escapes it in text and attributes)."""
-    if b"<!--" in data or b"<![CDATA[" in data or data.count(b"<?") > 1:
+    (anywhere else a literal ``<`` is markup: XML escapes it in text and attributes), nor in one
+    that already holds the mark (which is then an ordinary attribute, ignored)."""
+    if b"<!--" in data or b"<![CDATA[" in data or data.count(b"<?") > 1 or FAST_MARK.encode() in data:
         return data, []
     pieces: list[bytes] = []
     blocks: list[np.ndarray] = []

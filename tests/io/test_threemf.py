@@ -224,3 +224,12 @@ def test_low_resolution_meshes_and_mixed_units_are_said(tmp_path):
     assert any("low resolution" in w for w in result.warnings)
     assert any("different units (inch, millimeter)" in w for w in result.warnings)
     assert_exact(result, placed(TET_VERTICES, TET_FACES))   # the root part's millimetres
+
+
+def test_a_forged_fast_mark_is_an_ordinary_attribute(tmp_path, path_kind):
+    """The fast road marks the lists it read with an attribute; a file that carries that
+    attribute itself gets the careful road, and the attribute means nothing."""
+    tet = mesh_object(1, TET_VERTICES, TET_FACES).replace("<vertices>", '<vertices p3d-block="0">')
+    cube = mesh_object(2, CUBE_VERTICES, CUBE_FACES)
+    result = p3d.props(package(tmp_path / "forged.3mf", model([cube, tet], [(1, None, None)])), output_units="mm")
+    assert_exact(result, placed(TET_VERTICES, TET_FACES))
