@@ -28,7 +28,7 @@ from p3d_cli.mesh.verdicts import CHECKS, CheckResult
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
                "outward", "manifold", "boundary_edges", "nonmanifold_edges", "misoriented_edges",
                "nonmanifold_vertices", "degenerate_faces", "zero_area_faces",
-               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error")
+               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume")
 
 _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("nonmanifold_edges", "non-manifold edge", "nonmanifold_edge_samples"),
@@ -135,7 +135,12 @@ def check_record(result: CheckResult) -> dict:
         "shells": r.shells,
         "shell_list": [{"faces": s.faces, "first_face": s.first_face, "volume": s.volume}
                        for s in r.shell_list],
-        "volume": r.volume,
+        # The volume props reports (the enclosed solid's, positive for an inward mesh) and the
+        # faces' signed volume, in the same units as props.
+        "volume": r.solid_volume,
+        "signed_volume": r.volume,
+        "units": ({"length": "m", "volume": "m^3", "mesh_length": result.declared_unit} if result.declared_unit
+                  else {"length": "mesh unit", "volume": "mesh unit^3"}),
         "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in _COUNTS},
         "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
     })
@@ -172,8 +177,9 @@ def check_text(result: CheckResult) -> str:
     r = result.report
     head = "ok" if result.ok else "FAILED " + ", ".join(result.failed)
     name = output.shown_name(result.source)
+    unit = " m^3" if result.declared_unit else ""
     details = (f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, "
-               f"volume {output.number(r.volume)})")
+               f"volume {output.number(r.solid_volume)}{unit})")
     lines = [f"{name}: {head}  {details}"]
     if len(lines[0]) > 80 and len(name) <= 40:
         # Break before the details when that makes the verdict fit; a name too long for any
@@ -185,9 +191,11 @@ def check_text(result: CheckResult) -> str:
             head = f"  {count} {noun}{'s' if count != 1 else ''}"
             listed = [_sample_text(sample) for sample in getattr(r, samples)]
             lines += _pack(head + " (e.g. ", listed, ")") if listed else [head]
-    if r.volume <= 0:
-        lines += _fit("signed volume is not positive: faces point inward (reverse the winding) or the "
-                      "mesh encloses nothing", "  ")
+    if r.volume < 0:
+        lines += _fit(f"signed volume {output.number(r.volume)}{unit} is negative: faces point inward (reverse the "
+                      "winding); the volume shown is the enclosed solid's, as p3d props reports it", "  ")
+    elif r.volume == 0:
+        lines += _fit("signed volume is 0: the mesh encloses nothing", "  ")
     if r.shells > 1:
         lines.append("  shell volumes:")
         for s in r.shell_list[:10]:

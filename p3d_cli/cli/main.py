@@ -72,6 +72,8 @@ FLAGS = {
     "rpy": "--rpy", "units": "--units", "output_units": "--output-units",
     "null": "-0/--null", "ignore_warning": "--ignore-warning", "rtol": "--rtol", "atol": "--atol",
     "root": "--root",
+    "size": "--size", "show": "--show", "view": "--view", "up": "--up", "azimuth": "--azimuth",
+    "elevation": "--elevation", "output": "--output", "plot": "--plot", "animate": "--animate",
 }
 
 
@@ -221,6 +223,7 @@ cli.commands = _Commands({
     "check": "p3d_cli.cli.check",
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
+    "render": "p3d_cli.cli.render",
     "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })

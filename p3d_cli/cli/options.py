@@ -237,8 +237,9 @@ def report_options(f):
                           "extension, warnings by code) as one JSON object to FILE.")(f)
     f = click.option("--report", "reports", multiple=True, metavar="KIND[:FILE]",
                      help="Also write a report for CI: junit:FILE (JUnit XML, one testcase per "
-                          "input), github (GitHub Actions annotations on stdout) or github:FILE. "
-                          "Repeatable.")(f)
+                          "input), github (GitHub Actions annotations on stdout) or github:FILE, "
+                          "html:DIR (a page with each input's picture) or github-summary:FILE (the same "
+                          "as Markdown, appended to FILE). Repeatable.")(f)
     return f
 
 

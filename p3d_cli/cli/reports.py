@@ -10,6 +10,8 @@ A command's run (``p3d_cli.cli.reporting.Batch``) records one ``Entry`` per inpu
   in its ``<system-out>``. The layout of the JUnit schema Jenkins and GitLab read.
 - ``--report github`` (standard output) or ``github:FILE``: workflow commands, one line each,
   ``::error file=PATH,title=p3d check::MESSAGE`` and ``::warning file=...::``.
+- ``--report html:DIR`` and ``github-summary:FILE``: a page with each input's picture (HTML,
+  or Markdown appended to a GitHub job summary), by ``p3d_cli.render.pages``.
 - ``--summary json:FILE``: ``{"command", "inputs", "ok", "warned", "failed", "errored",
   "skipped", "skipped_by_extension", "warnings_by_code", "exit_status"}``.
 """
@@ -75,8 +77,11 @@ def parse_reports(values, summary: str | None) -> ReportOptions:
             reports.append(("junit", path))
         elif kind == "github":
             reports.append(("github", path or None))
+        elif kind in ("html", "github-summary") and path:
+            reports.append((kind, path))
         else:
-            raise UsageError("--report", f"{value!r} is not a report", "use junit:FILE, github or github:FILE")
+            raise UsageError("--report", f"{value!r} is not a report",
+                             "use junit:FILE, github, github:FILE, html:DIR or github-summary:FILE")
     if summary is not None:
         kind, _, path = summary.partition(":")
         if kind != "json" or not path:
@@ -99,7 +104,15 @@ def write_reports(options: ReportOptions, command: str, entries, skipped: dict[s
     entries = list(entries)
     skipped_entries = [Entry(path, "skipped", (("skipped", f"p3d does not read {ext or 'extensionless'} files"),))
                        for ext, paths in sorted(skipped.items()) for path in paths]
+    pages = {kind: path for kind, path in options.reports if kind in ("html", "github-summary")}
+    if pages:
+        from p3d_cli.render.pages import Row, write_pages
+
+        write_pages(command, [Row(e.source, e.state, e.failures, e.warnings) for e in entries],
+                    html_dir=pages.get("html"), summary=pages.get("github-summary"), inputs=[e.source for e in entries])
     for kind, path in options.reports:
+        if kind in pages:
+            continue
         if kind == "junit":
             _write(path, junit_xml(command, entries + skipped_entries, seconds))
         else:

@@ -265,7 +265,7 @@ def load(raw: RawInput) -> MeshSource:
             name = node.get("name")
             entries.append((str(name) if isinstance(name, str) and name else f"node {index}", node["mesh"],
                             f"{where}.mesh", weights, matrix, _instances(doc, node, where)))
-    placed_vertices = 0
+    placed_vertices = placed_instances = 0
     for name, mesh_index, path, weights, matrix, instances in entries:
         vertices, faces = meshes.triangles(mesh_index, path, weights)
         if not len(faces):
@@ -273,8 +273,11 @@ def load(raw: RawInput) -> MeshSource:
         copies = 1 if instances is None else len(instances)
         total += len(faces) * copies
         placed_vertices += len(vertices) * copies
-        if total > limits.PLACED_TRIANGLES or placed_vertices > 3 * limits.PLACED_TRIANGLES:
-            raise FormatError(raw.where, limits.too_many_triangles(total), "split the model into several files")
+        placed_instances += copies
+        limits.check_instances(raw.where, placed_instances, total, "nodes and GPU instances")
+        if placed_vertices > 3 * limits.MAX_PLACED_FACES:
+            raise FormatError(raw.where, f"its nodes and GPU instances place {placed_vertices:,} vertices, more than "
+                              f"p3d places ({3 * limits.MAX_PLACED_FACES:,})", "measure the meshes apart")
         if instances is not None:
             vertices, faces = _placed_instances(vertices, faces, matrix @ instances)
             matrix = np.eye(4)

@@ -284,7 +284,7 @@ class Document:
         normalized = spec.get("normalized", False) is True and component in _NORMALIZED
         count = self.integer(spec, "count", where, minimum=1)
         width, dtype = WIDTHS[kind], COMPONENTS[component]
-        limit = limits.PLACED_TRIANGLES * 3
+        limit = limits.MAX_PLACED_FACES * 3
         if count > limit:
             raise FormatError(self.where, f"{where} declares {count:,} elements, more than p3d reads ({limit:,})",
                               "split the model")

@@ -131,7 +131,8 @@ class _Build:
         self.package = package
         self.root = root
         self.where = package.where
-        self.sizes: dict[Key, tuple[int, int, int]] = {}   # placed faces, vertices; nesting depth
+        #: Per object: the faces, vertices and mesh instances it places, and its nesting depth.
+        self.sizes: dict[Key, tuple[int, int, int, int]] = {}
 
     def object(self, key: Key) -> Object:
         model = self.package.model(key[0])
@@ -150,8 +151,9 @@ class _Build:
             out.append(((part_name(path) if path else key[0], oid), matrix))
         return out
 
-    def size(self, start: Key) -> tuple[int, int, int]:
-        """Triangles and vertices ``start`` places, and its nesting depth, without expanding."""
+    def size(self, start: Key) -> tuple[int, int, int, int]:
+        """Triangles, vertices and mesh instances ``start`` places, and its nesting depth,
+        without expanding."""
         stack: list[tuple[Key, bool]] = [(start, False)]
         visiting: set[Key] = set()
         while stack:
@@ -165,11 +167,13 @@ class _Build:
                 sub = [self.sizes[k] for k, _ in kids]
                 faces = (0 if obj.faces is None else len(obj.faces)) + sum(s[0] for s in sub)
                 vertices = (0 if obj.vertices is None else len(obj.vertices)) + sum(s[1] for s in sub)
-                depth = 1 + max((s[2] for s in sub), default=0)
+                own = obj.faces is not None and len(obj.faces) > 0
+                instances = int(own) + sum(s[2] for s in sub)
+                depth = 1 + max((s[3] for s in sub), default=0)
                 if depth > limits.NESTING_DEPTH:
                     raise FormatError(self.where, f"object {key[1]} nests components {depth} deep, deeper than "
                                       f"p3d follows ({limits.NESTING_DEPTH})", CORRUPT)
-                self.sizes[key] = (faces, vertices, depth)
+                self.sizes[key] = (faces, vertices, instances, depth)
                 continue
             if key in visiting:
                 raise FormatError(self.where, f"object {key[1]} is its own component (a cycle)", CORRUPT)
@@ -232,12 +236,14 @@ def _load(raw: RawInput, package: _Package) -> MeshSource:
                           "use one of " + ", ".join(UNITS))
     build = _Build(package, root)
     items = [((part_name(path) if path else root, oid), matrix) for oid, path, matrix in model.items]
-    faces = vertices = 0
+    faces = vertices = instances = 0
     for key, _ in items:
         size = build.size(key)
-        faces, vertices = faces + size[0], vertices + size[1]
-    if faces > limits.PLACED_TRIANGLES or vertices > 3 * limits.PLACED_TRIANGLES:
-        raise FormatError(raw.where, limits.too_many_triangles(faces), "split the model into several files")
+        faces, vertices, instances = faces + size[0], vertices + size[1], instances + size[2]
+    limits.check_instances(raw.where, instances, faces, "build items and components")
+    if vertices > 3 * limits.MAX_PLACED_FACES:
+        raise FormatError(raw.where, f"its build items and components place {vertices:,} vertices, more than p3d "
+                          f"places ({3 * limits.MAX_PLACED_FACES:,})", "measure the objects apart")
     _check_required(raw.where, list(package.models.values()))
     found: list[tuple[str, Object, np.ndarray]] = []
     kinds: dict[str, int] = {}

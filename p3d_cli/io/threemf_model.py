@@ -339,7 +339,7 @@ def parse(stream: IO[bytes], declared: int, where: str, part: str) -> Model:
     stream : binary stream
         The part's inflated bytes (a ``zipfile`` member).
     declared : int
-        Its size as the archive declares it (already checked against ``MODEL_PART_BYTES``).
+        Its size as the archive declares it (checked here against ``limits.MAX_INFLATED``).
 
     Raises
     ------
@@ -347,9 +347,7 @@ def parse(stream: IO[bytes], declared: int, where: str, part: str) -> Model:
         Not well-formed XML, a DOCTYPE, a malformed number or transform, a duplicate object id,
         more bytes than declared.
     """
-    if declared > limits.MODEL_PART_BYTES:
-        raise FormatError(where, f"{part} inflates to {declared:,} bytes, more than p3d reads "
-                          f"({limits.MODEL_PART_BYTES:,})", "split the model into several files")
+    limits.check_declared(where, declared, part)
     parser = _Parser(where, part)
     if declared > FAST_PART_BYTES:
         return parser.feed(stream, declared)

@@ -1,6 +1,6 @@
-"""Scene files read by trimesh's loaders (glTF, 3MF, COLLADA), as ``SceneObject`` lists.
+"""Scene files read by trimesh's loaders (glTF, 3MF), as ``SceneObject`` lists.
 
-trimesh (with pycollada for DAE, lxml and networkx for 3MF: the ``formats`` extra) is the
+trimesh (with lxml and networkx for 3MF: the ``formats`` extra) is the
 maintained reader of these formats; it is imported here, on first use, so that runs on STL,
 OBJ or PLY never pay for it. It is asked for the scene graph unprocessed (``process=False``:
 no vertex merging, no removal of degenerate or duplicate faces), so p3d integrates the file's

@@ -51,6 +51,10 @@ class CheckResult:
         broken, then ``NAME:CHECK`` for each check an object of a multi-object file failed.
     parts : tuple of (str, CheckResult)
         For a file of several objects (glTF nodes, 3MF build items), each object's verdict.
+    declared_unit : str or None
+        The unit the file declares (glTF, 3MF, DAE, AMF; a key of ``p3d_cli.units.LENGTHS``):
+        the report's lengths and volumes are then in metres, as ``props`` reports them; None:
+        in the mesh's own unit.
     """
 
     source: str
@@ -59,14 +63,21 @@ class CheckResult:
     required: tuple[str, ...]
     failed: tuple[str, ...]
     parts: tuple = ()
+    declared_unit: str | None = None
 
     @property
     def ok(self) -> bool:
         return not self.failed
 
+    def _repr_html_(self) -> str:
+        """In a notebook: the verdict, the counts, and the mesh with its defects drawn."""
+        from p3d_cli.render.notebook import check_html
+
+        return check_html(self)
+
 
 def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
-                 max_faces: int | None = None) -> CheckResult:
+                 max_faces: int | None = None, declared_unit: str | None = None) -> CheckResult:
     """Check a loaded mesh against the required checks and limits.
 
     The triangles are read block by block (twice, and once more for the volumes of several
@@ -83,6 +94,9 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         Fail when the total signed volume is below this.
     max_faces : int, optional
         Fail when the mesh has more faces than this.
+    declared_unit : str, optional
+        The unit the file declares (``MeshSource.length_unit``): lengths and volumes (and
+        ``min_volume``'s comparison) are then in metres.
 
     Raises
     ------
@@ -98,10 +112,15 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
     if mesh.face_count == 0:
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
     report = topology_of_blocks(mesh.read_blocks, mesh.face_count, where)
+    if declared_unit is not None:
+        from p3d_cli.units import LENGTHS
+
+        report = report.in_length_unit(LENGTHS[declared_unit])
     required = tuple(required)
     failed = [name for name in required if not passes(report, name)]
     if min_volume is not None and not report.volume >= min_volume:
         failed.append("min-volume")
     if max_faces is not None and report.faces > max_faces:
         failed.append("max-faces")
-    return CheckResult(source, mesh.format, report, required, tuple(failed))
+    return CheckResult(source, mesh.format, report, required, tuple(failed),
+                       declared_unit=declared_unit)

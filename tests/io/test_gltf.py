@@ -191,17 +191,21 @@ def test_instances_times_faces_are_bounded(tmp_path, monkeypatch):
     placed triangles (the same bound trips at a billion)."""
     from p3d_cli.io import limits
 
-    monkeypatch.setattr(limits, "PLACED_TRIANGLES", 3000)
+    monkeypatch.setattr(limits, "MAX_PLACED_FACES", 3000)
     doc = Gltf()
     ext = {"attributes": {"TRANSLATION": doc.accessor(np.arange(3000, dtype=np.float32).reshape(1000, 3))}}
     doc.node(doc.mesh(doc.primitive(TET_VERTICES, TET_FACES)), extensions={"EXT_mesh_gpu_instancing": ext})
-    with pytest.raises(FormatError, match="4,000 triangles, more than p3d reads"):
+    with pytest.raises(FormatError, match="4,000 triangles, more than p3d places"):
         p3d.props(save(doc, tmp_path))
     many_nodes = Gltf()
     mesh = many_nodes.mesh(many_nodes.primitive(TET_VERTICES, TET_FACES))
     for i in range(751):
         many_nodes.node(mesh, translation=[float(i), 0.0, 0.0])
-    with pytest.raises(FormatError, match="more than p3d reads"):
+    with pytest.raises(FormatError, match="more than p3d places"):
+        p3d.props(save(many_nodes, tmp_path))
+    monkeypatch.setattr(limits, "MAX_PLACED_FACES", 10 ** 9)
+    monkeypatch.setattr(limits, "MAX_INSTANCES", 500)
+    with pytest.raises(FormatError, match="501 mesh instances, more than p3d places"):
         p3d.props(save(many_nodes, tmp_path))
 
 

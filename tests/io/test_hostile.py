@@ -226,7 +226,7 @@ FACET = "facet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vert
 
 @pytest.mark.parametrize("facet, line", [
     (FACET.replace("vertex 1 0 0", "vertex 1_0 0 0"), 4),
-    (FACET.replace("normal 0 0 1", "normal 0 0").replace("vertex 0 0 0", "vertex 1 0 0 0"), 1),
+    (FACET.replace("normal 0 0 1", "normal 0 0").replace("vertex 0 0 0", "vertex 1 0 0 0"), 3),
     (FACET.replace("vertex 1 0 0", "vertex 1 - 0 0"), 4),
     (FACET.replace("vertex 1 0 0", "vertex 1 0 nan"), 4),
     (FACET.replace(" outer loop\n", ""), 2),

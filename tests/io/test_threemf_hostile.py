@@ -25,11 +25,11 @@ def tet_model(**kwargs) -> str:
 def test_inflation_past_the_limit_is_refused_before_inflating(tmp_path, monkeypatch):
     """A deflate bomb made small: a 2 MB model part (of comment-free whitespace, which deflates
     ~1000:1) against a limit of 1 MB."""
-    monkeypatch.setattr(limits, "MODEL_PART_BYTES", 1 << 20)
+    monkeypatch.setattr(limits, "MAX_INFLATED", 1 << 20)
     text = tet_model().replace("<build>", " " * (2 << 20) + "<build>")
     path = package(tmp_path / "bomb.3mf", text)
     assert path.stat().st_size < 20_000
-    one_error(path, "more than p3d reads (1,048,576)")
+    one_error(path, "more than p3d inflates (1,048,576 bytes)")
 
 
 def test_part_that_inflates_past_its_declared_size(tmp_path):
@@ -53,7 +53,7 @@ def test_part_that_inflates_past_its_declared_size(tmp_path):
 def test_component_bomb_is_refused_before_expansion(tmp_path, monkeypatch):
     """Billion laughs in components made small: 10^4 cubes (120,000 triangles) in four levels
     against a limit of 100,000 placed triangles; counted, not expanded."""
-    monkeypatch.setattr(limits, "PLACED_TRIANGLES", 100_000)
+    monkeypatch.setattr(limits, "MAX_PLACED_FACES", 100_000)
     objects = [mesh_object(1, CUBE_VERTICES, CUBE_FACES)]
     for level in range(2, 6):
         objects.append(component_object(level, [(level - 1, trs((float(i), 0.0, 0.0)), None) for i in range(10)]))
