@@ -154,8 +154,9 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
     failed = [c.link for c in checks if not c.ok]
     frames = sum(1 for c in checks if c.status == "frame")
     if not as_json:
-        tally = f"{len(checks)} links, {len(failed)} failed" + (f", {frames} massless frames" if frames else "") \
-            + (f": {', '.join(failed)}" if failed else "")
+        tally = (f"{output.plural(len(checks), 'link')}, {len(failed)} failed"
+                 + (f", {output.plural(frames, 'massless frame')}" if frames else "")
+                 + (f": {', '.join(failed)}" if failed else ""))
         click.echo(f"p3d robot check: {robot_.path}: {tally}", err=True)
     return 1 if failed else 0
 
