@@ -1,0 +1,262 @@
+"""What two triangles of a mesh do to each other, decided with exact orientation signs.
+
+For a pair of non-degenerate faces ``A = (a0, a1, a2)`` and ``B = (b0, b1, b2)`` (vertices
+shared when their coordinates are exactly equal), ``classify`` returns one of:
+
+- ``NONE``: disjoint, or meeting only in the vertices or the edge they share;
+- ``CROSSING``: not coplanar, and some point lies in the relative interior of both (the
+  surfaces pass through each other there);
+- ``OVERLAP``: coplanar, overlapping in a region of positive area, facing the same way (the
+  region between is counted twice by the divergence theorem);
+- ``FOLD``: coplanar, sharing an edge, overlapping in a region of positive area, facing opposite
+  ways: the surface turns back onto itself across that edge;
+- ``CONTACT``: not coplanar, touching along a segment of positive length that lies on an edge
+  of one face (or on edges of both) and not in the other's interior only at isolated points.
+  Whether the *surfaces* cross there depends on the faces around that edge, which
+  ``p3d_cli.mesh.contacts`` decides; the pair alone is a touch.
+
+Coplanar faces facing opposite ways without a shared edge (two parts pressed together, two
+cubes sharing a face) touch and are ``NONE``; so are faces touching at a point.
+
+Method (non-coplanar faces, all signs exact, ``p3d_cli.geometry.predicates``). With
+``s`` the sides of B's vertices relative to A's plane and ``t`` those of A's relative to B's,
+B meets A's plane in a segment ``I_B`` and A meets B's in ``I_A``, both on the line ``L`` where
+the planes meet, and ``A ∩ B = I_A ∩ I_B``. Each segment is cut from its triangle by the two
+edges leaving its *apex* (the vertex alone on its side of the other plane, or alone on it), so
+its ends are ``apex-x ∩ plane``. For ends ``p`` on edge ``a-x`` of A and ``r`` on edge ``d-y``
+of B, writing ``n_A, n_B`` for the normals and ``D = n_A × n_B`` for the direction of ``L``,
+
+    orient3d(a, x, d, y) = D·(r - p) · (n_B·(a - x)) · (n_A·(d - y)) / |D|²,
+
+(expand ``det(x - a, d - a, y - a)`` with ``a - p``, ``x - p`` along one direction in A's plane
+and ``d - r``, ``y - r`` along one in B's), and the two last factors have known signs, so one
+orientation sign compares two ends along ``L``. The ends of each segment come in a known order
+(the apex's side and the face's winding fix it), so two signs decide whether ``I_A`` and
+``I_B`` overlap, strictly or only at a point. This is the structure of Guigue and Devillers'
+test ("Fast and robust triangle-triangle overlap test using orientation predicates", *J.
+Graphics Tools* 8(1), 2003), derived again here because the classification needs more than
+their yes/no: strict against touching overlap, and the segments' ends on edges or inside.
+A face's open segment lies in its relative interior exactly when it has vertices strictly on
+both sides of the other plane (it *straddles*); a crossing is a strict overlap of two
+straddling faces. Coplanar faces are compared in the coordinate plane where A's normal is
+largest, with the separating-axis test over the six edge lines (interiors overlap exactly when
+no edge line has the other triangle in its closed outer half-plane).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from p3d_cli.geometry.predicates import Planes, orient2d
+
+NONE, CROSSING, OVERLAP, FOLD, CONTACT = 0, 1, 2, 3, 4
+#: Names of the kinds (``CONTACT`` pairs are resolved before anything is reported).
+KINDS = {CROSSING: "crossing", OVERLAP: "overlap", FOLD: "fold"}
+
+_NEXT = np.array([1, 2, 0])
+_PREV = np.array([2, 0, 1])
+
+
+def classify(points: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray, safe: bool = True):
+    """Kinds of the face pairs ``(i[k], j[k])`` and, for ``CONTACT`` pairs, their touching edges.
+
+    Parameters
+    ----------
+    points : (m, 3) float64
+        Vertex coordinates (exact vertex ids: equal coordinates are one vertex).
+    faces : (n, 3) int
+        Vertex ids of each face; none of the faces given is degenerate (zero area).
+    i, j : (k,) int
+        Face pairs, ``i != j``.
+    safe : bool
+        ``predicates.in_safe_range(points)``.
+
+    Returns
+    -------
+    kind : (k,) int8
+    edges : (k, 2, 2) int64
+        For ``CONTACT`` pairs: per face, the corners ``(c, c')`` of its edge on the contact
+        line, or ``(-1, -1)`` when the contact lies in that face's interior. Unset elsewhere.
+    """
+    fa, fb = faces[i], faces[j]
+    k = len(i)
+    kind = np.zeros(k, dtype=np.int8)
+    edges = np.full((k, 2, 2), -1, dtype=np.int64)
+    same = fa[:, :, None] == fb[:, None, :]                 # (k, 3 of A, 3 of B)
+    shared = same.sum(axis=(1, 2))
+    rows = np.flatnonzero(shared == 2)
+    if rows.size:
+        kind[rows] = _edge_pairs(points, fa[rows], fb[rows], same[rows], safe)
+    rows = np.flatnonzero(shared < 2)
+    if rows.size:
+        kind[rows], edges[rows] = _general(points, fa[rows], fb[rows], same[rows], safe)
+    return kind, edges
+
+
+def _edge_pairs(points, fa, fb, same, safe) -> np.ndarray:
+    """Faces sharing exactly one edge: nothing unless coplanar and on the same side of it."""
+    free_a = np.argmin(same.any(axis=2), axis=1)            # A's corner not on the shared edge
+    free_b = np.argmin(same.any(axis=1), axis=1)
+    rows = np.arange(len(fa))
+    A = points[fa]
+    planes = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
+    side = planes.side(points[fb[rows, free_b]])
+    kind = np.zeros(len(fa), dtype=np.int8)
+    flat = np.flatnonzero(side == 0)
+    if flat.size:
+        u = fa[flat, _NEXT[free_a[flat]]]                   # the shared edge, as A's corners
+        v = fa[flat, _PREV[free_a[flat]]]
+        axes = _projection(planes, flat, A[flat], safe)
+        ua, va = _project(points[u], axes), _project(points[v], axes)
+        near_a = orient2d(ua, va, _project(points[fa[flat, free_a[flat]]], axes), safe)
+        near_b = orient2d(ua, va, _project(points[fb[flat, free_b[flat]]], axes), safe)
+        facing = _facing(points, fa[flat], axes, safe) == _facing(points, fb[flat], axes, safe)
+        together = near_a == near_b                         # both nonzero: faces not degenerate
+        kind[flat[together & facing]] = OVERLAP
+        kind[flat[together & ~facing]] = FOLD
+    return kind
+
+
+def _projection(planes: Planes, rows: np.ndarray, A: np.ndarray, safe: bool) -> np.ndarray:
+    """For each row, a coordinate axis to drop so that face A projects to a proper triangle:
+    the largest component of its (rounded) normal, and another axis where that is exactly flat."""
+    normal = np.abs(np.stack([n[rows] for n in planes.normal], axis=1))
+    axes = np.argmax(normal, axis=1)
+    for _ in range(2):
+        flat = np.flatnonzero(orient2d(*(_project(A[:, c], axes) for c in range(3)), safe=safe) == 0)
+        if flat.size == 0:
+            break
+        axes[flat] = (axes[flat] + 1) % 3
+    return axes
+
+
+def _project(x: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """``(k, 3)`` points without coordinate ``axes[k]``: ``(k, 2)``, keeping the cyclic order
+    of the two others (so that orientations are those seen along ``+axis``)."""
+    rows = np.arange(len(x))
+    return np.stack([x[rows, (axes + 1) % 3], x[rows, (axes + 2) % 3]], axis=1)
+
+
+def _facing(points, f, axes, safe) -> np.ndarray:
+    """The orientation of each face seen along its projection axis (+1 or -1)."""
+    return orient2d(*(_project(points[f[:, c]], axes) for c in range(3)), safe=safe)
+
+
+def _sides(planes: Planes, T: np.ndarray, same_as_plane: np.ndarray) -> np.ndarray:
+    """Sides of the three corners of ``T`` ``(k, 3, 3)`` relative to ``planes``; corners that
+    are vertices of the plane's own face are 0 without any arithmetic."""
+    out = np.zeros((len(T), 3), dtype=np.int8)
+    for c in range(3):
+        free = np.flatnonzero(~same_as_plane[:, c])
+        if free.size == len(T):
+            out[:, c] = planes.side(T[:, c])
+        elif free.size:
+            out[free, c] = _subset(planes, free).side(T[free, c])
+    return out
+
+
+def _subset(planes: Planes, rows: np.ndarray) -> Planes:
+    sub = Planes.__new__(Planes)
+    sub.a, sub.b, sub.c, sub.safe = planes.a[rows], planes.b[rows], planes.c[rows], planes.safe
+    sub.normal = tuple(n[rows] for n in planes.normal)
+    sub.permanent = tuple(p[rows] for p in planes.permanent)
+    return sub
+
+
+def _general(points, fa, fb, same, safe):
+    """Pairs sharing at most one vertex."""
+    k = len(fa)
+    kind = np.zeros(k, dtype=np.int8)
+    edges = np.full((k, 2, 2), -1, dtype=np.int64)
+    A, B = points[fa], points[fb]
+    plane_a = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
+    s = _sides(plane_a, B, same.any(axis=1))                # B's corners against A's plane
+    apart = (s.min(axis=1) > 0) | (s.max(axis=1) < 0)
+    live = np.flatnonzero(~apart)
+    if live.size == 0:
+        return kind, edges
+    A, B, s, same = A[live], B[live], s[live], same[live]
+    plane_b = Planes(B[:, 0], B[:, 1], B[:, 2], safe)
+    t = _sides(plane_b, A, same.any(axis=2))                # A's corners against B's plane
+    apart = (t.min(axis=1) > 0) | (t.max(axis=1) < 0)
+    flat = (s == 0).all(axis=1)
+    rows = np.flatnonzero(flat & ~apart)
+    if rows.size:
+        kind[live[rows]] = _coplanar(_subset(plane_a, live[rows]), A[rows], B[rows], safe)
+    rows = np.flatnonzero(~flat & ~apart)
+    if rows.size:
+        kind[live[rows]], edges[live[rows]] = _crossing(A[rows], B[rows], s[rows], t[rows], safe)
+    return kind, edges
+
+
+def _apex(sign: np.ndarray):
+    """Per row of corner signs (not all equal and nonzero, not all zero): the apex corner, the
+    sign of (apex side - other side), and whether the face straddles the plane."""
+    nxt, prv = sign[:, _NEXT], sign[:, _PREV]
+    alone = (sign != 0) & (nxt != sign) & (prv != sign)
+    on_it = (sign == 0) & (nxt == prv) & (nxt != 0)
+    apex = np.argmax(alone | on_it, axis=1)
+    rows = np.arange(len(sign))
+    s_apex = sign[rows, apex].astype(np.int64)
+    factor = np.where(s_apex != 0, s_apex, -sign[rows, _NEXT[apex]].astype(np.int64))
+    straddle = (sign > 0).any(axis=1) & (sign < 0).any(axis=1)
+    return apex, factor, straddle
+
+
+def _crossing(A, B, s, t, safe):
+    """Non-coplanar pairs whose faces each meet the other's plane: compare ``I_A`` and ``I_B``."""
+    k = len(A)
+    rows = np.arange(k)
+    apex_a, f_a, straddle_a = _apex(t)
+    apex_b, f_b, straddle_b = _apex(s)
+    a, d = A[rows, apex_a], B[rows, apex_b]
+    # Ends of I_A lie on edges apex-x; in the order along L (module docstring): for f_a > 0
+    # the end on the edge to the previous corner comes first.
+    a_lo = np.where(f_a > 0, _PREV[apex_a], _NEXT[apex_a])
+    a_hi = np.where(f_a > 0, _NEXT[apex_a], _PREV[apex_a])
+    b_lo = np.where(f_b > 0, _NEXT[apex_b], _PREV[apex_b])
+    b_hi = np.where(f_b > 0, _PREV[apex_b], _NEXT[apex_b])
+    factor = (f_a * f_b).astype(np.int8)
+    # cmp(p, r) = sign(D·(r - p)) = orient3d(a, x, d, y) · f_a · f_b
+    lo_hi = Planes(a, A[rows, a_lo], d, safe).side(B[rows, b_hi]) * factor      # lo_A vs hi_B
+    hi_lo = Planes(a, A[rows, a_hi], d, safe).side(B[rows, b_lo]) * factor      # hi_A vs lo_B
+    strict = (lo_hi > 0) & (hi_lo < 0)
+    kind = np.zeros(k, dtype=np.int8)
+    kind[strict & straddle_a & straddle_b] = CROSSING
+    edges = np.full((k, 2, 2), -1, dtype=np.int64)
+    # A segment of contact: a strict overlap of two segments of positive length (a face that
+    # only touches the other's plane at a vertex has a one-point segment), one of which is an
+    # edge lying in the other's plane -- the surfaces may cross through that edge.
+    a_edge_on, b_edge_on = (t == 0).sum(axis=1) == 2, (s == 0).sum(axis=1) == 2
+    contact = (strict & ~(straddle_a & straddle_b) & (a_edge_on | b_edge_on)
+               & (straddle_a | a_edge_on) & (straddle_b | b_edge_on))
+    kind[contact] = CONTACT
+    for face, signs, on in ((0, t, a_edge_on), (1, s, b_edge_on)):
+        rows_on = np.flatnonzero(contact & on)
+        zero = signs[rows_on] == 0
+        first = np.argmax(zero, axis=1)
+        second = 2 - np.argmax(zero[:, ::-1], axis=1)
+        edges[rows_on, face, 0], edges[rows_on, face, 1] = first, second
+    return kind, edges
+
+
+def _coplanar(plane_a: Planes, A, B, safe) -> np.ndarray:
+    """Coplanar pairs sharing at most one vertex: ``OVERLAP`` when their interiors overlap and
+    they face the same way (facing opposite ways, they are pressed together: ``NONE``)."""
+    rows = np.arange(len(A))
+    axes = _projection(plane_a, rows, A, safe)
+    a = [_project(A[:, c], axes) for c in range(3)]
+    b = [_project(B[:, c], axes) for c in range(3)]
+    o_a = orient2d(a[0], a[1], a[2], safe)
+    o_b = orient2d(b[0], b[1], b[2], safe)
+    separated = np.zeros(len(A), dtype=bool)
+    for edge_of, against, o in ((a, b, o_a), (b, a, o_b)):
+        for c in range(3):
+            p, q = edge_of[c], edge_of[(c + 1) % 3]
+            outer = np.ones(len(A), dtype=bool)
+            for x in against:
+                outer &= orient2d(p, q, x, safe) * o <= 0
+            separated |= outer
+    kind = np.zeros(len(A), dtype=np.int8)
+    kind[~separated & (o_a == o_b)] = OVERLAP
+    return kind
