@@ -28,7 +28,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
           tessellate: int | None = None, samples: int | None = None, seed: int | None = None,
           tolerance: float | None = None, format: str | None = None,
           stdin: BinaryIO | None = None, units: str | None = None,
-          output_units: str | None = None) -> PropsResult:
+          output_units: str | None = None, intersections: bool = False, shells: bool = False) -> PropsResult:
     """Volume, mass, centre of mass, inertia and principal frame of a mesh or shape.
 
     Parameters
@@ -60,6 +60,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         units, results are in SI (or ``output_units``) and ``result.units`` says which.
     output_units : str, optional
         ``"LENGTH,MASS"`` of the results, e.g. ``"mm,g"`` (default ``"m,kg"``).
+    intersections : bool
+        Also test a mesh exactly for self-intersections and for closed shells nested wound
+        alike (``p3d_cli.bodies``): warnings ``self-intersecting`` and ``nested-shells``. The
+        test also runs, without being asked, when the inertia is not a solid's.
+    shells : bool
+        Measure each closed shell of a mesh (with the cavities inside it) as a part of an
+        assembly: the bodies of a multi-body export (implies ``intersections``).
 
     A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.assembly``) or an
     ``Assembly`` gives the whole, with each part's result in ``result.parts``.
@@ -92,6 +99,10 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         solid = as_solid(thing, format=format, stdin=stdin)
         units = declared_units(solid, units, density, mass)
         found = scene_assembly(solid)
+        if shells:
+            from p3d_cli.bodies import shells_assembly
+
+            found, extra = shells_assembly(solid, found)
     if found is not None:
         from p3d_cli.assemble import assembly_props
 
@@ -99,6 +110,8 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
                                 density=density, mass=mass, about=about, method=method,
                                 tessellate=tessellate, samples=samples, seed=seed,
                                 tolerance=tolerance)
+        if shells:
+            return dataclasses.replace(result, warnings=result.warnings + tuple(extra))
         return result if solid is None else scene_record(result, solid)
     density_given = density is not None
     system, density, mass = unit_rules.resolve(units, output_units, density, mass)
@@ -110,7 +123,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     result = measure_solid(solid, placement, method=method, density=density,
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
                            tolerance=tolerance)
-    return finish(result, system, user_placement, density_given)
+    result = finish(result, system, user_placement, density_given)
+    if solid.mesh is not None and solid.mesh.tetrahedra is None and (
+            intersections or "self-intersecting" in result.warning_codes):
+        from p3d_cli.bodies import with_solidity_warnings
+
+        result = with_solidity_warnings(result, solid.mesh)
+    return result
 
 
 def _assembly(thing):

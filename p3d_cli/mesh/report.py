@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from p3d_cli.mesh.solidity_report import Nesting, SelfIntersections
+
 #: Sample locations kept per kind of problem.
 SAMPLES = 5
 
@@ -82,6 +84,11 @@ class TopologyReport:
     nonmanifold_vertex_samples: tuple[VertexSample, ...] = ()
     degenerate_face_samples: tuple[int, ...] = ()
     duplicate_face_samples: tuple[tuple[int, int], ...] = ()
+    #: Face pairs whose interiors cross or overlap (``p3d_cli.mesh.intersections``); None when
+    #: the test was not asked for.
+    self_intersections: SelfIntersections | None = None
+    #: How the closed shells nest (``p3d_cli.mesh.nesting``); None when not asked for.
+    nesting: Nesting | None = None
 
     @property
     def closed(self) -> bool:

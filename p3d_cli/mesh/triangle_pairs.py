@@ -82,21 +82,61 @@ def classify(points: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray
     k = len(i)
     kind = np.zeros(k, dtype=np.int8)
     edges = np.full((k, 2, 2), -1, dtype=np.int64)
-    same = fa[:, :, None] == fb[:, None, :]                 # (k, 3 of A, 3 of B)
-    shared = same.sum(axis=(1, 2))
+    on_a, on_b = _shared_corners(fa, fb)
+    shared = on_a[:, 0].astype(np.int8) + on_a[:, 1] + on_a[:, 2]
     rows = np.flatnonzero(shared == 2)
     if rows.size:
-        kind[rows] = _edge_pairs(points, fa[rows], fb[rows], same[rows], safe)
-    rows = np.flatnonzero(shared < 2)
+        kind[rows] = _edge_pairs(points, fa[rows], fb[rows], on_a[rows], on_b[rows], safe)
+    one = np.flatnonzero(shared == 1)
+    if one.size:        # most pairs of a mesh: neighbours around a vertex, screened cheaply
+        one = one[_near_at_vertex(points, fa[one], fb[one], on_a[one], on_b[one], safe)]
+    rows = np.concatenate([np.flatnonzero(shared == 0), one])
     if rows.size:
-        kind[rows], edges[rows] = _general(points, fa[rows], fb[rows], same[rows], safe)
+        kind[rows], edges[rows] = _general(points, fa[rows], fb[rows], on_a[rows], on_b[rows], safe)
     return kind, edges
 
 
-def _edge_pairs(points, fa, fb, same, safe) -> np.ndarray:
+def _shared_corners(fa: np.ndarray, fb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(k, 3)`` masks of the corners of A, and of B, that are a vertex of the other face."""
+    on_a = np.zeros(fa.shape, dtype=bool)
+    on_b = np.zeros(fb.shape, dtype=bool)
+    for p in range(3):
+        for q in range(3):
+            same = fa[:, p] == fb[:, q]
+            on_a[:, p] |= same
+            on_b[:, q] |= same
+    return on_a, on_b
+
+
+def _first(mask: np.ndarray) -> np.ndarray:
+    """The first column set in each row of a ``(k, 3)`` mask (2 if none of the first two)."""
+    return np.where(mask[:, 0], 0, np.where(mask[:, 1], 1, 2))
+
+
+def _near_at_vertex(points, fa, fb, on_a, on_b, safe) -> np.ndarray:
+    """For faces sharing one vertex ``v``: False where one face's two other corners lie
+    strictly on one side of the other's plane (they meet at ``v`` only), True where the full
+    test must decide."""
+    base = 3 * np.arange(len(fa))
+    pa, pb = _first(on_a) + base, _first(on_b) + base
+    flat_a, flat_b = fa.ravel(), fb.ravel()
+    V = points[flat_a[pa]]
+    A1, A2 = points[flat_a[base + _NEXT[pa - base]]], points[flat_a[base + _PREV[pa - base]]]
+    B1, B2 = points[flat_b[base + _NEXT[pb - base]]], points[flat_b[base + _PREV[pb - base]]]
+    plane = Planes(V, A1, A2, safe)
+    s1, s2 = plane.side(B1), plane.side(B2)
+    near = (s1 != s2) | (s1 == 0)
+    rest = np.flatnonzero(near)
+    if rest.size:
+        plane = Planes(V[rest], B1[rest], B2[rest], safe)
+        t1, t2 = plane.side(A1[rest]), plane.side(A2[rest])
+        near[rest] = (t1 != t2) | (t1 == 0)
+    return near
+
+
+def _edge_pairs(points, fa, fb, on_a, on_b, safe) -> np.ndarray:
     """Faces sharing exactly one edge: nothing unless coplanar and on the same side of it."""
-    free_a = np.argmin(same.any(axis=2), axis=1)            # A's corner not on the shared edge
-    free_b = np.argmin(same.any(axis=1), axis=1)
+    free_a, free_b = _first(~on_a), _first(~on_b)           # the corners off the shared edge
     rows = np.arange(len(fa))
     A = points[fa]
     planes = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
@@ -123,7 +163,8 @@ def _projection(planes: Planes, rows: np.ndarray, A: np.ndarray, safe: bool) -> 
     normal = np.abs(np.stack([n[rows] for n in planes.normal], axis=1))
     axes = np.argmax(normal, axis=1)
     for _ in range(2):
-        flat = np.flatnonzero(orient2d(*(_project(A[:, c], axes) for c in range(3)), safe=safe) == 0)
+        a, b, c = (_project(A[:, k], axes) for k in range(3))
+        flat = np.flatnonzero(orient2d(a, b, c, safe) == 0)
         if flat.size == 0:
             break
         axes[flat] = (axes[flat] + 1) % 3
@@ -139,7 +180,8 @@ def _project(x: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 def _facing(points, f, axes, safe) -> np.ndarray:
     """The orientation of each face seen along its projection axis (+1 or -1)."""
-    return orient2d(*(_project(points[f[:, c]], axes) for c in range(3)), safe=safe)
+    a, b, c = (_project(points[f[:, k]], axes) for k in range(3))
+    return orient2d(a, b, c, safe)
 
 
 def _sides(planes: Planes, T: np.ndarray, same_as_plane: np.ndarray) -> np.ndarray:
@@ -163,21 +205,21 @@ def _subset(planes: Planes, rows: np.ndarray) -> Planes:
     return sub
 
 
-def _general(points, fa, fb, same, safe):
+def _general(points, fa, fb, on_a, on_b, safe):
     """Pairs sharing at most one vertex."""
     k = len(fa)
     kind = np.zeros(k, dtype=np.int8)
     edges = np.full((k, 2, 2), -1, dtype=np.int64)
     A, B = points[fa], points[fb]
     plane_a = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
-    s = _sides(plane_a, B, same.any(axis=1))                # B's corners against A's plane
+    s = _sides(plane_a, B, on_b)                            # B's corners against A's plane
     apart = (s.min(axis=1) > 0) | (s.max(axis=1) < 0)
     live = np.flatnonzero(~apart)
     if live.size == 0:
         return kind, edges
-    A, B, s, same = A[live], B[live], s[live], same[live]
+    A, B, s, on_a, fa, fb = A[live], B[live], s[live], on_a[live], fa[live], fb[live]
     plane_b = Planes(B[:, 0], B[:, 1], B[:, 2], safe)
-    t = _sides(plane_b, A, same.any(axis=2))                # A's corners against B's plane
+    t = _sides(plane_b, A, on_a)                            # A's corners against B's plane
     apart = (t.min(axis=1) > 0) | (t.max(axis=1) < 0)
     flat = (s == 0).all(axis=1)
     rows = np.flatnonzero(flat & ~apart)
@@ -185,7 +227,8 @@ def _general(points, fa, fb, same, safe):
         kind[live[rows]] = _coplanar(_subset(plane_a, live[rows]), A[rows], B[rows], safe)
     rows = np.flatnonzero(~flat & ~apart)
     if rows.size:
-        kind[live[rows]], edges[live[rows]] = _crossing(A[rows], B[rows], s[rows], t[rows], safe)
+        kind[live[rows]], edges[live[rows]] = _crossing(A[rows], B[rows], fa[rows], fb[rows], s[rows], t[rows],
+                                                        safe)
     return kind, edges
 
 
@@ -203,7 +246,7 @@ def _apex(sign: np.ndarray):
     return apex, factor, straddle
 
 
-def _crossing(A, B, s, t, safe):
+def _crossing(A, B, fa, fb, s, t, safe):
     """Non-coplanar pairs whose faces each meet the other's plane: compare ``I_A`` and ``I_B``."""
     k = len(A)
     rows = np.arange(k)
@@ -218,8 +261,11 @@ def _crossing(A, B, s, t, safe):
     b_hi = np.where(f_b > 0, _PREV[apex_b], _NEXT[apex_b])
     factor = (f_a * f_b).astype(np.int8)
     # cmp(p, r) = sign(D·(r - p)) = orient3d(a, x, d, y) · f_a · f_b
-    lo_hi = Planes(a, A[rows, a_lo], d, safe).side(B[rows, b_hi]) * factor      # lo_A vs hi_B
-    hi_lo = Planes(a, A[rows, a_hi], d, safe).side(B[rows, b_lo]) * factor      # hi_A vs lo_B
+    a_id, d_id = fa[rows, apex_a], fb[rows, apex_b]
+    lo_hi = _orient(a, A[rows, a_lo], d, B[rows, b_hi], a_id, fa[rows, a_lo], d_id, fb[rows, b_hi], safe)
+    hi_lo = _orient(a, A[rows, a_hi], d, B[rows, b_lo], a_id, fa[rows, a_hi], d_id, fb[rows, b_lo], safe)
+    lo_hi *= factor                                        # lo_A against hi_B
+    hi_lo *= factor                                        # hi_A against lo_B
     strict = (lo_hi > 0) & (hi_lo < 0)
     kind = np.zeros(k, dtype=np.int8)
     kind[strict & straddle_a & straddle_b] = CROSSING
@@ -238,6 +284,15 @@ def _crossing(A, B, s, t, safe):
         second = 2 - np.argmax(zero[:, ::-1], axis=1)
         edges[rows_on, face, 0], edges[rows_on, face, 1] = first, second
     return kind, edges
+
+
+def _orient(a, x, d, y, a_id, x_id, d_id, y_id, safe) -> np.ndarray:
+    """``orient3d(a, x, d, y)`` row by row. Two of the four being one vertex (a corner the
+    faces share) makes it exactly zero: such rows get points the filter proves zero at once (a
+    repeated point, so a zero difference) instead of a float value it cannot decide."""
+    d = np.where((x_id == d_id)[:, None], a, d)
+    y = np.where(((y_id == a_id) | (y_id == x_id) | (y_id == d_id))[:, None], a, y)
+    return Planes(a, x, d, safe).side(y)
 
 
 def _coplanar(plane_a: Planes, A, B, safe) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from p3d_cli.mesh.report import TopologyReport
-from p3d_cli.mesh.topology import topology_of_blocks
+from p3d_cli.mesh.topology import topology_and_layout
 
 #: The checks ``p3d check --require`` can ask for, and what each needs.
 CHECKS = {
@@ -15,7 +15,13 @@ CHECKS = {
     "manifold": "no edge used by more than two faces, no vertex joining separate fans of faces",
     "no-degenerate": "no face with zero area or a repeated vertex",
     "no-duplicate": "no two faces with the same three vertices",
+    "no-self-intersection": "no two faces whose interiors cross or overlap (decided exactly)",
+    "nesting": "closed shells nest as a solid's: a shell inside another is wound opposite to it (a cavity), "
+               "so no volume is counted twice",
 }
+
+#: The checks that need the self-intersection pass (the costliest: run only when required).
+SOLIDITY = ("no-self-intersection", "nesting")
 
 
 def passes(report: TopologyReport, check: str) -> bool:
@@ -32,6 +38,10 @@ def passes(report: TopologyReport, check: str) -> bool:
         return report.degenerate_faces == 0
     if check == "no-duplicate":
         return report.duplicate_faces == 0
+    if check == "no-self-intersection":
+        return report.self_intersections is not None and report.self_intersections.count == 0
+    if check == "nesting":
+        return report.nesting is not None and report.nesting.ok
     raise KeyError(check)
 
 
@@ -97,8 +107,12 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
                          "export the boundary surface")
     if mesh.face_count == 0:
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
-    report = topology_of_blocks(mesh.read_blocks, mesh.face_count, where)
+    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, where)
     required = tuple(required)
+    if any(name in required for name in SOLIDITY) and layout is not None:
+        from p3d_cli.mesh.solidity import with_solidity
+
+        report = with_solidity(report, mesh.read_blocks, layout)
     failed = [name for name in required if not passes(report, name)]
     if min_volume is not None and not report.volume >= min_volume:
         failed.append("min-volume")

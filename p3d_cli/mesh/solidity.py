@@ -1,0 +1,20 @@
+"""Does a mesh bound a solid? Its self-intersections and its shells' nesting, added to the
+topology report of ``p3d check`` (the passes that need the vertex ids the topology found)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from p3d_cli.mesh.intersections import self_intersections
+from p3d_cli.mesh.layout import Layout, vertex_points
+from p3d_cli.mesh.nesting import shell_nesting
+from p3d_cli.mesh.report import TopologyReport
+
+
+def with_solidity(report: TopologyReport, blocks, layout: Layout) -> TopologyReport:
+    """``report`` with its ``self_intersections`` and its shells' ``nesting`` (one more pass
+    over ``blocks()`` for the vertices' coordinates)."""
+    points = vertex_points(blocks, layout)
+    found = self_intersections(points, layout.faces, layout.zero_area, layout.crowded_edges)
+    nesting = shell_nesting(points, layout, found.pairs)
+    return dataclasses.replace(report, self_intersections=found, nesting=nesting)
