@@ -208,7 +208,8 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
 
 
 def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,
-          max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None):
+          max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None,
+          weld: float | None = None):
     """Is a mesh a clean solid? Closed, oriented, outward, manifold, no degenerate or duplicate faces.
 
     Parameters
@@ -223,6 +224,9 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
         Also fail a mesh with more faces than this.
     format, stdin
         As for ``props``.
+    weld : float, optional
+        Merge vertices within this distance (in the file's units) before checking; the result's
+        ``weld`` says how many were merged and the largest distance. Never done without it.
 
     Returns
     -------
@@ -243,12 +247,16 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
                          "check mesh files")
-    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces)
+    if weld is not None:
+        from p3d_cli.mesh.weld import check_tolerance
+
+        weld = check_tolerance(weld)
+    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, weld)
     if not solid.mesh.objects:
         return whole
     # A multi-object file: each object is checked on its own, and the whole (where objects
     # that touch or overlap show as shared edges or duplicate faces).
-    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces))
+    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, weld))
                   for name, part in solid.mesh.objects)
     failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
     return dataclasses.replace(whole, failed=failed, parts=parts)

@@ -143,6 +143,8 @@ def check_record(result: CheckResult) -> dict:
         "self_intersections": None if r.self_intersections is None else r.self_intersections.to_dict(),
         "nesting": None if r.nesting is None else r.nesting.to_dict(),
     })
+    if result.weld is not None:
+        record["weld"] = result.weld.to_dict()
     if result.parts:
         record["parts"] = [{"name": name, **check_record(part)} for name, part in result.parts]
     return record
@@ -185,6 +187,10 @@ def check_text(result: CheckResult) -> str:
         # Break before the details when that makes the verdict fit; a name too long for any
         # layout to fit keeps its verdict on one line, which greps better.
         lines = [f"{name}: {head}", f"  {details}"]
+    if result.weld is not None:
+        w = result.weld
+        lines.append(f"  welded {w.vertices} {'vertex' if w.vertices == 1 else 'vertices'} within "
+                     f"{output.number(w.tolerance)} (largest distance {output.number(w.largest_distance)})")
     for key, noun, samples in _COUNTS:
         count = getattr(r, key)
         if count:
@@ -316,11 +322,14 @@ def _sample_text(sample) -> str:
               help="Also fail a mesh whose signed volume is below V.")
 @click.option("--max-faces", type=click.IntRange(min=0), default=None, metavar="N",
               help="Also fail a mesh with more than N faces.")
+@click.option("--weld", type=FiniteFloat(), default=None, metavar="TOL",
+              help="Merge vertices closer than TOL (in the file's units) before checking, and say how "
+                   "many and how far apart they were (never done without it).")
 @json_option
 @field_option
 @config_option
 @batch_options
-def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch):
+def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch, weld=None):
     """Check that meshes are clean solids: one verdict per file, and an exit status.
 
     Each mesh is checked for being closed (every edge used by exactly two faces, in
@@ -352,12 +361,16 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
       p3d check exports/ --json > verdicts.jsonl
       p3d check part.stl --require closed,outward --min-volume 1e-6 --max-faces 200000
       find . -name '*.stl' | p3d check --files-from - --csv --jobs 8
+      p3d check scan.stl --weld 1e-6
     """
     required = parse_require(require) if require else None   # None: the settings', or all
     style = output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
+    if weld is not None and not weld > 0:
+        raise UsageError("--weld", f"{weld} is not positive", "give the largest distance of vertices to merge")
     work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
-                             require=required, min_volume=min_volume, max_faces=max_faces)
+                             require=required, min_volume=min_volume, max_faces=max_faces,
+                             **({"weld": weld} if weld is not None else {}))
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from p3d_cli.mesh.report import TopologyReport
 from p3d_cli.mesh.topology import topology_and_layout
+from p3d_cli.mesh.weld import Weld
 
 #: The checks ``p3d check --require`` can ask for, and what each needs.
 CHECKS = {
@@ -61,6 +62,8 @@ class CheckResult:
         broken, then ``NAME:CHECK`` for each check an object of a multi-object file failed.
     parts : tuple of (str, CheckResult)
         For a file of several objects (glTF nodes, 3MF build items), each object's verdict.
+    weld : Weld or None
+        With a weld tolerance: what was merged before the checks (``p3d_cli.mesh.weld``).
     """
 
     source: str
@@ -69,6 +72,7 @@ class CheckResult:
     required: tuple[str, ...]
     failed: tuple[str, ...]
     parts: tuple = ()
+    weld: Weld | None = None
 
     @property
     def ok(self) -> bool:
@@ -76,7 +80,7 @@ class CheckResult:
 
 
 def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
-                 max_faces: int | None = None) -> CheckResult:
+                 max_faces: int | None = None, weld: float | None = None) -> CheckResult:
     """Check a loaded mesh against the required checks and limits.
 
     The triangles are read block by block (twice, and once more for the volumes of several
@@ -93,6 +97,9 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         Fail when the total signed volume is below this.
     max_faces : int, optional
         Fail when the mesh has more faces than this.
+    weld : float, optional
+        Merge vertices within this distance (the file's units) before the checks; never done
+        without it (``p3d_cli.mesh.weld``).
 
     Raises
     ------
@@ -107,6 +114,13 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
                          "export the boundary surface")
     if mesh.face_count == 0:
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
+    welded = None
+    if weld is not None:
+        from p3d_cli.io.source import array_source
+        from p3d_cli.mesh.weld import weld_triangles
+
+        triangles, welded = weld_triangles(_finite(mesh, where), weld)
+        mesh = array_source(mesh.format, triangles, "float64")
     report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, where)
     required = tuple(required)
     if any(name in required for name in SOLIDITY) and layout is not None:
@@ -118,4 +132,17 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         failed.append("min-volume")
     if max_faces is not None and report.faces > max_faces:
         failed.append("max-faces")
-    return CheckResult(source, mesh.format, report, required, tuple(failed))
+    return CheckResult(source, mesh.format, report, required, tuple(failed), weld=welded)
+
+
+def _finite(mesh, where: str):
+    """All of ``mesh``'s triangles, refusing a NaN or infinite coordinate (``InputError``)."""
+    import numpy as np
+
+    from p3d_cli.io.source import first_nonfinite, nonfinite_error
+
+    triangles = mesh.triangles()
+    bad = first_nonfinite(triangles)
+    if bad is not None:
+        raise nonfinite_error(where, bad)
+    return np.asarray(triangles, dtype=np.float64)
