@@ -260,3 +260,34 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
                   for name, part in solid.mesh.objects)
     failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
     return dataclasses.replace(whole, failed=failed, parts=parts)
+
+
+def self_intersections(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = None):
+    """The face pairs of a mesh whose interiors cross or overlap, decided exactly.
+
+    Faces that share an edge or a vertex, or touch without crossing, are never reported;
+    crossings, coplanar overlaps and folds are, wherever the mesh sits (docs/method.md,
+    "Self-intersections"). This is ``check(thing, require=["no-self-intersection"])``'s
+    ``report.self_intersections``.
+
+    Parameters
+    ----------
+    thing, format, stdin
+        As for ``check``.
+
+    Returns
+    -------
+    SelfIntersections
+        ``count``, ``by_kind``, ``pairs`` (every pair of face indices), ``kinds`` and
+        ``samples`` (the first pairs, with a point where each meets).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import p3d_cli as p3d
+    >>> cube = p3d.Box(1, 1, 1).triangles()           # [-1, 1]^3
+    >>> p3d.self_intersections(np.concatenate([cube, cube + 1])).count
+    6
+    """
+    result = check(thing, require=["no-self-intersection"], format=format, stdin=stdin)
+    return result.report.self_intersections

@@ -13,10 +13,11 @@ the way one goes leaves the solid (winding number - 1), against it enters (+ 1).
 numbers of the sectors between the half-planes, up to a constant, follow. Two sheets that only
 touch leave every sector within two consecutive values (0 and 1 for an outward solid: two
 cubes side by side, a part resting on another); sheets that cross make one sector differ from
-another by two or more (a region the divergence theorem counts twice or not at all). Half-planes
-at the same angle (faces lying on each other) are ordered as if each sheet had shrunk a little
-into its own solid: the faces one leaves the solid through come first. So two solids pressed
-face to face touch, and a sheet that runs along another and then passes through it crosses.
+another by two or more (a region the divergence theorem counts twice or not at all). Only
+sectors of positive width count: faces lying on each other (two solids pressed face to face, a
+flap of two opposite faces, as scans hold) leave zero-width sectors, which some order of those
+faces keeps within the other sectors' values; a sheet that runs along another and then passes
+through it shows where it leaves.
 """
 
 from __future__ import annotations
@@ -60,10 +61,11 @@ class Line:
         return -sign(dot(normal, moving))
 
 
-def windings(line: Line, half_planes: list) -> list[tuple[int, int]]:
+def windings(line: Line, half_planes: list) -> list[tuple[int, int, bool]]:
     """The half-planes ``(q, normal, face)`` in counter-clockwise order around ``line``, each
-    with the winding number (up to a constant) of the sector that follows it; faces lying on
-    each other leave zero-width sectors between them, which count.
+    as ``(face, w, wide)``: ``w`` the winding number (up to a constant) of the sector that
+    follows it, ``wide`` whether that sector has positive width (the next half-plane is at
+    another angle; faces lying on each other leave zero-width sectors between them).
 
     Returns an empty list when the steps do not add up to zero (an open edge, or a surface that
     is not consistently oriented there: no winding number is defined).
@@ -73,37 +75,42 @@ def windings(line: Line, half_planes: list) -> list[tuple[int, int]]:
     q0 = half_planes[0][0]
     keyed = [(line.turn(q0, q), q, line.step(normal, q), face) for q, normal, face in half_planes]
 
-    def compare(x, y) -> int:
+    def angle(x, y) -> int:
         if x[0] != y[0]:
             return -1 if x[0] < y[0] else 1
-        if x[0] in (1, 3):
-            c = line.order(x[1], y[1])
-            if c:
-                return c
-        return x[2] - y[2]      # same angle: leaving (-1) before entering (+1)
+        return line.order(x[1], y[1]) if x[0] in (1, 3) else 0
 
-    ordered = sorted(keyed, key=cmp_to_key(compare))
+    ordered = sorted(keyed, key=cmp_to_key(angle))
     if sum(x[2] for x in ordered) != 0:
         return []
     out, w = [], 0
-    for _, _, step, face in ordered:
+    for k, (_, _, step, face) in enumerate(ordered):
         w += step
-        out.append((face, w))
+        wide = angle(ordered[k], ordered[(k + 1) % len(ordered)]) != 0 or len(ordered) == 1
+        out.append((face, w, wide))
     return out
 
 
 def crossing_faces(line: Line, half_planes: list) -> list[tuple[int, int]]:
-    """The face pairs that bound the sectors of highest and lowest winding number when the
-    sheets around ``line`` cross (the windings span more than two consecutive values), else []."""
+    """The face pairs bounding the sectors of highest and lowest winding number when the
+    sheets around ``line`` cross, else [].
+
+    They cross when the sectors of positive width span more than two consecutive winding
+    numbers. Zero-width sectors (faces lying on each other) do not count: whether two
+    coincident faces are two solids pressed together or a sheet of no thickness, some order
+    of the two keeps their sector within the others' winding numbers, and a crossing that
+    runs along such faces shows in the wide sectors where the sheet leaves them.
+    """
     w = windings(line, half_planes)
-    if not w:
+    wide = [(k, x) for k, (_, x, is_wide) in enumerate(w) if is_wide]
+    if not wide:
         return []
-    values = [x for _, x in w]
+    values = [x for _, x in wide]
     if max(values) - min(values) < 2:
         return []
     out = set()
     for target in (max(values), min(values)):
-        k = values.index(target)
+        k = next(k for k, x in wide if x == target)
         a, b = w[k][0], w[(k + 1) % len(w)][0]
         if a != b:
             out.add((min(a, b), max(a, b)))
