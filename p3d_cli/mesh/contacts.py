@@ -13,11 +13,11 @@ the way one goes leaves the solid (winding number - 1), against it enters (+ 1).
 numbers of the sectors between the half-planes, up to a constant, follow. Two sheets that only
 touch leave every sector within two consecutive values (0 and 1 for an outward solid: two
 cubes side by side, a part resting on another); sheets that cross make one sector differ from
-another by two or more (a region the divergence theorem counts twice or not at all). Only
-sectors of positive width count: faces lying on each other (two solids pressed face to face, a
-flap of two opposite faces, as scans hold) leave zero-width sectors, which some order of those
-faces keeps within the other sectors' values; a sheet that runs along another and then passes
-through it shows where it leaves.
+another by two or more (a region the divergence theorem counts twice or not at all). Faces
+lying on each other count as one: two solids pressed face to face, or a flap of two opposite
+faces (scans hold them), cancel; faces facing the same way (an overlap the pair test reports,
+a duplicate the duplicate check reports) count once. A sheet that runs along another and then
+passes through it shows where it leaves.
 """
 
 from __future__ import annotations
@@ -61,14 +61,16 @@ class Line:
         return -sign(dot(normal, moving))
 
 
-def windings(line: Line, half_planes: list) -> list[tuple[int, int, bool]]:
-    """The half-planes ``(q, normal, face)`` in counter-clockwise order around ``line``, each
-    as ``(face, w, wide)``: ``w`` the winding number (up to a constant) of the sector that
-    follows it, ``wide`` whether that sector has positive width (the next half-plane is at
-    another angle; faces lying on each other leave zero-width sectors between them).
+def windings(line: Line, half_planes: list) -> list[tuple[int, int]]:
+    """The half-planes ``(q, normal, face)`` in counter-clockwise order around ``line``, as
+    ``(face, w)``: ``w`` the winding number (up to a constant) of the sector that follows.
 
-    Returns an empty list when the steps do not add up to zero (an open edge, or a surface that
-    is not consistently oriented there: no winding number is defined).
+    Faces lying on each other (half-planes at one angle) are one step, the sign of theirs
+    added: a face and one facing it cancel (two solids pressed together, a flap of two
+    opposite faces: nothing there), faces facing the same way count once (their overlap is
+    the pair test's, their repetition the duplicate check's). Returns an empty list when the
+    steps do not add up to zero (an open edge, or a surface not consistently oriented there:
+    no winding number is defined).
     """
     if not half_planes:
         return []
@@ -81,36 +83,36 @@ def windings(line: Line, half_planes: list) -> list[tuple[int, int, bool]]:
         return line.order(x[1], y[1]) if x[0] in (1, 3) else 0
 
     ordered = sorted(keyed, key=cmp_to_key(angle))
-    if sum(x[2] for x in ordered) != 0:
+    groups: list[list] = []
+    for item in ordered:
+        if groups and angle(groups[-1][0], item) == 0:
+            groups[-1].append(item)
+        else:
+            groups.append([item])
+    steps = [(group[0][3], sign(sum(x[2] for x in group))) for group in groups]
+    steps = [(face, step) for face, step in steps if step]
+    if sum(step for _, step in steps) != 0:
         return []
     out, w = [], 0
-    for k, (_, _, step, face) in enumerate(ordered):
+    for face, step in steps:
         w += step
-        wide = angle(ordered[k], ordered[(k + 1) % len(ordered)]) != 0 or len(ordered) == 1
-        out.append((face, w, wide))
+        out.append((face, w))
     return out
 
 
 def crossing_faces(line: Line, half_planes: list) -> list[tuple[int, int]]:
     """The face pairs bounding the sectors of highest and lowest winding number when the
-    sheets around ``line`` cross, else [].
-
-    They cross when the sectors of positive width span more than two consecutive winding
-    numbers. Zero-width sectors (faces lying on each other) do not count: whether two
-    coincident faces are two solids pressed together or a sheet of no thickness, some order
-    of the two keeps their sector within the others' winding numbers, and a crossing that
-    runs along such faces shows in the wide sectors where the sheet leaves them.
-    """
+    sheets around ``line`` cross (their sectors span more than two consecutive winding
+    numbers), else []."""
     w = windings(line, half_planes)
-    wide = [(k, x) for k, (_, x, is_wide) in enumerate(w) if is_wide]
-    if not wide:
+    if not w:
         return []
-    values = [x for _, x in wide]
+    values = [x for _, x in w]
     if max(values) - min(values) < 2:
         return []
     out = set()
     for target in (max(values), min(values)):
-        k = next(k for k, x in wide if x == target)
+        k = values.index(target)
         a, b = w[k][0], w[(k + 1) % len(w)][0]
         if a != b:
             out.add((min(a, b), max(a, b)))
