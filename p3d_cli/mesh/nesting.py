@@ -152,11 +152,15 @@ def _nest(points, faces, labels, ids, volume, relations, parent, lo, hi) -> None
 
 
 def _inside(points, faces, order, starts, inner, outer_faces, safe) -> int | None:
-    """The winding number of a vertex of shell ``inner`` about shell ``outer`` (None when
-    every vertex tried lies on the outer surface)."""
-    members = order[starts[inner]:starts[inner + 1]]
-    for v in np.unique(faces[members[:_TRIES]].ravel())[:_TRIES]:
-        w = winding_number(points[v], outer_faces, safe)
+    """The winding number about shell ``outer`` of a point of shell ``inner``'s surface: a
+    vertex, or the midpoint of an edge (exact in floats), that does not lie on the outer
+    surface (None when every point tried does)."""
+    members = order[starts[inner]:starts[inner + 1]][:_TRIES]
+    corners = points[faces[members]]
+    tries = [points[v] for v in np.unique(faces[members].ravel())[:_TRIES]]
+    tries += [(corners[k, i] + corners[k, (i + 1) % 3]) / 2 for k in range(len(members)) for i in range(3)]
+    for p in tries:
+        w = winding_number(p, outer_faces, safe)
         if w is not None:
             return w
     return None

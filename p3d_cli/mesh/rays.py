@@ -9,7 +9,8 @@ Every sign is exact (``p3d_cli.geometry.predicates``). A ray through an edge or 
 resolved by simulation of simplicity (Edelsbrunner and Mücke, *ACM Trans. Graphics* 9(1),
 1990): the point is moved by ``(0, ε, ε²)``, which lies on no edge line, so each edge is
 passed on one side, the same for its two faces. A point exactly on the surface has no winding
-number and is reported as such (``None``).
+number and is reported as such (``None``): it lies in the plane of a face whose box holds it,
+and inside that face's triangle (closed), decided exactly too.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ def winding_number(point: np.ndarray, triangles_of, safe: bool = True) -> int | 
     p2 = point[1:][None, :]
     total = 0
     for tri in triangles_of():
+        if _on_a_face(point, tri, safe):
+            return None
         # Faces the ray can meet: their y and z ranges hold the point's (a face passed only
         # at its rim is decided by the perturbed sides below, which never count it twice).
         y, z = tri[:, :, 1], tri[:, :, 2]
@@ -76,8 +79,30 @@ def winding_number(point: np.ndarray, triangles_of, safe: bool = True) -> int | 
             continue
         tri, facing = tri[rows], facing[rows]
         level = Planes(tri[:, 0], tri[:, 1], tri[:, 2], safe).side(np.broadcast_to(point, (rows.size, 3)).copy())
-        if (level == 0).any():
-            return None                                       # the point lies on a face
         ahead = level != facing                               # the face is met at x > point's x
         total += int(facing[ahead].sum())
     return total
+
+
+def _on_a_face(point: np.ndarray, tri: np.ndarray, safe: bool) -> bool:
+    """Whether ``point`` lies on one of the triangles ``(k, 3, 3)`` (closed), exactly."""
+    near = ((tri.min(axis=1) <= point) & (tri.max(axis=1) >= point)).all(axis=1)
+    tri = tri[near]
+    if len(tri) == 0:
+        return False
+    flat = Planes(tri[:, 0], tri[:, 1], tri[:, 2], safe).side(np.broadcast_to(point, (len(tri), 3)).copy()) == 0
+    tri = tri[flat]
+    for axis in range(3):           # a coordinate plane where the triangle is not a segment
+        keep = [(axis + 1) % 3, (axis + 2) % 3]
+        a, b, c = (np.ascontiguousarray(tri[:, k][:, keep]) for k in range(3))
+        area = orient2d(a, b, c, safe)
+        rows = area != 0
+        if rows.any():
+            p = np.broadcast_to(point[keep], (int(rows.sum()), 2))
+            sides = [orient2d(u[rows], v[rows], p, safe) * area[rows] for u, v in ((a, b), (b, c), (c, a))]
+            if ((sides[0] >= 0) & (sides[1] >= 0) & (sides[2] >= 0)).any():
+                return True
+        tri = tri[~rows]
+        if len(tri) == 0:
+            return False
+    return False
