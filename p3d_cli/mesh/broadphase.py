@@ -7,20 +7,33 @@ level a box spans at most two cells along each axis, so a face is entered in at 
 cells. Two boxes that overlap then share a cell at the coarser level of the two:
 
 - faces of the same level are paired within each cell (their entries sorted by cell: one
-  ``numpy.sort`` of packed 64-bit keys ``cell | face``);
+  ``numpy.sort`` of packed 64-bit keys ``cell | face | bits``), the cells of each size at
+  once, from the upper triangle of a table of that size (no per-pair index arithmetic);
 - a face of a finer level is looked up in the cells of each coarser level that holds faces
   (at most eight cells per level, usually one or two), and paired with the faces there.
 
 A pair that shares several cells is kept in one only: the cell whose coordinates are, along
 each axis, the larger of the two boxes' first cells (the cell holding the lower corner of the
 boxes' intersection). Each entry carries three bits saying along which axes its face starts in
-the entry's cell; a pair is kept where, along every axis, one of the two starts. Kept pairs
-are then filtered by the exact box overlap test.
+the entry's cell; a pair is kept where, along every axis, one of the two starts.
 
+Pairs are tested within their cell on boxes quantised to 1/256 of the cell, rounded outwards
+by a step (so never smaller), packed six 9-bit fields to a 64-bit word: the upper corner and
+the complement of the lower corner, ``[hx, hy, hz, 255-lx, 255-ly, 255-lz]``, and the lower
+word ``[lx, ly, lz, 255-hx, 255-hy, 255-hz]``. Boxes i and j overlap along every axis exactly
+when every field of ``H_j`` is at least the one of ``L_i``, which one subtraction decides for
+all six (a guard bit per field stays set where the field did not borrow; a SIMD-within-a-
+register compare). The start bits ride in the same words. So a candidate pair costs two
+loads and a few integer operations. A pair whose quantised boxes meet may still have boxes
+that do not (within a step of each other): the callers test faces exactly anyway, and
+``box_pairs`` filters them when exact box pairs are wanted.
+
+Levels are cut into slabs along x of at most ``SLAB`` entries, each sorted and paired on its
+own (a cell belongs to one slab, so a pair is still kept once), which bounds the memory.
 The work is linear in the number of faces for meshes whose faces are of a few sizes (a scan,
-a tessellated CAD part), plus the number of overlapping pairs; pairs come out in chunks so that
-memory stays bounded. References: the uniform grid and its hierarchical form for collision
-detection (C. Ericson, *Real-Time Collision Detection*, Morgan Kaufmann 2005, ch. 7).
+a tessellated CAD part), plus the number of overlapping pairs. References: the uniform grid
+and its hierarchical form (C. Ericson, *Real-Time Collision Detection*, Morgan Kaufmann 2005,
+ch. 7); SIMD within a register (H. S. Warren, *Hacker's Delight*, 2nd ed., 2012, ch. 2).
 """
 
 from __future__ import annotations
@@ -33,7 +46,22 @@ import numpy as np
 PAIR_CHUNK = 1 << 16
 #: The typical extent: this quantile of the faces' largest box extents (faces above it go to
 #: coarser levels, whose cells are twice as large per level).
-TYPICAL = 0.75
+TYPICAL = 0.9
+#: Cell size as a multiple of the typical extent: larger cells hold more faces (more pairs
+#: to test, which is cheap) but enter each face in fewer cells (fewer entries to sort).
+SCALE = 2.0
+#: Entries per slab of a level's grid (bounds the memory of the sort).
+SLAB = 1 << 20
+
+Pairs = Iterator[tuple[np.ndarray, np.ndarray]]
+Blocks = Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+_FIELD = 9
+_DATA = np.uint64(sum(0xFF << (_FIELD * k) for k in range(6)))
+_GUARD = np.uint64(sum(0x100 << (_FIELD * k) for k in range(6)))
+_START_SHIFT = np.uint64(6 * _FIELD)
+_SEVEN = np.uint64(7)
+_BYTE = np.uint64(255)
 
 
 def outward_boxes(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -44,9 +72,6 @@ def outward_boxes(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarra
     high = hi32.astype(np.float64) < hi
     hi32[high] = np.nextafter(hi32[high], np.float32(np.inf))
     return lo32, hi32
-
-
-Pairs = Iterator[tuple[np.ndarray, np.ndarray]]
 
 
 def box_pairs(lo: np.ndarray, hi: np.ndarray, faces: np.ndarray | None = None) -> Pairs:
@@ -65,132 +90,232 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray, faces: np.ndarray | None = None) -
     (k,) int64, (k,) int64
         Face numbers, in no particular order within a pair.
     """
+    index = np.arange(len(lo)) if faces is None else np.asarray(faces)
+    for members, p, q in pair_blocks(lo, hi):
+        i, j = members[p], members[q]
+        keep = _overlap(lo, hi, i, j)
+        if keep.any():
+            yield index[i[keep]], index[j[keep]]
+
+
+def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
+    """``(members, p, q)``: the box numbers ``members`` of a block of grid cells and the pairs
+    ``(members[p], members[q])`` among them whose quantised boxes overlap (every overlapping
+    pair of boxes once, and a few within a quantisation step). A block holds a run of cells,
+    so the callers gather each face's data once per block, then index it locally per pair."""
     n = len(lo)
-    if faces is None:
-        faces = np.arange(n, dtype=np.int64)
     if n < 2:
         return
-    extent = (hi - lo).max(axis=1).astype(np.float64)
-    cell = float(np.quantile(extent, TYPICAL)) if n > 1 else 0.0
+    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2]).astype(np.float64)
+    cell = float(np.quantile(extent, TYPICAL)) * SCALE
     if not cell > 0:
         positive = extent[extent > 0]
         cell = float(positive.min()) if positive.size else 1.0
     # The grid's origin and the cell size: floor((x - origin) / size) for every coordinate.
     origin = lo.min(axis=0).astype(np.float64)
-    level = np.zeros(n, dtype=np.int64)
+    level = np.zeros(n, dtype=np.int8)
     big = extent > cell
-    level[big] = np.ceil(np.log2(extent[big] / cell)).astype(np.int64)
+    level[big] = np.ceil(np.log2(extent[big] / cell)).astype(np.int8)
     # log2 rounds: make sure every box fits its level's cells (at most two per axis).
     while True:
-        short = extent > cell * np.exp2(level)
-        if not short.any():
+        short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
+        if not short.size:
             break
         level[short] += 1
-    levels = np.unique(level)
-    grids = {int(L): _Grid(lo, hi, np.flatnonzero(level == L), origin, cell * 2.0 ** int(L)) for L in levels}
-    for L, grid in grids.items():
-        for i, j in grid.own_pairs():
-            yield faces[i], faces[j]
-        # Finer faces whose boxes meet the box of this level's faces.
-        finer = np.flatnonzero((level < L) & (lo <= grid.box_hi).all(axis=1) & (hi >= grid.box_lo).all(axis=1))
-        for start in range(0, finer.size, PAIR_CHUNK):
-            for i, j in grid.probe(finer[start:start + PAIR_CHUNK]):
-                yield faces[i], faces[j]
+    del big, extent
+    top = hi.max(axis=0).astype(np.float64)
+    levels = np.unique(level).tolist()
+    for L in levels:
+        members = np.flatnonzero(level == L)
+        size = cell * 2.0 ** L
+        for x0, x1 in _slabs(lo, hi, members, origin, size):
+            grid = _Grid(lo, hi, members, origin, size, x0, x1, top)
+            yield from grid.own_blocks()
+            if L == levels[0]:
+                continue                         # no finer faces to look up
+            # Finer faces whose boxes meet the box of this slab's faces.
+            box_lo, box_hi = grid.box()
+            near = level < L
+            for k in range(3):
+                near &= (lo[:, k] <= box_hi[k]) & (hi[:, k] >= box_lo[k])
+            finer = np.flatnonzero(near)
+            for start in range(0, finer.size, PAIR_CHUNK):
+                yield from grid.probe(finer[start:start + PAIR_CHUNK])
+            del grid
+
+
+def _cells(x: np.ndarray, origin: np.ndarray, size: float) -> np.ndarray:
+    """Integer cell coordinates ``(k, 3)`` of points (monotone in each coordinate)."""
+    return np.floor((x.astype(np.float64) - origin) / size).astype(np.int64)
+
+
+def _slabs(lo, hi, members, origin, size) -> list[tuple[int, int]]:
+    """Ranges of x cells ``[x0, x1)`` holding at most about ``SLAB`` entries each."""
+    first = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size).astype(np.int64)
+    top = int(np.floor((float(hi[members, 0].max()) - origin[0]) / size)) + 1
+    # Entries per x column (about: a face's entries all counted in its first column, at 4).
+    column = np.bincount(first, minlength=top) * 4.0
+    del first
+    cuts, running, start = [], 0.0, 0
+    for x, count in enumerate(column.tolist()):
+        if running and running + count > SLAB:
+            cuts.append((start, x))
+            start, running = x, 0.0
+        running += count
+    cuts.append((start, top))
+    return cuts
 
 
 class _Grid:
-    """The faces of one level, entered in every cell their boxes overlap, sorted by cell."""
+    """The faces of one level, entered in every cell of x range ``[x0, x1)`` their boxes
+    overlap, sorted by cell; each entry with its packed words (module docstring)."""
 
-    def __init__(self, lo: np.ndarray, hi: np.ndarray, members: np.ndarray, origin: np.ndarray, size: float):
+    def __init__(self, lo, hi, members, origin, size: float, x0: int, x1: int, top: np.ndarray):
         self.lo, self.hi, self.origin, self.size = lo, hi, origin, size
-        top = np.zeros(3, dtype=np.int64)
-        total = 0
-        for part in _slices(members):
-            last = self.cells(hi[part])
-            top = np.maximum(top, last.max(axis=0))
-            total += int((last - self.cells(lo[part]) + 1).prod(axis=1).sum())
-        self.bits = [max(int(t + 2).bit_length(), 1) for t in top]  # room for probes beyond
+        first_x = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size)
+        last_x = np.floor((hi[members, 0].astype(np.float64) - origin[0]) / size)
+        members = members[(first_x < x1) & (last_x >= x0)]
+        self.x0, self.x1 = x0, x1
+        # Room for every cell of the level (and a probe one beyond): the bits of a cell key.
+        top = np.floor((top - origin) / size).astype(np.int64) + 2
+        self.bits = [max(int(t).bit_length(), 1) for t in top]
         self.face_bits = max(int(len(lo) - 1).bit_length(), 1)
         packed = sum(self.bits) + self.face_bits + 3 <= 63
-        # One 64-bit key per entry, ``cell | face | start bits``, sorted in place: no argsort.
-        keys = np.empty(total, dtype=np.int64)
-        faces = None if packed else np.empty(total, dtype=np.int64)
-        done = 0
+        keys, faces = [], []
         for part in _slices(members):
             face, coords, starts = self._entries(part)
             key = self.pack(coords)
-            if packed:
-                keys[done:done + key.size] = (key << (self.face_bits + 3)) | (face << 3) | starts
-            else:
-                keys[done:done + key.size] = (key << 3) | starts
-                faces[done:done + key.size] = face
-            done += key.size
+            keys.append((((key << self.face_bits) | face) << 3 | starts) if packed else (key << 3 | starts))
+            if not packed:
+                faces.append(face)
+        key = np.concatenate(keys) if keys else np.zeros(0, dtype=np.int64)
+        del keys
         index = np.int32 if len(lo) < 2**31 else np.int64
         if packed:
-            keys.sort()
-            self.face = ((keys >> 3) & ((1 << self.face_bits) - 1)).astype(index)
-            self.start = (keys & 7).astype(np.int8)
-            keys >>= self.face_bits + 3
+            key.sort()
+            starts = (key & 7).astype(np.uint64)
+            key >>= 3
+            self.face = (key & ((1 << self.face_bits) - 1)).astype(index)
+            key >>= self.face_bits
         else:
-            order = np.lexsort((faces, keys))
-            keys, self.face = keys[order], faces[order].astype(index)
-            del faces, order
-            self.start = (keys & 7).astype(np.int8)
-            keys >>= 3
-        self.size_entries = keys.size
-        new = np.ones(keys.size, dtype=bool)
-        np.not_equal(keys[1:], keys[:-1], out=new[1:])
-        self.cell_start = np.flatnonzero(new)
-        self.cell_key = keys[self.cell_start]
-        self.cell_end = np.append(self.cell_start[1:], keys.size)
-        self.box_lo, self.box_hi = lo[members].min(axis=0), hi[members].max(axis=0)
+            face = np.concatenate(faces)
+            order = np.lexsort((face, key))
+            key, self.face = key[order], face[order].astype(index)
+            del order, face
+            starts = (key & 7).astype(np.uint64)
+            key >>= 3
+        new = np.ones(key.size, dtype=bool)
+        np.not_equal(key[1:], key[:-1], out=new[1:])
+        self.cell_start = np.flatnonzero(new).astype(index)
+        del new
+        self.cell_key = key[self.cell_start]
+        self.cell_end = np.append(self.cell_start[1:], index(key.size))
+        self.high, self.low = self._words(key, self.face, starts)
+        del key, starts
+        self.members = members
+
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The box around this slab's faces."""
+        if self.members.size == 0:
+            return np.full(3, np.inf), np.full(3, -np.inf)
+        return self.lo[self.members].min(axis=0), self.hi[self.members].max(axis=0)
 
     def _entries(self, part: np.ndarray):
-        """``(face, cell coordinates, start bits)`` of every cell the boxes of ``part`` overlap."""
-        first, last = self.cells(self.lo[part]), self.cells(self.hi[part])
+        """``(face, cell coordinates, start bits)`` of every cell in the slab the boxes of
+        ``part`` overlap."""
+        first, last = _cells(self.lo[part], self.origin, self.size), _cells(self.hi[part], self.origin, self.size)
         span = last - first + 1                             # 1 or 2 per axis at a face's level
         count = span.prod(axis=1)
         face = np.repeat(part, count)
         step = np.arange(face.size) - np.repeat(np.cumsum(count) - count, count)
         sx, sy = np.repeat(span[:, 0], count), np.repeat(span[:, 1], count)
         offset = np.stack([step % sx, (step // sx) % sy, step // (sx * sy)], axis=1)
+        coords = np.repeat(first, count, axis=0) + offset
+        inside = (coords[:, 0] >= self.x0) & (coords[:, 0] < self.x1)
         # Bit k: the face's box starts in this cell along axis k (see the module docstring).
-        starts = (offset == 0) @ np.array([1, 2, 4])
-        return face, np.repeat(first, count, axis=0) + offset, starts
-
-    def cells(self, x: np.ndarray) -> np.ndarray:
-        """Integer cell coordinates ``(k, 3)`` of points (monotone in each coordinate)."""
-        return np.floor((x.astype(np.float64) - self.origin) / self.size).astype(np.int64)
+        starts = (offset[:, 0] == 0) * 1 + (offset[:, 1] == 0) * 2 + (offset[:, 2] == 0) * 4
+        return face[inside], coords[inside], starts[inside]
 
     def pack(self, coords: np.ndarray) -> np.ndarray:
         by, bz = self.bits[1], self.bits[2]
         return (coords[:, 0] << (by + bz)) | (coords[:, 1] << bz) | coords[:, 2]
 
-    def own_pairs(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """Pairs of this level's faces that share a cell (kept in their owner cell)."""
-        end = np.repeat(self.cell_end, self.cell_end - self.cell_start)
-        after = end - np.arange(self.size_entries) - 1          # partners later in the same cell
-        yield from self._pairs_after(after)
+    def unpack(self, key: np.ndarray) -> np.ndarray:
+        by, bz = self.bits[1], self.bits[2]
+        return np.stack([key >> (by + bz), (key >> bz) & ((1 << by) - 1), key & ((1 << bz) - 1)], axis=1)
 
-    def probe(self, queries: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """Pairs of finer faces ``queries`` with this level's faces in the cells they overlap."""
+    def _words(self, key: np.ndarray, faces: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The packed upper and lower words of the entries ``(cell key, face, start bits)``
+        (module docstring)."""
+        high = np.empty(key.size, dtype=np.uint64)
+        low = np.empty(key.size, dtype=np.uint64)
+        scale = 256.0 / self.size
+        by, bz = self.bits[1], self.bits[2]
+        for at in range(0, key.size, PAIR_CHUNK):
+            k = key[at:at + PAIR_CHUNK]
+            face = faces[at:at + PAIR_CHUNK]
+            box_lo, box_hi = self.lo[face], self.hi[face]
+            h = starts[at:at + PAIR_CHUNK] << _START_SHIFT
+            lw = h.copy()
+            for axis, cell in enumerate((k >> (by + bz), (k >> bz) & ((1 << by) - 1), k & ((1 << bz) - 1))):
+                # Quantised to 1/256 of the cell, a step of margin each way (the rounding of the
+                # scaling never makes a quantised box smaller than the box), clipped to the cell.
+                base = (cell * 256).astype(np.float64)
+                q_lo = np.floor((box_lo[:, axis] - self.origin[axis]) * scale) - base - 1
+                q_hi = np.floor((box_hi[:, axis] - self.origin[axis]) * scale) - base + 1
+                q_lo = np.clip(q_lo, 0, 255, out=q_lo).astype(np.uint64)
+                q_hi = np.clip(q_hi, 0, 255, out=q_hi).astype(np.uint64)
+                h |= (q_hi << np.uint64(_FIELD * axis)) | ((_BYTE - q_lo) << np.uint64(_FIELD * (axis + 3)))
+                lw |= (q_lo << np.uint64(_FIELD * axis)) | ((_BYTE - q_hi) << np.uint64(_FIELD * (axis + 3)))
+            high[at:at + PAIR_CHUNK], low[at:at + PAIR_CHUNK] = h, lw
+        return high, low
+
+    def own_blocks(self) -> Blocks:
+        """This level's pairs that share a cell (kept in their owner cell, boxes overlapping),
+        a block of whole cells at a time: ``(faces of the block's entries, p, q)``."""
+        cells = self.cell_start.size
+        first = 0
+        while first < cells:
+            # Cells whose entries fill about PAIR_CHUNK positions (at least one cell).
+            last = int(np.searchsorted(self.cell_start, self.cell_start[first] + PAIR_CHUNK, side="right"))
+            last = max(last, first + 1)
+            lo, hi = int(self.cell_start[first]), int(self.cell_end[last - 1])
+            high, low = self.high[lo:hi], self.low[lo:hi]
+            kept_p, kept_q = [], []
+            for p, q in _cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo):
+                keep = _meet(high[q], low[p])
+                kept_p.append(p[keep])
+                kept_q.append(q[keep])
+            if kept_p:
+                yield self.face[lo:hi], np.concatenate(kept_p), np.concatenate(kept_q)
+            first = last
+
+    def probe(self, queries: np.ndarray) -> Blocks:
+        """Pairs of finer faces ``queries`` with this slab's faces in the cells they overlap."""
         who, coords, starts = self._entries(queries)
         inside = ((coords >= 0) & (coords < (1 << np.array(self.bits)))).all(axis=1)
-        who, key, starts = who[inside], self.pack(coords[inside]), starts[inside]
+        who, key = who[inside], self.pack(coords[inside])
+        if key.size == 0 or self.cell_key.size == 0:
+            return
         at = np.minimum(np.searchsorted(self.cell_key, key), self.cell_key.size - 1)
         hit = self.cell_key[at] == key
-        who, at, starts = who[hit], at[hit], starts[hit]
+        who, at, key = who[hit], at[hit], key[hit]
+        _, low = self._words(key, who, starts[inside][hit].astype(np.uint64))   # the probes' own words
         begin, size = self.cell_start[at], self.cell_end[at] - self.cell_start[at]
         for index, step in _items(size):        # (probe, every entry of its cell)
             entry = begin[index] + step
-            keep = (starts[index] | self.start[entry]) == 7
-            yield from _overlapping(self.lo, self.hi, who[index][keep], self.face[entry][keep])
+            keep = _meet(self.high[entry], low[index])
+            if keep.any():
+                i, j = who[index][keep], self.face[entry][keep]
+                k = np.arange(i.size)
+                yield np.concatenate([i, j]), k, k + i.size
 
-    def _pairs_after(self, after: np.ndarray):
-        for index, step in _items(after):       # (entry p, entry p + 1 + step)
-            q = index + 1 + step
-            keep = (self.start[index] | self.start[q]) == 7
-            yield from _overlapping(self.lo, self.hi, self.face[index][keep], self.face[q][keep])
+
+def _meet(high: np.ndarray, low: np.ndarray) -> np.ndarray:
+    """Whether entries with upper words ``high`` and lower words ``low`` (of the other box)
+    overlap in every quantised field and are owned by their cell (start bits make 7)."""
+    fields = ((high | _GUARD) - (low & _DATA)) & _GUARD
+    return (fields == _GUARD) & ((((high | low) >> _START_SHIFT) & _SEVEN) == _SEVEN)
 
 
 def _slices(members: np.ndarray, step: int = PAIR_CHUNK) -> Iterator[np.ndarray]:
@@ -216,13 +341,42 @@ def _items(counts: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         yield index, step
 
 
-def _overlapping(lo: np.ndarray, hi: np.ndarray, i: np.ndarray, j: np.ndarray):
-    """The pairs of ``(i, j)`` whose closed boxes overlap (one chunk, or nothing)."""
-    if i.size == 0:
-        return
-    keep = (lo[i, 0] <= hi[j, 0]) & (lo[j, 0] <= hi[i, 0])
-    keep &= (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1])
-    keep &= (lo[i, 2] <= hi[j, 2]) & (lo[j, 2] <= hi[i, 2])
-    keep &= i != j
-    if keep.any():
-        yield i[keep], j[keep]
+def _overlap(lo: np.ndarray, hi: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Whether the closed boxes ``i`` and ``j`` overlap, row by row."""
+    a_lo, a_hi, b_lo, b_hi = lo[i], hi[i], lo[j], hi[j]
+    keep = (a_lo[:, 0] <= b_hi[:, 0]) & (b_lo[:, 0] <= a_hi[:, 0])
+    keep &= (a_lo[:, 1] <= b_hi[:, 1]) & (b_lo[:, 1] <= a_hi[:, 1])
+    keep &= (a_lo[:, 2] <= b_hi[:, 2]) & (b_lo[:, 2] <= a_hi[:, 2])
+    return keep & (i != j)
+
+
+#: Upper-triangle index pairs of an m x m table, by m (the pairs within a cell of m entries).
+_TRIANGLES: dict[int, np.ndarray] = {}
+#: Cells with more entries than this get their pairs a row at a time (bounded memory).
+_BIG_CELL = 256
+
+
+def _triangle(m: int) -> np.ndarray:
+    pairs = _TRIANGLES.get(m)
+    if pairs is None:
+        a, b = np.triu_indices(m, 1)
+        pairs = np.stack([a, b]).astype(np.int32)
+        if m <= _BIG_CELL:
+            _TRIANGLES[m] = pairs
+    return pairs
+
+
+def _cell_pairs(starts: np.ndarray, ends: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Every pair of positions within each cell ``starts[c]:ends[c]``: the cells of one size
+    ``m`` at once, from the ``m x m`` upper triangle (no per-pair index arithmetic)."""
+    size = (ends - starts).astype(np.int64)
+    for m in np.unique(size[size > 1]).tolist():
+        first = starts[size == m].astype(np.int32)
+        if m <= _BIG_CELL:
+            a, b = _triangle(m)
+            yield (first[:, None] + a).ravel(), (first[:, None] + b).ravel()
+        else:
+            for f in first.tolist():
+                for row in range(m - 1):
+                    q = np.arange(f + row + 1, f + m, dtype=np.int32)
+                    yield np.full(q.size, f + row, dtype=np.int32), q

@@ -22,11 +22,11 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import in_safe_range, orient2d
-from p3d_cli.mesh.broadphase import box_pairs, outward_boxes
+from p3d_cli.mesh.broadphase import outward_boxes, pair_blocks
 from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
 from p3d_cli.mesh.meeting import meeting_point
-from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify
+from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify_block
 
 #: Faces per block when computing boxes (bounded temporaries).
 _BLOCK = 1 << 16
@@ -70,8 +70,11 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     contacts: list[tuple] = []
     if live.size > 1:
         lo, hi = _boxes(points, faces, live)
-        for i, j in box_pairs(lo, hi, live):
-            kind, edges = classify(points, faces, i, j, safe)
+        for members, p, q in pair_blocks(lo, hi):
+            members = live[members]
+            corners = faces[members]
+            kind, edges = classify_block(np.take(points, corners, axis=0), corners, p, q, safe)
+            i, j = members[p], members[q]
             if crowded:
                 _unfold(kind, faces, i, j, crowded)
             hit = np.flatnonzero((kind != 0) & (kind != CONTACT))

@@ -33,18 +33,20 @@ LISTED = 100
 _TRIES = 16
 
 
-def shell_nesting(points: np.ndarray, layout: Layout, crossing_pairs: np.ndarray) -> Nesting:
+def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossing_pairs: np.ndarray) -> Nesting:
     """The nesting of the closed shells of a mesh.
 
     Parameters
     ----------
     points : (m, 3) float64
         Vertex coordinates by id.
+    faces : (n, 3) int
+        Vertex ids of every face.
     layout : Layout
+        The shells and which of them are open.
     crossing_pairs : (k, 2) int
         Face pairs that cross or overlap (``SelfIntersections.pairs``).
     """
-    faces = layout.faces
     labels = layout.shells.labels
     count = layout.shells.count
     closed = np.ones(count, dtype=bool)

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.geometry.predicates import Planes, orient2d
+from p3d_cli.geometry.predicates import O3D_BOUND, Planes, exact_orient3d, orient2d
 
 NONE, CROSSING, OVERLAP, FOLD, CONTACT = 0, 1, 2, 3, 4
 #: Names of the kinds (``CONTACT`` pairs are resolved before anything is reported).
@@ -78,33 +78,105 @@ def classify(points: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray
         For ``CONTACT`` pairs: per face, the corners ``(c, c')`` of its edge on the contact
         line, or ``(-1, -1)`` when the contact lies in that face's interior. Unset elsewhere.
     """
-    fa, fb = faces[i], faces[j]
-    k = len(i)
+    members = np.concatenate([i, j])
+    corners = faces[members]
+    k = np.arange(len(i))
+    return classify_block(points[corners], corners, k, k + len(i), safe)
+
+
+def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np.ndarray, safe: bool = True):
+    """``classify`` for the pairs ``(p[k], q[k])`` of a block of faces given by their corners'
+    coordinates ``(e, 3, 3)`` and vertex ids ``(e, 3)`` (gathered once for all their pairs)."""
+    fa, fb = corners[p], corners[q]
+    k = len(p)
     kind = np.zeros(k, dtype=np.int8)
     edges = np.full((k, 2, 2), -1, dtype=np.int64)
+    A, B = coords[p], coords[q]
     on_a, on_b = _shared_corners(fa, fb)
-    shared = on_a[:, 0].astype(np.int8) + on_a[:, 1] + on_a[:, 2]
-    rows = np.flatnonzero(shared == 2)
+    shared = on_a[:, 0].view(np.int8) + on_a[:, 1].view(np.int8) + on_a[:, 2].view(np.int8)
+    # Screen every pair at once: B's corners against A's plane; where B meets that plane only
+    # in the vertices the faces share (most neighbours of a mesh), they meet only there.
+    s = all_sides(A, B, on_b, safe)
+    live = np.flatnonzero(_beyond_shared(s, shared))
+    if live.size == 0:
+        return kind, edges
+    t = all_sides(B[live], A[live], on_a[live], safe)
+    keep = _beyond_shared(t, shared[live])
+    live, t = live[keep], t[keep]
+    if live.size == 0:
+        return kind, edges
+    s, shared = s[live], shared[live]
+    flat = (s == 0).all(axis=1)
+    rows = np.flatnonzero(flat & (shared == 2))
     if rows.size:
-        kind[rows] = _edge_pairs(points, fa[rows], fb[rows], on_a[rows], on_b[rows], safe)
-    one = np.flatnonzero(shared == 1)
-    if one.size:        # most pairs of a mesh: neighbours around a vertex, screened cheaply
-        one = one[_near_at_vertex(points, fa[one], fb[one], on_a[one], on_b[one], safe)]
-    rows = np.concatenate([np.flatnonzero(shared == 0), one])
+        at = live[rows]
+        kind[at] = _edge_pairs(A[at], B[at], on_a[at], on_b[at], safe)
+    rows = np.flatnonzero(flat & (shared < 2))
     if rows.size:
-        kind[rows], edges[rows] = _general(points, fa[rows], fb[rows], on_a[rows], on_b[rows], safe)
+        at = live[rows]
+        kind[at] = _coplanar(A[at], B[at], safe)
+    rows = np.flatnonzero(~flat)
+    if rows.size:
+        at = live[rows]
+        kind[at], edges[at] = _crossing(A[at], B[at], fa[at], fb[at], s[rows], t[rows], safe)
     return kind, edges
+
+
+def all_sides(A: np.ndarray, B: np.ndarray, shared: np.ndarray, safe: bool) -> np.ndarray:
+    """``orient3d`` of the three corners of each ``B`` ``(k, 3, 3)`` against the plane of ``A``:
+    ``(k, 3)`` int8. Corners that are vertices of ``A`` (``shared``) are 0 without arithmetic
+    (their difference from ``A``'s first corner is set to zero, which the filter proves)."""
+    a = A[:, 0]
+    ux, uy, uz = A[:, 1, 0] - a[:, 0], A[:, 1, 1] - a[:, 1], A[:, 1, 2] - a[:, 2]
+    vx, vy, vz = A[:, 2, 0] - a[:, 0], A[:, 2, 1] - a[:, 1], A[:, 2, 2] - a[:, 2]
+    p0, p1, p2, p3, p4, p5 = uy * vz, uz * vy, uz * vx, ux * vz, ux * vy, uy * vx
+    n = (p0 - p1, p2 - p3, p4 - p5)
+    pn = (np.abs(p0) + np.abs(p1), np.abs(p2) + np.abs(p3), np.abs(p4) + np.abs(p5))
+    w = B - a[:, None, :]
+    w[shared] = 0.0
+    det = w[:, :, 0] * n[0][:, None]
+    det += w[:, :, 1] * n[1][:, None]
+    det += w[:, :, 2] * n[2][:, None]
+    np.abs(w, out=w)
+    perm = w[:, :, 0] * pn[0][:, None]
+    perm += w[:, :, 1] * pn[1][:, None]
+    perm += w[:, :, 2] * pn[2][:, None]
+    out = (det > 0).view(np.int8) - (det < 0).view(np.int8)
+    if safe:
+        perm *= O3D_BOUND
+        unsure = np.abs(det) <= perm
+        unsure &= perm != 0
+    else:
+        unsure = ~shared
+    rows, corners = np.nonzero(unsure)
+    if rows.size:
+        out[rows, corners] = exact_orient3d(A[rows, 0], A[rows, 1], A[rows, 2], B[rows, corners])
+    return out
+
+
+def _beyond_shared(signs: np.ndarray, shared: np.ndarray) -> np.ndarray:
+    """Where a face may meet the other beyond their shared vertices: its corners do not lie
+    strictly on one side of the other's plane apart from the shared ones."""
+    a, b, c = signs[:, 0], signs[:, 1], signs[:, 2]
+    # Apart from the zeros (shared corners, or corners on the plane), one sign at most:
+    # the sum's size equals the count of nonzero signs exactly then.
+    nonzero = (a != 0).view(np.int8) + (b != 0).view(np.int8) + (c != 0).view(np.int8)
+    one_sided = np.abs(a + b + c) == nonzero
+    return ~one_sided | (nonzero != 3 - shared)
 
 
 def _shared_corners(fa: np.ndarray, fb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(k, 3)`` masks of the corners of A, and of B, that are a vertex of the other face."""
-    on_a = np.zeros(fa.shape, dtype=bool)
+    on_a = np.empty(fa.shape, dtype=bool)
     on_b = np.zeros(fb.shape, dtype=bool)
+    a = [np.ascontiguousarray(fa[:, p]) for p in range(3)]
+    b = [np.ascontiguousarray(fb[:, q]) for q in range(3)]
     for p in range(3):
-        for q in range(3):
-            same = fa[:, p] == fb[:, q]
-            on_a[:, p] |= same
-            on_b[:, q] |= same
+        e0, e1, e2 = a[p] == b[0], a[p] == b[1], a[p] == b[2]
+        on_a[:, p] = e0 | e1 | e2
+        on_b[:, 0] |= e0
+        on_b[:, 1] |= e1
+        on_b[:, 2] |= e2
     return on_a, on_b
 
 
@@ -113,44 +185,21 @@ def _first(mask: np.ndarray) -> np.ndarray:
     return np.where(mask[:, 0], 0, np.where(mask[:, 1], 1, 2))
 
 
-def _near_at_vertex(points, fa, fb, on_a, on_b, safe) -> np.ndarray:
-    """For faces sharing one vertex ``v``: False where one face's two other corners lie
-    strictly on one side of the other's plane (they meet at ``v`` only), True where the full
-    test must decide."""
-    base = 3 * np.arange(len(fa))
-    pa, pb = _first(on_a) + base, _first(on_b) + base
-    flat_a, flat_b = fa.ravel(), fb.ravel()
-    V = points[flat_a[pa]]
-    A1, A2 = points[flat_a[base + _NEXT[pa - base]]], points[flat_a[base + _PREV[pa - base]]]
-    B1, B2 = points[flat_b[base + _NEXT[pb - base]]], points[flat_b[base + _PREV[pb - base]]]
-    plane = Planes(V, A1, A2, safe)
-    s1, s2 = plane.side(B1), plane.side(B2)
-    near = (s1 != s2) | (s1 == 0)
-    rest = np.flatnonzero(near)
-    if rest.size:
-        plane = Planes(V[rest], B1[rest], B2[rest], safe)
-        t1, t2 = plane.side(A1[rest]), plane.side(A2[rest])
-        near[rest] = (t1 != t2) | (t1 == 0)
-    return near
-
-
-def _edge_pairs(points, fa, fb, on_a, on_b, safe) -> np.ndarray:
-    """Faces sharing exactly one edge: nothing unless coplanar and on the same side of it."""
+def _edge_pairs(A, B, on_a, on_b, safe) -> np.ndarray:
+    """Coplanar faces sharing exactly one edge: a fold or an overlap when on the same side of it."""
     free_a, free_b = _first(~on_a), _first(~on_b)           # the corners off the shared edge
-    rows = np.arange(len(fa))
-    A = points[fa]
+    rows = np.arange(len(A))
     planes = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
-    side = planes.side(points[fb[rows, free_b]])
-    kind = np.zeros(len(fa), dtype=np.int8)
-    flat = np.flatnonzero(side == 0)
+    kind = np.zeros(len(A), dtype=np.int8)
+    flat = rows
     if flat.size:
-        u = fa[flat, _NEXT[free_a[flat]]]                   # the shared edge, as A's corners
-        v = fa[flat, _PREV[free_a[flat]]]
+        u = A[flat, _NEXT[free_a[flat]]]                    # the shared edge, as A's corners
+        v = A[flat, _PREV[free_a[flat]]]
         axes = _projection(planes, flat, A[flat], safe)
-        ua, va = _project(points[u], axes), _project(points[v], axes)
-        near_a = orient2d(ua, va, _project(points[fa[flat, free_a[flat]]], axes), safe)
-        near_b = orient2d(ua, va, _project(points[fb[flat, free_b[flat]]], axes), safe)
-        facing = _facing(points, fa[flat], axes, safe) == _facing(points, fb[flat], axes, safe)
+        ua, va = _project(u, axes), _project(v, axes)
+        near_a = orient2d(ua, va, _project(A[flat, free_a[flat]], axes), safe)
+        near_b = orient2d(ua, va, _project(B[flat, free_b[flat]], axes), safe)
+        facing = _facing(A[flat], axes, safe) == _facing(B[flat], axes, safe)
         together = near_a == near_b                         # both nonzero: faces not degenerate
         kind[flat[together & facing]] = OVERLAP
         kind[flat[together & ~facing]] = FOLD
@@ -178,58 +227,10 @@ def _project(x: np.ndarray, axes: np.ndarray) -> np.ndarray:
     return np.stack([x[rows, (axes + 1) % 3], x[rows, (axes + 2) % 3]], axis=1)
 
 
-def _facing(points, f, axes, safe) -> np.ndarray:
-    """The orientation of each face seen along its projection axis (+1 or -1)."""
-    a, b, c = (_project(points[f[:, k]], axes) for k in range(3))
+def _facing(T, axes, safe) -> np.ndarray:
+    """The orientation of each face ``(k, 3, 3)`` seen along its projection axis (+1 or -1)."""
+    a, b, c = (_project(T[:, k], axes) for k in range(3))
     return orient2d(a, b, c, safe)
-
-
-def _sides(planes: Planes, T: np.ndarray, same_as_plane: np.ndarray) -> np.ndarray:
-    """Sides of the three corners of ``T`` ``(k, 3, 3)`` relative to ``planes``; corners that
-    are vertices of the plane's own face are 0 without any arithmetic."""
-    out = np.zeros((len(T), 3), dtype=np.int8)
-    for c in range(3):
-        free = np.flatnonzero(~same_as_plane[:, c])
-        if free.size == len(T):
-            out[:, c] = planes.side(T[:, c])
-        elif free.size:
-            out[free, c] = _subset(planes, free).side(T[free, c])
-    return out
-
-
-def _subset(planes: Planes, rows: np.ndarray) -> Planes:
-    sub = Planes.__new__(Planes)
-    sub.a, sub.b, sub.c, sub.safe = planes.a[rows], planes.b[rows], planes.c[rows], planes.safe
-    sub.normal = tuple(n[rows] for n in planes.normal)
-    sub.permanent = tuple(p[rows] for p in planes.permanent)
-    return sub
-
-
-def _general(points, fa, fb, on_a, on_b, safe):
-    """Pairs sharing at most one vertex."""
-    k = len(fa)
-    kind = np.zeros(k, dtype=np.int8)
-    edges = np.full((k, 2, 2), -1, dtype=np.int64)
-    A, B = points[fa], points[fb]
-    plane_a = Planes(A[:, 0], A[:, 1], A[:, 2], safe)
-    s = _sides(plane_a, B, on_b)                            # B's corners against A's plane
-    apart = (s.min(axis=1) > 0) | (s.max(axis=1) < 0)
-    live = np.flatnonzero(~apart)
-    if live.size == 0:
-        return kind, edges
-    A, B, s, on_a, fa, fb = A[live], B[live], s[live], on_a[live], fa[live], fb[live]
-    plane_b = Planes(B[:, 0], B[:, 1], B[:, 2], safe)
-    t = _sides(plane_b, A, on_a)                            # A's corners against B's plane
-    apart = (t.min(axis=1) > 0) | (t.max(axis=1) < 0)
-    flat = (s == 0).all(axis=1)
-    rows = np.flatnonzero(flat & ~apart)
-    if rows.size:
-        kind[live[rows]] = _coplanar(_subset(plane_a, live[rows]), A[rows], B[rows], safe)
-    rows = np.flatnonzero(~flat & ~apart)
-    if rows.size:
-        kind[live[rows]], edges[live[rows]] = _crossing(A[rows], B[rows], fa[rows], fb[rows], s[rows], t[rows],
-                                                        safe)
-    return kind, edges
 
 
 def _apex(sign: np.ndarray):
@@ -295,11 +296,11 @@ def _orient(a, x, d, y, a_id, x_id, d_id, y_id, safe) -> np.ndarray:
     return Planes(a, x, d, safe).side(y)
 
 
-def _coplanar(plane_a: Planes, A, B, safe) -> np.ndarray:
+def _coplanar(A, B, safe) -> np.ndarray:
     """Coplanar pairs sharing at most one vertex: ``OVERLAP`` when their interiors overlap and
     they face the same way (facing opposite ways, they are pressed together: ``NONE``)."""
     rows = np.arange(len(A))
-    axes = _projection(plane_a, rows, A, safe)
+    axes = _projection(Planes(A[:, 0], A[:, 1], A[:, 2], safe), rows, A, safe)
     a = [_project(A[:, c], axes) for c in range(3)]
     b = [_project(B[:, c], axes) for c in range(3)]
     o_a = orient2d(a[0], a[1], a[2], safe)
