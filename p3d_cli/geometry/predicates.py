@@ -102,6 +102,58 @@ class Planes:
         return out
 
 
+    def facing(self, d: np.ndarray) -> np.ndarray:
+        """Exact signs of ``((b - a) × (c - a)) · d`` for vectors ``d`` ``(k, 3)`` (taken as
+        exact: no difference is rounded), row by row: where the plane's normal points along."""
+        if not self.safe:
+            return exact_turn(self.b, self.c, d, self.a)
+        n, p = self.normal, self.permanent
+        det = (n[0] * d[:, 0] + n[1] * d[:, 1]) + n[2] * d[:, 2]
+        perm = (np.abs(d[:, 0]) * p[0] + np.abs(d[:, 1]) * p[1]) + np.abs(d[:, 2]) * p[2]
+        out = _signs(det)
+        unsure = (np.abs(det) <= O3D_BOUND * perm) & (perm != 0)
+        if unsure.any():
+            rows = np.flatnonzero(unsure)
+            out[rows] = exact_turn(self.b[rows], self.c[rows], d[rows], self.a[rows])
+        return out
+
+
+def turn(a: np.ndarray, b: np.ndarray, r: np.ndarray, n: np.ndarray, safe: bool = True) -> np.ndarray:
+    """Exact signs of ``det[b - a, r, n]`` for points ``a, b`` and exact vectors ``r, n`` (all
+    ``(k, 3)``): the side of ``b - a`` from ``r`` seen along ``n``, ``(k,)`` int8. The minors of
+    ``r`` and ``n`` and their dot product with the rounded ``b - a`` have Shewchuk's structure,
+    so his bound holds."""
+    if not safe:
+        return -exact_turn(r, b, n, a, vectors=True)
+    p = (r[:, 1] * n[:, 2], r[:, 2] * n[:, 1], r[:, 2] * n[:, 0], r[:, 0] * n[:, 2], r[:, 0] * n[:, 1],
+         r[:, 1] * n[:, 0])
+    minor = (p[0] - p[1], p[2] - p[3], p[4] - p[5])
+    x = (b[:, 0] - a[:, 0], b[:, 1] - a[:, 1], b[:, 2] - a[:, 2])
+    det = (x[0] * minor[0] + x[1] * minor[1]) + x[2] * minor[2]
+    perm = ((np.abs(x[0]) * (np.abs(p[0]) + np.abs(p[1])) + np.abs(x[1]) * (np.abs(p[2]) + np.abs(p[3])))
+            + np.abs(x[2]) * (np.abs(p[4]) + np.abs(p[5])))
+    out = _signs(det)
+    unsure = (np.abs(det) <= O3D_BOUND * perm) & (perm != 0)
+    if unsure.any():
+        rows = np.flatnonzero(unsure)
+        out[rows] = -exact_turn(r[rows], b[rows], n[rows], a[rows], vectors=True)
+    return out
+
+
+def exact_turn(b: np.ndarray, c: np.ndarray, d: np.ndarray, a: np.ndarray, vectors: bool = False) -> np.ndarray:
+    """``det[b - a, c - a, d]`` in integers; with ``vectors``, ``det[b, c - a, d]`` (``b`` a
+    vector, not a point): the exact stage of ``Planes.facing`` and ``turn``."""
+    rows = _integers(np.concatenate([a, b, c, d], axis=1))
+    out = np.empty(len(rows), dtype=np.int8)
+    for i, (ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz) in enumerate(rows):
+        if not vectors:
+            bx, by, bz = bx - ax, by - ay, bz - az
+        ux, uy, uz = bx, by, bz
+        vx, vy, vz = cx - ax, cy - ay, cz - az
+        out[i] = _sign(dx * (uy * vz - uz * vy) + dy * (uz * vx - ux * vz) + dz * (ux * vy - uy * vx))
+    return out
+
+
 def orient3d(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, safe: bool = True) -> np.ndarray:
     """Exact signs of ``((b - a) × (c - a)) · (d - a)``, row by row (``(k, 3)`` float64 each)."""
     return Planes(a, b, c, safe).side(d)

@@ -51,7 +51,7 @@ TYPICAL = 0.9
 #: to test, which is cheap) but enter each face in fewer cells (fewer entries to sort).
 SCALE = 2.0
 #: Entries per slab of a level's grid (bounds the memory of the sort).
-SLAB = 1 << 20
+SLAB = 1 << 18
 
 Pairs = Iterator[tuple[np.ndarray, np.ndarray]]
 Blocks = Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]
@@ -106,16 +106,16 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
     n = len(lo)
     if n < 2:
         return
-    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2]).astype(np.float64)
+    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2])
     cell = float(np.quantile(extent, TYPICAL)) * SCALE
     if not cell > 0:
         positive = extent[extent > 0]
         cell = float(positive.min()) if positive.size else 1.0
     # The grid's origin and the cell size: floor((x - origin) / size) for every coordinate.
     origin = lo.min(axis=0).astype(np.float64)
-    level = np.zeros(n, dtype=np.int8)
+    level = np.zeros(n, dtype=np.int16)
     big = extent > cell
-    level[big] = np.ceil(np.log2(extent[big] / cell)).astype(np.int8)
+    level[big] = np.ceil(np.log2(extent[big].astype(np.float64) / cell)).astype(np.int16)
     # log2 rounds: make sure every box fits its level's cells (at most two per axis).
     while True:
         short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
@@ -126,7 +126,7 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
     top = hi.max(axis=0).astype(np.float64)
     levels = np.unique(level).tolist()
     for L in levels:
-        members = np.flatnonzero(level == L)
+        members = np.flatnonzero(level == L).astype(np.int32 if n < 2**31 else np.int64)
         size = cell * 2.0 ** L
         for x0, x1 in _slabs(lo, hi, members, origin, size):
             grid = _Grid(lo, hi, members, origin, size, x0, x1, top)
@@ -151,7 +151,7 @@ def _cells(x: np.ndarray, origin: np.ndarray, size: float) -> np.ndarray:
 
 def _slabs(lo, hi, members, origin, size) -> list[tuple[int, int]]:
     """Ranges of x cells ``[x0, x1)`` holding at most about ``SLAB`` entries each."""
-    first = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size).astype(np.int64)
+    first = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size).astype(np.int32)
     top = int(np.floor((float(hi[members, 0].max()) - origin[0]) / size)) + 1
     # Entries per x column (about: a face's entries all counted in its first column, at 4).
     column = np.bincount(first, minlength=top) * 4.0
@@ -172,9 +172,14 @@ class _Grid:
 
     def __init__(self, lo, hi, members, origin, size: float, x0: int, x1: int, top: np.ndarray):
         self.lo, self.hi, self.origin, self.size = lo, hi, origin, size
-        first_x = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size)
-        last_x = np.floor((hi[members, 0].astype(np.float64) - origin[0]) / size)
-        members = members[(first_x < x1) & (last_x >= x0)]
+        inside = np.empty(members.size, dtype=bool)
+        for at in range(0, members.size, 1 << 18):
+            part = members[at:at + (1 << 18)]
+            first_x = np.floor((lo[part, 0].astype(np.float64) - origin[0]) / size)
+            last_x = np.floor((hi[part, 0].astype(np.float64) - origin[0]) / size)
+            inside[at:at + part.size] = (first_x < x1) & (last_x >= x0)
+        members = members[inside]
+        del inside
         self.x0, self.x1 = x0, x1
         # Room for every cell of the level (and a probe one beyond): the bits of a cell key.
         top = np.floor((top - origin) / size).astype(np.int64) + 2
@@ -193,7 +198,7 @@ class _Grid:
         index = np.int32 if len(lo) < 2**31 else np.int64
         if packed:
             key.sort()
-            starts = (key & 7).astype(np.uint64)
+            starts = (key & 7).astype(np.uint8)
             key >>= 3
             self.face = (key & ((1 << self.face_bits) - 1)).astype(index)
             key >>= self.face_bits
@@ -202,7 +207,7 @@ class _Grid:
             order = np.lexsort((face, key))
             key, self.face = key[order], face[order].astype(index)
             del order, face
-            starts = (key & 7).astype(np.uint64)
+            starts = (key & 7).astype(np.uint8)
             key >>= 3
         new = np.ones(key.size, dtype=bool)
         np.not_equal(key[1:], key[:-1], out=new[1:])
@@ -255,7 +260,7 @@ class _Grid:
             k = key[at:at + PAIR_CHUNK]
             face = faces[at:at + PAIR_CHUNK]
             box_lo, box_hi = self.lo[face], self.hi[face]
-            h = starts[at:at + PAIR_CHUNK] << _START_SHIFT
+            h = starts[at:at + PAIR_CHUNK].astype(np.uint64) << _START_SHIFT
             lw = h.copy()
             for axis, cell in enumerate((k >> (by + bz), (k >> bz) & ((1 << by) - 1), k & ((1 << bz) - 1))):
                 # Quantised to 1/256 of the cell, a step of margin each way (the rounding of the

@@ -25,15 +25,17 @@ from p3d_cli.geometry.predicates import in_safe_range, orient2d
 from p3d_cli.mesh.broadphase import outward_boxes, pair_blocks
 from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
+from p3d_cli.mesh.stars import certified_vertices
 from p3d_cli.mesh.meeting import meeting_point
 from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify_block
 
-#: Faces per block when computing boxes (bounded temporaries).
+#: Faces per block when computing boxes, pairs per call of the pair test (bounded temporaries).
 _BLOCK = 1 << 16
+_PAIRS = 1 << 14
 
 
 def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.ndarray | None = None,
-                       nonmanifold_edges: np.ndarray | None = None) -> SelfIntersections:
+                       nonmanifold_edges: np.ndarray | None = None, fans: bool = False) -> SelfIntersections:
     """The face pairs of an indexed triangle surface whose interiors cross or overlap.
 
     Parameters
@@ -48,6 +50,10 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     nonmanifold_edges : (e, 2) int, optional
         Vertex ids of the edges used by more than two faces (found from the faces when not
         given).
+    fans : bool
+        The mesh is closed, without non-manifold edges or vertices: every vertex's faces form
+        one fan, and the fans whose faces provably meet only as neighbours do
+        (``p3d_cli.mesh.stars``) spare their pairs the pair test.
 
     Returns
     -------
@@ -61,29 +67,33 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         degenerate = zero_area_faces(points, faces, safe)
     live = np.ones(n, dtype=bool)
     live[np.asarray(degenerate, dtype=np.int64)] = False
-    live = np.flatnonzero(live)
+    live = np.flatnonzero(live).astype(np.int32 if n < 2**31 else np.int64)
     if nonmanifold_edges is None:
         nonmanifold_edges = crowded_edges(faces[live])
     crowded = {(min(u, v), max(u, v)) for u, v in np.asarray(nonmanifold_edges).tolist()}
     found: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
     contacts: list[tuple] = []
+    certified = certified_vertices(points, faces, safe) if fans and live.size > 1 else None
     if live.size > 1:
         lo, hi = _boxes(points, faces, live)
-        for members, p, q in pair_blocks(lo, hi):
+        for members, pp, qq in pair_blocks(lo, hi):
             members = live[members]
             corners = faces[members]
-            kind, edges = classify_block(np.take(points, corners, axis=0), corners, p, q, safe)
-            i, j = members[p], members[q]
-            if crowded:
-                _unfold(kind, faces, i, j, crowded)
-            hit = np.flatnonzero((kind != 0) & (kind != CONTACT))
-            if hit.size:
-                found.append(np.stack([i[hit], j[hit]], axis=1))
-                kinds.append(kind[hit])
-            touch = np.flatnonzero(kind == CONTACT)
-            if touch.size:
-                contacts.append((i[touch], j[touch], edges[touch]))
+            coords = np.take(points, corners, axis=0)
+            for at in range(0, pp.size, _PAIRS):       # bounded temporaries
+                p, q = pp[at:at + _PAIRS], qq[at:at + _PAIRS]
+                kind, edges = classify_block(coords, corners, p, q, safe, certified)
+                i, j = members[p], members[q]
+                if crowded:
+                    _unfold(kind, faces, i, j, crowded)
+                hit = np.flatnonzero((kind != 0) & (kind != CONTACT))
+                if hit.size:
+                    found.append(np.stack([i[hit], j[hit]], axis=1))
+                    kinds.append(kind[hit])
+                touch = np.flatnonzero(kind == CONTACT)
+                if touch.size:
+                    contacts.append((i[touch], j[touch], edges[touch]))
     lines = _line_crossings(points, faces, live, contacts, nonmanifold_edges)
     return _result(points, faces, found, kinds, lines, live.size)
 
@@ -128,8 +138,11 @@ def _boxes(points, faces, live):
     lo = np.empty((live.size, 3), dtype=np.float32)
     hi = np.empty((live.size, 3), dtype=np.float32)
     for start in range(0, live.size, _BLOCK):
-        corners = points[faces[live[start:start + _BLOCK]]]
-        lo[start:start + _BLOCK], hi[start:start + _BLOCK] = outward_boxes(corners.min(axis=1), corners.max(axis=1))
+        f = faces[live[start:start + _BLOCK]]
+        a, b, c = (np.take(points, f[:, k], axis=0) for k in range(3))
+        low, high = np.minimum(a, b), np.maximum(a, b)
+        lo[start:start + _BLOCK], hi[start:start + _BLOCK] = outward_boxes(np.minimum(low, c, out=low),
+                                                                            np.maximum(high, c, out=high))
     return lo, hi
 
 

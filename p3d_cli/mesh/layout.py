@@ -43,20 +43,21 @@ class Layout:
 
 
 def vertex_points(blocks, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """The vertices and faces of the mesh, renumbered in the order the file uses them.
+    """The vertices of the mesh, renumbered in the order the file uses them.
 
     The topology numbers vertices in the order of their hashes, at random in space; numbered
     by the place of one of their corners, the vertices of faces near each other in the file
     are near each other in memory, which the passes gathering them by face (the
-    self-intersection test) read several times faster.
+    self-intersection test) read several times faster. ``layout.ids`` are renumbered in
+    place (the topology is done with them; a second copy would cost as much memory again).
 
     Returns
     -------
     points : (m, 3) float64
         The coordinates of every vertex used (-0.0 read as 0.0), from one more pass over the
-        triangles.
-    faces : (n, 3) int32 or int64
-        The vertex of every corner (``layout.ids`` renumbered).
+        triangles; ``layout.faces`` index them.
+    rank : (vertex_count,) int
+        The new number of each old vertex id (for ids kept elsewhere, such as edges').
     """
     ids = layout.ids
     # Some corner of every vertex (whichever assignment numpy makes last: any one will do),
@@ -68,11 +69,13 @@ def vertex_points(blocks, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
     rank = np.empty(layout.vertex_count, dtype=ids.dtype)
     rank[order] = np.arange(layout.vertex_count, dtype=ids.dtype)
     del corner, order
-    faces = rank[ids].reshape(-1, 3)
+    for start in range(0, ids.size, 1 << 18):
+        np.take(rank, ids[start:start + (1 << 18)], out=ids[start:start + (1 << 18)])
     points = np.zeros((used, 3), dtype=np.float64)
     done = 0
     for block in blocks():
         corners = np.asarray(block, dtype=np.float64).reshape(-1, 3)
-        points[faces.ravel()[done:done + len(corners)]] = corners
+        points[ids[done:done + len(corners)]] = corners
         done += len(corners)
-    return points + 0.0, faces
+    np.add(points, 0.0, out=points)
+    return points, rank

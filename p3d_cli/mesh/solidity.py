@@ -11,25 +11,13 @@ from p3d_cli.mesh.nesting import shell_nesting
 from p3d_cli.mesh.report import TopologyReport
 
 
-def _renumbered(layout: Layout, faces, edges):
-    """``edges`` (vertex ids of the topology) in ``faces``' numbering."""
-    import numpy as np
-
-    if len(edges) == 0:
-        return edges
-    old = layout.ids.reshape(-1, 3)
-    mapping = {}
-    for f in np.unique(np.isin(old, edges).any(axis=1).nonzero()[0]):
-        for a, b in zip(old[f].tolist(), faces[f].tolist()):
-            mapping[a] = b
-    return np.array([[mapping[a], mapping[b]] for a, b in np.asarray(edges).tolist()], dtype=np.int64)
-
-
 def with_solidity(report: TopologyReport, blocks, layout: Layout) -> TopologyReport:
     """``report`` with its ``self_intersections`` and its shells' ``nesting`` (one more pass
     over ``blocks()`` for the vertices' coordinates)."""
-    points, faces = vertex_points(blocks, layout)
-    crowded = _renumbered(layout, faces, layout.crowded_edges)
-    found = self_intersections(points, faces, layout.zero_area, crowded)
+    points, rank = vertex_points(blocks, layout)
+    faces = layout.faces
+    crowded = rank[layout.crowded_edges] if len(layout.crowded_edges) else layout.crowded_edges
+    fans = report.closed and report.nonmanifold_vertices == 0
+    found = self_intersections(points, faces, layout.zero_area, crowded, fans=fans)
     nesting = shell_nesting(points, faces, layout, found.pairs)
     return dataclasses.replace(report, self_intersections=found, nesting=nesting)

@@ -84,15 +84,33 @@ def classify(points: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray
     return classify_block(points[corners], corners, k, k + len(i), safe)
 
 
-def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np.ndarray, safe: bool = True):
+def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np.ndarray, safe: bool = True,
+                   certified: np.ndarray | None = None):
     """``classify`` for the pairs ``(p[k], q[k])`` of a block of faces given by their corners'
-    coordinates ``(e, 3, 3)`` and vertex ids ``(e, 3)`` (gathered once for all their pairs)."""
-    fa, fb = corners[p], corners[q]
+    coordinates ``(e, 3, 3)`` and vertex ids ``(e, 3)`` (gathered once for all their pairs).
+
+    ``certified`` (bool per vertex, ``p3d_cli.mesh.stars``): pairs sharing such a vertex are
+    ``NONE`` without a test.
+    """
     k = len(p)
     kind = np.zeros(k, dtype=np.int8)
     edges = np.full((k, 2, 2), -1, dtype=np.int64)
-    A, B = coords[p], coords[q]
+    if certified is not None:
+        # A pair sharing a certified vertex needs no test: one pass of id compares for all.
+        a = [np.take(corners[:, c], p) for c in range(3)]
+        b = [np.take(corners[:, c], q) for c in range(3)]
+        sure = np.zeros(k, dtype=bool)
+        for c in range(3):
+            meets = (a[c] == b[0]) | (a[c] == b[1]) | (a[c] == b[2])
+            sure |= meets & np.take(certified, a[c])
+        rest = np.flatnonzero(~sure)
+        if rest.size < k:
+            if rest.size:
+                kind[rest], edges[rest] = classify_block(coords, corners, p[rest], q[rest], safe)
+            return kind, edges
+    fa, fb = corners[p], corners[q]
     on_a, on_b = _shared_corners(fa, fb)
+    A, B = coords[p], coords[q]
     shared = on_a[:, 0].view(np.int8) + on_a[:, 1].view(np.int8) + on_a[:, 2].view(np.int8)
     # Screen every pair at once: B's corners against A's plane; where B meets that plane only
     # in the vertices the faces share (most neighbours of a mesh), they meet only there.

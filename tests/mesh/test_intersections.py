@@ -11,11 +11,19 @@ from helpers.solids import box, grid, indexed, octahedron
 from helpers.triangle_oracle import CONTACT, CROSSING, FOLD, OVERLAP, classify as oracle
 from p3d_cli.mesh.broadphase import box_pairs
 from p3d_cli.mesh.intersections import crowded_edges, self_intersections
+from p3d_cli.mesh.topology import topology
 
 
 def found(triangles):
+    """The self-intersections, by the pair test alone and, for a closed manifold mesh, with
+    the fans' certificate too (p3d_cli.mesh.stars): both must give the same pairs."""
     points, faces = indexed(triangles)
-    return self_intersections(points, faces)
+    result = self_intersections(points, faces)
+    report = topology(np.asarray(triangles, dtype=float))
+    if report.closed and report.nonmanifold_vertices == 0:
+        fast = self_intersections(points, faces, fans=True)
+        assert fast.pairs.tolist() == result.pairs.tolist() and fast.kinds == result.kinds
+    return result
 
 
 def test_a_closed_cube_does_not_intersect_itself():
@@ -115,6 +123,41 @@ def test_a_twice_subdivided_triangle_has_no_intersection_published_example():
                   [4, 14, 12], [4, 10, 14], [5, 9, 13], [3, 6, 12], [5, 13, 14], [14, 10, 11], [13, 9, 8],
                   [12, 6, 7], [14, 13, 12]])
     assert self_intersections(V, F).count == 0
+
+
+def test_a_closed_scan_pushed_through_itself():
+    """A closed sphere whose north pole is pushed in: a dent (inside the body) is a valid
+    surface, through the south cap it crosses itself. The fans around the pole are certified
+    in neither case (their faces turn over), every other fan is, and both ways agree."""
+    sphere = _sphere(24)
+    assert found(sphere).count == 0
+    pole = np.isclose(sphere[:, :, 2], 1.0)
+    dented = sphere.copy()
+    dented[pole] = [0.0, 0.0, -0.5]
+    assert found(dented).count == 0
+    through = sphere.copy()
+    through[pole] = [0.0, 0.0, -1.5]
+    result = found(through)
+    assert result.count > 0 and all(s.point[2] < -0.9 for s in result.samples)
+
+
+def _sphere(n: int) -> np.ndarray:
+    """A closed UV sphere of radius 1, wound outwards, poles on the z axis."""
+    theta = np.linspace(0, np.pi, n + 1)[1:-1]
+    phi = np.linspace(0, 2 * np.pi, 2 * n, endpoint=False)
+    ring = np.stack([np.sin(theta)[:, None] * np.cos(phi), np.sin(theta)[:, None] * np.sin(phi),
+                     -np.cos(theta)[:, None] * np.ones_like(phi)], axis=-1)
+    south, north = np.array([0, 0, -1.0]), np.array([0, 0, 1.0])
+    tris = []
+    m = len(phi)
+    for j in range(m):
+        tris.append([south, ring[0, (j + 1) % m], ring[0, j]])
+        tris.append([north, ring[-1, j], ring[-1, (j + 1) % m]])
+    for i in range(len(theta) - 1):
+        for j in range(m):
+            a, b, c, d = ring[i, j], ring[i, (j + 1) % m], ring[i + 1, (j + 1) % m], ring[i + 1, j]
+            tris += [[a, b, c], [a, c, d]]
+    return np.array(tris)
 
 
 def test_a_fold_in_a_scan():
@@ -232,3 +275,23 @@ def test_box_pairs_are_every_overlapping_pair_once():
         expected = {(i, j) for i in range(n) for j in range(i + 1, n)
                     if (lo[i] <= hi[j]).all() and (lo[j] <= hi[i]).all()}
         assert set(got) == expected
+
+
+def test_certified_fans_have_no_crossing_pair_and_folded_fans_are_not_certified():
+    """The fans' certificate against the rational oracle: on a sphere whose vertices are
+    shaken hard (some fans fold), every pair of faces around a certified vertex meets only
+    as neighbours do, and fans that fold are left to the pair test."""
+    from p3d_cli.mesh.stars import certified_vertices
+
+    rng = np.random.default_rng(2)
+    points, faces = indexed(_sphere(8))
+    shaken = points + rng.normal(0, 0.12, points.shape)
+    certified = certified_vertices(shaken, faces)
+    assert 0 < certified.sum() < len(points)                  # both kinds occur
+    for v in range(len(points)):
+        around = np.flatnonzero((faces == v).any(axis=1))
+        bad = any(oracle(shaken[faces[a]].tolist(), shaken[faces[b]].tolist()) in (CROSSING, OVERLAP, FOLD,
+                                                                                    CONTACT)
+                  for k, a in enumerate(around) for b in around[k + 1:])
+        if certified[v]:
+            assert not bad
