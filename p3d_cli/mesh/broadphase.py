@@ -227,19 +227,27 @@ class _Grid:
 
     def _entries(self, part: np.ndarray):
         """``(face, cell coordinates, start bits)`` of every cell in the slab the boxes of
-        ``part`` overlap."""
+        ``part`` overlap: at their level a face's box spans one or two cells per axis, so the
+        cells are its first one plus each of the eight offsets in {0, 1}³ that it reaches
+        (the start bits of an offset: the axes along which it is 0)."""
         first, last = _cells(self.lo[part], self.origin, self.size), _cells(self.hi[part], self.origin, self.size)
-        span = last - first + 1                             # 1 or 2 per axis at a face's level
-        count = span.prod(axis=1)
-        face = np.repeat(part, count)
-        step = np.arange(face.size) - np.repeat(np.cumsum(count) - count, count)
-        sx, sy = np.repeat(span[:, 0], count), np.repeat(span[:, 1], count)
-        offset = np.stack([step % sx, (step // sx) % sy, step // (sx * sy)], axis=1)
-        coords = np.repeat(first, count, axis=0) + offset
-        inside = (coords[:, 0] >= self.x0) & (coords[:, 0] < self.x1)
-        # Bit k: the face's box starts in this cell along axis k (see the module docstring).
-        starts = (offset[:, 0] == 0) * 1 + (offset[:, 1] == 0) * 2 + (offset[:, 2] == 0) * 4
-        return face[inside], coords[inside], starts[inside]
+        wide = last > first                                 # (k, 3): reaches a second cell
+        faces, coords, starts = [], [], []
+        for dx in (0, 1):
+            for dy in (0, 1):
+                for dz in (0, 1):
+                    mask = (first[:, 0] + dx >= self.x0) & (first[:, 0] + dx < self.x1)
+                    if dx:
+                        mask &= wide[:, 0]
+                    if dy:
+                        mask &= wide[:, 1]
+                    if dz:
+                        mask &= wide[:, 2]
+                    rows = np.flatnonzero(mask)
+                    faces.append(part[rows])
+                    coords.append(first[rows] + np.array([dx, dy, dz]))
+                    starts.append(np.full(rows.size, (dx == 0) + 2 * (dy == 0) + 4 * (dz == 0), dtype=np.int64))
+        return np.concatenate(faces), np.concatenate(coords), np.concatenate(starts)
 
     def pack(self, coords: np.ndarray) -> np.ndarray:
         by, bz = self.bits[1], self.bits[2]
@@ -286,13 +294,12 @@ class _Grid:
             last = max(last, first + 1)
             lo, hi = int(self.cell_start[first]), int(self.cell_end[last - 1])
             high, low = self.high[lo:hi], self.low[lo:hi]
-            kept_p, kept_q = [], []
-            for p, q in _cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo):
-                keep = _meet(high[q], low[p])
-                kept_p.append(p[keep])
-                kept_q.append(q[keep])
-            if kept_p:
-                yield self.face[lo:hi], np.concatenate(kept_p), np.concatenate(kept_q)
+            pairs = list(_cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo))
+            if pairs:
+                p = np.concatenate([x for x, _ in pairs]) if len(pairs) > 1 else pairs[0][0]
+                q = np.concatenate([y for _, y in pairs]) if len(pairs) > 1 else pairs[0][1]
+                keep = np.flatnonzero(_meet(np.take(high, q), np.take(low, p)))
+                yield self.face[lo:hi], np.take(p, keep), np.take(q, keep)
             first = last
 
     def probe(self, queries: np.ndarray) -> Blocks:

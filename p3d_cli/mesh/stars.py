@@ -54,24 +54,45 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
         f = faces[start:start + _STEP]
         a, b, c = points[f[:, 0]], points[f[:, 1]], points[f[:, 2]]
         np.add.at(normal, f.ravel(), np.repeat(np.cross(b - a, c - a), 3, axis=0))
+    # The reference and the minors of (R, N), once per vertex: every corner of a vertex uses them.
+    reference = _reference(normal)
+    minor, minor_abs = _minors(reference, normal)
     good = np.ones(m, dtype=bool)
     hits = []
     for start in range(0, len(faces), _STEP):
         f = faces[start:start + _STEP]
+        corner = [np.take(points, f[:, k], axis=0) for k in range(3)]
         for k in range(3):
-            v, b, c = f[:, k], f[:, (k + 1) % 3], f[:, (k + 2) % 3]
-            P, B, C = (np.take(points, x, axis=0) for x in (v, b, c))
-            N = np.take(normal, v, axis=0)
-            R = _reference(N)
-            M, Mabs = _minors(R, N)
-            sector = Planes(P, B, C, safe).facing(N)      # det[b - v, c - v, N]
-            before = _turn(P, B, M, Mabs, R, N, safe)      # det[b - v, R, N]
-            after = -_turn(P, C, M, Mabs, R, N, safe)      # det[R, c - v, N]
+            v = f[:, k]
+            P, B, C = corner[k], corner[(k + 1) % 3], corner[(k + 2) % 3]
+            N, M, Mabs = (np.take(x, v, axis=0) for x in (normal, minor, minor_abs))
+            x, y = B - P, C - P
+            sector = _sector(x, y, N, P, B, C, safe)        # det[b - v, c - v, N]
+            before = _turn(x, M, Mabs, P, B, reference, normal, v, safe)     # det[b - v, R, N]
+            after = -_turn(y, M, Mabs, P, C, reference, normal, v, safe)     # det[R, c - v, N]
             bad = (sector <= 0) | (before == 0) | (after == 0)
             good[v[bad]] = False
             hits.append(v[(before > 0) & (after > 0)])
     count = np.bincount(np.concatenate(hits), minlength=m) if hits else np.zeros(m, dtype=np.int64)
     return good & (count == 1)
+
+
+def _sector(x, y, n, a, b, c, safe: bool) -> np.ndarray:
+    """``det[x, y, n]`` for the rounded differences ``x = b - a``, ``y = c - a`` and an exact
+    ``n``: the minors of ``x, y`` dotted with ``n`` (Shewchuk's structure and bound)."""
+    if not safe:
+        return Planes(a, b, c, safe).facing(n)
+    p0, p1 = x[:, 1] * y[:, 2], x[:, 2] * y[:, 1]
+    p2, p3 = x[:, 2] * y[:, 0], x[:, 0] * y[:, 2]
+    p4, p5 = x[:, 0] * y[:, 1], x[:, 1] * y[:, 0]
+    det = ((p0 - p1) * n[:, 0] + (p2 - p3) * n[:, 1]) + (p4 - p5) * n[:, 2]
+    perm = ((np.abs(p0) + np.abs(p1)) * np.abs(n[:, 0]) + (np.abs(p2) + np.abs(p3)) * np.abs(n[:, 1])
+            + (np.abs(p4) + np.abs(p5)) * np.abs(n[:, 2]))
+    out = (det > 0).view(np.int8) - (det < 0).view(np.int8)
+    unsure = np.flatnonzero((np.abs(det) <= O3D_BOUND * perm) & (perm != 0))
+    if unsure.size:
+        out[unsure] = Planes(a[unsure], b[unsure], c[unsure], safe).facing(n[unsure])
+    return out
 
 
 def _reference(normal: np.ndarray) -> np.ndarray:
@@ -93,16 +114,16 @@ def _minors(r: np.ndarray, n: np.ndarray):
     return minor, minor_abs
 
 
-def _turn(a, b, minor, minor_abs, r, n, safe: bool) -> np.ndarray:
-    """``predicates.turn(a, b, r, n)`` from the minors of ``r`` and ``n`` computed beforehand."""
+def _turn(x, minor, minor_abs, a, b, reference, normal, v, safe: bool) -> np.ndarray:
+    """``predicates.turn(a, b, R, N)`` (``R``, ``N`` of vertices ``v``) from ``x = b - a`` and the
+    minors of ``R`` and ``N``."""
     if not safe:
-        return turn(a, b, r, n, safe)
-    x = b - a
+        return turn(a, b, reference[v], normal[v], safe)
     det = (x[:, 0] * minor[:, 0] + x[:, 1] * minor[:, 1]) + x[:, 2] * minor[:, 2]
-    np.abs(x, out=x)
-    perm = (x[:, 0] * minor_abs[:, 0] + x[:, 1] * minor_abs[:, 1]) + x[:, 2] * minor_abs[:, 2]
+    ax = np.abs(x)
+    perm = (ax[:, 0] * minor_abs[:, 0] + ax[:, 1] * minor_abs[:, 1]) + ax[:, 2] * minor_abs[:, 2]
     out = (det > 0).view(np.int8) - (det < 0).view(np.int8)
     unsure = np.flatnonzero((np.abs(det) <= O3D_BOUND * perm) & (perm != 0))
     if unsure.size:
-        out[unsure] = turn(a[unsure], b[unsure], r[unsure], n[unsure], safe)
+        out[unsure] = turn(a[unsure], b[unsure], reference[v[unsure]], normal[v[unsure]], safe)
     return out
