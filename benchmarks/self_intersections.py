@@ -40,7 +40,7 @@ import sys
 import tempfile
 import time
 
-from installed import cache_bytecode, run_once
+from installed import alternated, cache_bytecode
 
 TORUS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "torus.py")
 TOPOLOGY_ONLY = "closed,oriented,outward,manifold,no-degenerate,no-duplicate"
@@ -83,23 +83,14 @@ def commands(path: str, meshlab: bool) -> dict:
 
 
 def time_all(tools: dict, runs: int, env) -> dict:
-    results = {name: {"wall": [], "cpu": [], "rss": [], "filter": []} for name in tools}
-    names = list(tools)
-    for name in names:                              # warm-up, and the answer checks
-        argv, ok = tools[name]
-        *_, status, text = run_once(argv, env)
-        if not ok(status, text):
-            raise SystemExit(f"{name}: unexpected answer (exit {status}): {text[:300]}")
-    for r in range(runs):
-        shift = r % len(names)
-        for name in names[shift:] + names[:shift]:
-            wall, cpu, rss, _, text = run_once(tools[name][0], env)
-            results[name]["wall"].append(wall)
-            results[name]["cpu"].append(cpu)
-            results[name]["rss"].append(rss)
-            if name.startswith("pymeshlab"):
-                results[name]["filter"].append(float(text.split()[1]))
-    return {name: {k: statistics.median(v) if v else None for k, v in got.items()} for name, got in results.items()}
+    results = alternated(tools, runs, env)
+    medians = {}
+    for name, got in results.items():
+        medians[name] = {k: statistics.median(got[k]) for k in ("wall", "cpu", "rss")}
+        # pymeshlab's child prints its filter's own time after the count.
+        medians[name]["filter"] = (statistics.median(float(t.split()[1]) for t in got["stdout"])
+                                   if name.startswith("pymeshlab") else None)
+    return medians
 
 
 def table(rows: dict, runs: int, load: tuple) -> str:

@@ -67,7 +67,8 @@ def failure_messages(result: CheckResult) -> tuple[tuple[str, str], ...]:
                           f"{plural(r.nonmanifold_vertices, 'non-manifold vertex')}",
               "no-degenerate": plural(r.degenerate_faces, "degenerate face"),
               "no-duplicate": plural(r.duplicate_faces, "duplicate face"),
-              "no-self-intersection": plural(_crossing_count(r), "self-intersecting face pair")}
+              "no-self-intersection": plural(_crossing_count(r), "self-intersecting face pair"),
+              "nesting": _nesting_detail(r)}
     out = []
     for name in result.failed:
         if name == "min-volume":
@@ -213,6 +214,16 @@ def check_text(result: CheckResult) -> str:
     for _, part in result.parts:
         lines += ["  " + line for line in check_text(part).splitlines()]
     return "\n".join(lines)
+
+
+def _nesting_detail(report) -> str:
+    """``volume counted twice: 1, negative: 0, crossing shells: 1`` for the failure message."""
+    n = report.nesting
+    if n is None:
+        return "not tested"
+    crossing = sum(1 for _, _, kind in n.relations if kind == "crossing")
+    return (f"volume counted twice: {output.number(n.counted_twice)}, negative: "
+            f"{output.number(n.counted_negative)}, {plural(crossing, 'pair')} of crossing shells")
 
 
 def _crossing_count(report) -> int:

@@ -287,10 +287,13 @@ class _Grid:
         """This level's pairs that share a cell (kept in their owner cell, boxes overlapping),
         a block of whole cells at a time: ``(faces of the block's entries, p, q)``."""
         cells = self.cell_start.size
+        size = (self.cell_end - self.cell_start).astype(np.int64)
+        # Candidate pairs up to each cell: blocks of about PAIR_CHUNK * 4 candidates (memory).
+        reach = np.cumsum(size * (size - 1) // 2)
         first = 0
         while first < cells:
-            # Cells whose entries fill about PAIR_CHUNK positions (at least one cell).
-            last = int(np.searchsorted(self.cell_start, self.cell_start[first] + PAIR_CHUNK, side="right"))
+            done = int(reach[first - 1]) if first else 0
+            last = int(np.searchsorted(reach, done + 4 * PAIR_CHUNK, side="right"))
             last = max(last, first + 1)
             lo, hi = int(self.cell_start[first]), int(self.cell_end[last - 1])
             high, low = self.high[lo:hi], self.low[lo:hi]

@@ -26,7 +26,7 @@ import numpy as np
 from p3d_cli.geometry.predicates import O3D_BOUND, Planes, turn
 
 #: Corners per vectorised step.
-_STEP = 1 << 16
+_STEP = 1 << 15
 #: Two fixed directions, far from the axes and from each other, for the reference ``R = N × G``.
 _G = (np.array([0.6180339887498949, 0.3819660112501051, 0.7071067811865476]),
       np.array([-0.2679491924311227, 0.8660254037844386, 0.4226182617406994]))
@@ -54,9 +54,6 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
         f = faces[start:start + _STEP]
         a, b, c = points[f[:, 0]], points[f[:, 1]], points[f[:, 2]]
         np.add.at(normal, f.ravel(), np.repeat(np.cross(b - a, c - a), 3, axis=0))
-    # The reference and the minors of (R, N), once per vertex: every corner of a vertex uses them.
-    reference = _reference(normal)
-    minor, minor_abs = _minors(reference, normal)
     good = np.ones(m, dtype=bool)
     hits = []
     for start in range(0, len(faces), _STEP):
@@ -65,11 +62,15 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
         for k in range(3):
             v = f[:, k]
             P, B, C = corner[k], corner[(k + 1) % 3], corner[(k + 2) % 3]
-            N, M, Mabs = (np.take(x, v, axis=0) for x in (normal, minor, minor_abs))
+            # The reference and the minors of (R, N), per corner: per vertex they would cost
+            # four arrays of the vertices' size at once (memory), for no time saved.
+            N = np.take(normal, v, axis=0)
+            R = _reference(N)
+            M, Mabs = _minors(R, N)
             x, y = B - P, C - P
             sector = _sector(x, y, N, P, B, C, safe)        # det[b - v, c - v, N]
-            before = _turn(x, M, Mabs, P, B, reference, normal, v, safe)     # det[b - v, R, N]
-            after = -_turn(y, M, Mabs, P, C, reference, normal, v, safe)     # det[R, c - v, N]
+            before = _turn(x, M, Mabs, P, B, R, N, safe)    # det[b - v, R, N]
+            after = -_turn(y, M, Mabs, P, C, R, N, safe)    # det[R, c - v, N]
             bad = (sector <= 0) | (before == 0) | (after == 0)
             good[v[bad]] = False
             hits.append(v[(before > 0) & (after > 0)])
@@ -114,16 +115,15 @@ def _minors(r: np.ndarray, n: np.ndarray):
     return minor, minor_abs
 
 
-def _turn(x, minor, minor_abs, a, b, reference, normal, v, safe: bool) -> np.ndarray:
-    """``predicates.turn(a, b, R, N)`` (``R``, ``N`` of vertices ``v``) from ``x = b - a`` and the
-    minors of ``R`` and ``N``."""
+def _turn(x, minor, minor_abs, a, b, r, n, safe: bool) -> np.ndarray:
+    """``predicates.turn(a, b, r, n)`` from ``x = b - a`` and the minors of ``r`` and ``n``."""
     if not safe:
-        return turn(a, b, reference[v], normal[v], safe)
+        return turn(a, b, r, n, safe)
     det = (x[:, 0] * minor[:, 0] + x[:, 1] * minor[:, 1]) + x[:, 2] * minor[:, 2]
     ax = np.abs(x)
     perm = (ax[:, 0] * minor_abs[:, 0] + ax[:, 1] * minor_abs[:, 1]) + ax[:, 2] * minor_abs[:, 2]
     out = (det > 0).view(np.int8) - (det < 0).view(np.int8)
     unsure = np.flatnonzero((np.abs(det) <= O3D_BOUND * perm) & (perm != 0))
     if unsure.size:
-        out[unsure] = turn(a[unsure], b[unsure], reference[v[unsure]], normal[v[unsure]], safe)
+        out[unsure] = turn(a[unsure], b[unsure], r[unsure], n[unsure], safe)
     return out
