@@ -385,8 +385,12 @@ def _cell_pairs(starts: np.ndarray, ends: np.ndarray) -> Iterator[tuple[np.ndarr
     """Every pair of positions within each cell ``starts[c]:ends[c]``: the cells of one size
     ``m`` at once, from the ``m x m`` upper triangle (no per-pair index arithmetic)."""
     size = (ends - starts).astype(np.int64)
-    for m in np.unique(size[size > 1]).tolist():
-        first = starts[size == m].astype(np.int32)
+    present = np.bincount(size)                         # the sizes that occur (no sort)
+    order = np.argsort(size, kind="stable") if size.size else size
+    ranges = np.cumsum(present)
+    for m in np.flatnonzero(present[2:]).tolist():
+        m += 2
+        first = starts[order[ranges[m] - present[m]:ranges[m]]].astype(np.int32)
         if m <= _BIG_CELL:
             a, b = _triangle(m)
             yield (first[:, None] + a).ravel(), (first[:, None] + b).ravel()

@@ -27,11 +27,11 @@ from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
 from p3d_cli.mesh.stars import certified_vertices
 from p3d_cli.mesh.meeting import meeting_point
-from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify_block
+from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify, classify_block, uncertified
 
 #: Faces per block when computing boxes, pairs per call of the pair test (bounded temporaries).
 _BLOCK = 1 << 16
-_PAIRS = 1 << 14
+_PAIRS = 1 << 15
 
 
 def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.ndarray | None = None,
@@ -77,23 +77,27 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     certified = certified_vertices(points, faces, safe) if fans and live.size > 1 else None
     if live.size > 1:
         lo, hi = _boxes(points, faces, live)
-        for members, pp, qq in pair_blocks(lo, hi):
+        pending: list[tuple[np.ndarray, np.ndarray]] = []
+        waiting = 0
+        for members, p, q in pair_blocks(lo, hi):
             members = live[members]
             corners = faces[members]
-            coords = np.take(points, corners, axis=0)
-            for at in range(0, pp.size, _PAIRS):       # bounded temporaries
-                p, q = pp[at:at + _PAIRS], qq[at:at + _PAIRS]
-                kind, edges = classify_block(coords, corners, p, q, safe, certified)
-                i, j = members[p], members[q]
-                if crowded:
-                    _unfold(kind, faces, i, j, crowded)
-                hit = np.flatnonzero((kind != 0) & (kind != CONTACT))
-                if hit.size:
-                    found.append(np.stack([i[hit], j[hit]], axis=1))
-                    kinds.append(kind[hit])
-                touch = np.flatnonzero(kind == CONTACT)
-                if touch.size:
-                    contacts.append((i[touch], j[touch], edges[touch]))
+            if certified is None:
+                # Every pair to test: the block's faces gathered once, indexed per pair.
+                coords = np.take(points, corners, axis=0)
+                for at in range(0, p.size, _PAIRS):
+                    kind, edges = classify_block(coords, corners, p[at:at + _PAIRS], q[at:at + _PAIRS], safe)
+                    _keep(kind, edges, members[p[at:at + _PAIRS]], members[q[at:at + _PAIRS]], faces, crowded,
+                          found, kinds, contacts)
+                continue
+            # Few pairs left once the certified fans' are set aside: tested in batches.
+            rest = uncertified(corners, p, q, certified)
+            pending.append((members[p[rest]], members[q[rest]]))
+            waiting += rest.size
+            if waiting >= _PAIRS:
+                _test(points, faces, pending, safe, crowded, found, kinds, contacts)
+                pending, waiting = [], 0
+        _test(points, faces, pending, safe, crowded, found, kinds, contacts)
     lines = _line_crossings(points, faces, live, contacts, nonmanifold_edges)
     return _result(points, faces, found, kinds, lines, live.size)
 
@@ -121,6 +125,31 @@ def crowded_edges(faces: np.ndarray) -> np.ndarray:
     hi = np.maximum(a, np.roll(a, -1, axis=1)).ravel()
     keys = np.unique(np.stack([lo, hi], axis=1), axis=0, return_counts=True)
     return keys[0][keys[1] > 2]
+
+
+def _test(points, faces, pending, safe, crowded, found, kinds, contacts) -> None:
+    """Classify the pending pairs and keep what they find (``found``/``kinds``/``contacts``)."""
+    if not pending:
+        return
+    i = np.concatenate([x for x, _ in pending])
+    j = np.concatenate([y for _, y in pending])
+    if i.size == 0:
+        return
+    kind, edges = classify(points, faces, i, j, safe)
+    _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts)
+
+
+def _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts) -> None:
+    """Keep the reported pairs of one test (and the contacts, for the lines' test)."""
+    if crowded:
+        _unfold(kind, faces, i, j, crowded)
+    hit = np.flatnonzero((kind != 0) & (kind != CONTACT))
+    if hit.size:
+        found.append(np.stack([i[hit], j[hit]], axis=1))
+        kinds.append(kind[hit])
+    touch = np.flatnonzero(kind == CONTACT)
+    if touch.size:
+        contacts.append((i[touch], j[touch], edges[touch]))
 
 
 def _unfold(kind: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray, crowded: set) -> None:

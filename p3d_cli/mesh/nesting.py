@@ -33,7 +33,8 @@ LISTED = 100
 _TRIES = 16
 
 
-def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossing_pairs: np.ndarray) -> Nesting:
+def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossing_pairs: np.ndarray,
+                  volume_of_one: float | None = None) -> Nesting:
     """The nesting of the closed shells of a mesh.
 
     Parameters
@@ -46,17 +47,25 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
         The shells and which of them are open.
     crossing_pairs : (k, 2) int
         Face pairs that cross or overlap (``SelfIntersections.pairs``).
+    volume_of_one : float, optional
+        The mesh's signed volume, used as its shell's when it has one (no sum over the faces).
     """
     labels = layout.shells.labels
     count = layout.shells.count
     closed = np.ones(count, dtype=bool)
     closed[layout.open_shells] = False
-    volume = _shell_volumes(points, faces, labels, count)
+    if count == 1 and volume_of_one is not None:
+        volume = np.array([float(volume_of_one)])
+    else:
+        volume = _shell_volumes(points, faces, labels, count)
     closed &= volume != 0                       # a flat shell encloses nothing
     ids = np.flatnonzero(closed)
     sizes = np.bincount(labels, minlength=count)
-    first = np.full(count, len(faces), dtype=np.int64)
-    np.minimum.at(first, labels, np.arange(len(faces)))
+    if count == 1:
+        first = np.zeros(1, dtype=np.int64)
+    else:
+        first = np.full(count, len(faces), dtype=np.int64)
+        np.minimum.at(first, labels, np.arange(len(faces)))
     relations: dict[tuple[int, int], str] = {}
     for a, b in _crossing_shells(labels, crossing_pairs, closed):
         relations[(a, b)] = "crossing"

@@ -19,5 +19,5 @@ def with_solidity(report: TopologyReport, blocks, layout: Layout) -> TopologyRep
     crowded = rank[layout.crowded_edges] if len(layout.crowded_edges) else layout.crowded_edges
     fans = report.closed and report.nonmanifold_vertices == 0
     found = self_intersections(points, faces, layout.zero_area, crowded, fans=fans)
-    nesting = shell_nesting(points, faces, layout, found.pairs)
+    nesting = shell_nesting(points, faces, layout, found.pairs, report.volume)
     return dataclasses.replace(report, self_intersections=found, nesting=nesting)

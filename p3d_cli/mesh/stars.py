@@ -53,7 +53,13 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
     for start in range(0, len(faces), _STEP):
         f = faces[start:start + _STEP]
         a, b, c = points[f[:, 0]], points[f[:, 1]], points[f[:, 2]]
-        np.add.at(normal, f.ravel(), np.repeat(np.cross(b - a, c - a), 3, axis=0))
+        n = np.repeat(np.cross(b - a, c - a), 3, axis=0)
+        # Vertices are numbered by use, so a chunk's ids span a short range: bincount there.
+        ids = f.ravel()
+        low = int(ids.min())
+        span = int(ids.max()) - low + 1
+        for k in range(3):
+            normal[low:low + span, k] += np.bincount(ids - low, weights=n[:, k], minlength=span)
     good = np.ones(m, dtype=bool)
     hits = []
     for start in range(0, len(faces), _STEP):

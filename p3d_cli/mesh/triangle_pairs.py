@@ -84,30 +84,12 @@ def classify(points: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray
     return classify_block(points[corners], corners, k, k + len(i), safe)
 
 
-def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np.ndarray, safe: bool = True,
-                   certified: np.ndarray | None = None):
+def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np.ndarray, safe: bool = True):
     """``classify`` for the pairs ``(p[k], q[k])`` of a block of faces given by their corners'
-    coordinates ``(e, 3, 3)`` and vertex ids ``(e, 3)`` (gathered once for all their pairs).
-
-    ``certified`` (bool per vertex, ``p3d_cli.mesh.stars``): pairs sharing such a vertex are
-    ``NONE`` without a test.
-    """
+    coordinates ``(e, 3, 3)`` and vertex ids ``(e, 3)`` (gathered once for all their pairs)."""
     k = len(p)
     kind = np.zeros(k, dtype=np.int8)
     edges = np.full((k, 2, 2), -1, dtype=np.int64)
-    if certified is not None:
-        # A pair sharing a certified vertex needs no test: one pass of id compares for all.
-        a = [np.take(corners[:, c], p) for c in range(3)]
-        b = [np.take(corners[:, c], q) for c in range(3)]
-        sure = np.zeros(k, dtype=bool)
-        for c in range(3):
-            meets = (a[c] == b[0]) | (a[c] == b[1]) | (a[c] == b[2])
-            sure |= meets & np.take(certified, a[c])
-        rest = np.flatnonzero(~sure)
-        if rest.size < k:
-            if rest.size:
-                kind[rest], edges[rest] = classify_block(coords, corners, p[rest], q[rest], safe)
-            return kind, edges
     fa, fb = corners[p], corners[q]
     on_a, on_b = _shared_corners(fa, fb)
     A, B = coords[p], coords[q]
@@ -138,6 +120,18 @@ def classify_block(coords: np.ndarray, corners: np.ndarray, p: np.ndarray, q: np
         at = live[rows]
         kind[at], edges[at] = _crossing(A[at], B[at], fa[at], fb[at], s[rows], t[rows], safe)
     return kind, edges
+
+
+def uncertified(corners: np.ndarray, p: np.ndarray, q: np.ndarray, certified: np.ndarray) -> np.ndarray:
+    """The pairs ``(p[k], q[k])`` (rows of ``corners``, vertex ids) that share no vertex marked
+    in ``certified`` (``p3d_cli.mesh.stars``): the others meet only as neighbours, no test needed."""
+    a = [np.take(corners[:, c], p) for c in range(3)]
+    b = [np.take(corners[:, c], q) for c in range(3)]
+    sure = np.zeros(len(p), dtype=bool)
+    for c in range(3):
+        meets = (a[c] == b[0]) | (a[c] == b[1]) | (a[c] == b[2])
+        sure |= meets & np.take(certified, a[c])
+    return np.flatnonzero(~sure)
 
 
 def all_sides(A: np.ndarray, B: np.ndarray, shared: np.ndarray, safe: bool) -> np.ndarray:
