@@ -144,20 +144,31 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
             del grid
 
 
+#: Cells per axis at most: faces beyond are in the last cell (clamping keeps the cells monotone,
+#: so every pair is still found, once; only parts 2**40 face sizes apart share such a cell).
+_MAX_CELL = float(2 ** 40)
+
+
 def _cells(x: np.ndarray, origin: np.ndarray, size: float) -> np.ndarray:
     """Integer cell coordinates ``(k, 3)`` of points (monotone in each coordinate)."""
-    return np.floor((x.astype(np.float64) - origin) / size).astype(np.int64)
+    return np.clip(np.floor((x.astype(np.float64) - origin) / size), 0, _MAX_CELL).astype(np.int64)
 
 
 def _slabs(lo, hi, members, origin, size) -> list[tuple[int, int]]:
     """Ranges of x cells ``[x0, x1)`` holding at most about ``SLAB`` entries each."""
-    first = np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size).astype(np.int32)
-    top = int(np.floor((float(hi[members, 0].max()) - origin[0]) / size)) + 1
-    # Entries per x column (about: a face's entries all counted in its first column, at 4).
-    column = np.bincount(first, minlength=top) * 4.0
+    first = np.clip(np.floor((lo[members, 0].astype(np.float64) - origin[0]) / size), 0, _MAX_CELL).astype(np.int64)
+    top = int(first.max()) + 3
+    # Entries per x column (about: a face's entries all counted in its first column, at 4);
+    # only the occupied columns when there are far more columns than faces.
+    if top <= 4 * first.size + 1024:
+        column = np.bincount(first, minlength=top) * 4.0
+        where = np.arange(top)
+    else:
+        where, count = np.unique(first, return_counts=True)
+        column = count * 4.0
     del first
     cuts, running, start = [], 0.0, 0
-    for x, count in enumerate(column.tolist()):
+    for x, count in zip(where.tolist(), column.tolist()):
         if running and running + count > SLAB:
             cuts.append((start, x))
             start, running = x, 0.0
@@ -175,14 +186,14 @@ class _Grid:
         inside = np.empty(members.size, dtype=bool)
         for at in range(0, members.size, 1 << 18):
             part = members[at:at + (1 << 18)]
-            first_x = np.floor((lo[part, 0].astype(np.float64) - origin[0]) / size)
-            last_x = np.floor((hi[part, 0].astype(np.float64) - origin[0]) / size)
+            first_x = np.clip(np.floor((lo[part, 0].astype(np.float64) - origin[0]) / size), 0, _MAX_CELL)
+            last_x = np.clip(np.floor((hi[part, 0].astype(np.float64) - origin[0]) / size), 0, _MAX_CELL)
             inside[at:at + part.size] = (first_x < x1) & (last_x >= x0)
         members = members[inside]
         del inside
         self.x0, self.x1 = x0, x1
         # Room for every cell of the level (and a probe one beyond): the bits of a cell key.
-        top = np.floor((top - origin) / size).astype(np.int64) + 2
+        top = np.clip(np.floor((top - origin) / size), 0, _MAX_CELL).astype(np.int64) + 2
         self.bits = [max(int(t).bit_length(), 1) for t in top]
         self.face_bits = max(int(len(lo) - 1).bit_length(), 1)
         packed = sum(self.bits) + self.face_bits + 3 <= 63
@@ -297,12 +308,16 @@ class _Grid:
             last = max(last, first + 1)
             lo, hi = int(self.cell_start[first]), int(self.cell_end[last - 1])
             high, low = self.high[lo:hi], self.low[lo:hi]
-            pairs = list(_cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo))
+            members = self.face[lo:hi]
+            pairs, waiting = [], 0
+            for p, q in _cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo):
+                pairs.append((p, q))
+                waiting += p.size
+                if waiting >= 4 * PAIR_CHUNK:       # a crowded cell comes in pieces (memory)
+                    yield _kept(members, high, low, pairs)
+                    pairs, waiting = [], 0
             if pairs:
-                p = np.concatenate([x for x, _ in pairs]) if len(pairs) > 1 else pairs[0][0]
-                q = np.concatenate([y for _, y in pairs]) if len(pairs) > 1 else pairs[0][1]
-                keep = np.flatnonzero(_meet(np.take(high, q), np.take(low, p)))
-                yield self.face[lo:hi], np.take(p, keep), np.take(q, keep)
+                yield _kept(members, high, low, pairs)
             first = last
 
     def probe(self, queries: np.ndarray) -> Blocks:
@@ -324,6 +339,14 @@ class _Grid:
                 i, j = who[index][keep], self.face[entry][keep]
                 k = np.arange(i.size)
                 yield np.concatenate([i, j]), k, k + i.size
+
+
+def _kept(members, high, low, pairs):
+    """``(members, p, q)`` of the candidate pairs whose quantised boxes meet in their owner cell."""
+    p = np.concatenate([x for x, _ in pairs]) if len(pairs) > 1 else pairs[0][0]
+    q = np.concatenate([y for _, y in pairs]) if len(pairs) > 1 else pairs[0][1]
+    keep = np.flatnonzero(_meet(np.take(high, q), np.take(low, p)))
+    return members, np.take(p, keep), np.take(q, keep)
 
 
 def _meet(high: np.ndarray, low: np.ndarray) -> np.ndarray:
@@ -396,6 +419,13 @@ def _cell_pairs(starts: np.ndarray, ends: np.ndarray) -> Iterator[tuple[np.ndarr
             yield (first[:, None] + a).ravel(), (first[:, None] + b).ravel()
         else:
             for f in first.tolist():
-                for row in range(m - 1):
-                    q = np.arange(f + row + 1, f + m, dtype=np.int32)
-                    yield np.full(q.size, f + row, dtype=np.int32), q
+                # Rows of the triangle, as many as make about PAIR_CHUNK pairs at a time.
+                row = 0
+                while row < m - 1:
+                    rows = max(1, min(m - 1 - row, PAIR_CHUNK // (m - row)))
+                    lead = np.arange(row, row + rows)
+                    count = m - 1 - lead                  # partners after each row's entry
+                    a = np.repeat(lead, count)
+                    b = np.arange(a.size) - np.repeat(np.cumsum(count) - count, count)
+                    yield (f + a).astype(np.int32), (f + a + 1 + b).astype(np.int32)
+                    row += rows
