@@ -71,8 +71,11 @@ class Planes:
 
     def __init__(self, a: np.ndarray, b: np.ndarray, c: np.ndarray, safe: bool = True):
         self.a, self.b, self.c, self.safe = a, b, c, safe
-        if not safe:        # products may overflow or underflow: only the integer stage counts
-            a, b, c = (np.clip(p, -1.0, 1.0) for p in (a, b, c))
+        if not safe:        # products may overflow or underflow: only the integer stage counts,
+            # and the rounded normal only hints at a projection: computed on a scaled copy.
+            scale = np.max(np.abs(np.stack([a, b, c])), axis=(0, 2), keepdims=False)
+            scale = np.where(scale > 0, scale, 1.0)[:, None]
+            a, b, c = (np.ldexp(p, -np.frexp(scale)[1]) for p in (a, b, c))
         ux, uy, uz = (b[:, i] - a[:, i] for i in range(3))
         vx, vy, vz = (c[:, i] - a[:, i] for i in range(3))
         p = (uy * vz, uz * vy, uz * vx, ux * vz, ux * vy, uy * vx)

@@ -50,6 +50,8 @@ TYPICAL = 0.9
 #: Cell size as a multiple of the typical extent: larger cells hold more faces (more pairs
 #: to test, which is cheap) but enter each face in fewer cells (fewer entries to sort).
 SCALE = 2.0
+#: Above this many bits in a cell key, a slab ranks its cells' coordinates (``_Grid``).
+SPARSE_BITS = 60
 #: Entries per slab of a level's grid (bounds the memory of the sort).
 SLAB = 1 << 18
 
@@ -195,12 +197,22 @@ class _Grid:
         # Room for every cell of the level (and a probe one beyond): the bits of a cell key.
         top = np.clip(np.floor((top - origin) / size), 0, _MAX_CELL).astype(np.int64) + 2
         self.bits = [max(int(t).bit_length(), 1) for t in top]
+        self.axes: list[np.ndarray] | None = None
+        entries = [self._entries(part) for part in _slices(members)]
+        if sum(self.bits) > SPARSE_BITS:
+            # A grid too wide for one 64-bit key (parts very far apart for their faces' size):
+            # each axis's occupied coordinates are ranked (monotone, so the cells' order and
+            # their neighbours' order are kept), and the keys pack the ranks.
+            coords = np.concatenate([c for _, c, _ in entries]) if entries else np.zeros((0, 3), np.int64)
+            self.axes = [np.unique(coords[:, a]) for a in range(3)]
+            self.bits = [max(int(len(axis)).bit_length(), 1) for axis in self.axes]
+            del coords
         self.face_bits = max(int(len(lo) - 1).bit_length(), 1)
         packed = sum(self.bits) + self.face_bits + 3 <= 63
         keys, faces = [], []
-        for part in _slices(members):
-            face, coords, starts = self._entries(part)
-            key = self.pack(coords)
+        while entries:
+            face, coords, starts = entries.pop(0)
+            key, _ = self.encode(coords)
             keys.append((((key << self.face_bits) | face) << 3 | starts) if packed else (key << 3 | starts))
             if not packed:
                 faces.append(face)
@@ -260,13 +272,30 @@ class _Grid:
                     starts.append(np.full(rows.size, (dx == 0) + 2 * (dy == 0) + 4 * (dz == 0), dtype=np.int64))
         return np.concatenate(faces), np.concatenate(coords), np.concatenate(starts)
 
-    def pack(self, coords: np.ndarray) -> np.ndarray:
+    def encode(self, coords: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The keys of cells ``(k, 3)``, and which of them this grid can hold (the others
+        hold none of its faces)."""
+        if self.axes is None:
+            valid = ((coords >= 0) & (coords < (1 << np.array(self.bits)))).all(axis=1)
+            ranks = coords
+        else:
+            ranks = np.empty_like(coords)
+            valid = np.ones(len(coords), dtype=bool)
+            for a, axis in enumerate(self.axes):
+                at = np.minimum(np.searchsorted(axis, coords[:, a]), max(axis.size - 1, 0))
+                valid &= axis[at] == coords[:, a] if axis.size else False
+                ranks[:, a] = at
         by, bz = self.bits[1], self.bits[2]
-        return (coords[:, 0] << (by + bz)) | (coords[:, 1] << bz) | coords[:, 2]
+        ranks = np.where(valid[:, None], ranks, 0)
+        return (ranks[:, 0] << (by + bz)) | (ranks[:, 1] << bz) | ranks[:, 2], valid
 
-    def unpack(self, key: np.ndarray) -> np.ndarray:
+    def decode(self, key: np.ndarray) -> np.ndarray:
+        """The cell coordinates ``(k, 3)`` of keys."""
         by, bz = self.bits[1], self.bits[2]
-        return np.stack([key >> (by + bz), (key >> bz) & ((1 << by) - 1), key & ((1 << bz) - 1)], axis=1)
+        ranks = np.stack([key >> (by + bz), (key >> bz) & ((1 << by) - 1), key & ((1 << bz) - 1)], axis=1)
+        if self.axes is None:
+            return ranks
+        return np.stack([axis[ranks[:, a]] for a, axis in enumerate(self.axes)], axis=1)
 
     def _words(self, key: np.ndarray, faces: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The packed upper and lower words of the entries ``(cell key, face, start bits)``
@@ -274,14 +303,15 @@ class _Grid:
         high = np.empty(key.size, dtype=np.uint64)
         low = np.empty(key.size, dtype=np.uint64)
         scale = 256.0 / self.size
-        by, bz = self.bits[1], self.bits[2]
         for at in range(0, key.size, PAIR_CHUNK):
             k = key[at:at + PAIR_CHUNK]
             face = faces[at:at + PAIR_CHUNK]
             box_lo, box_hi = self.lo[face], self.hi[face]
             h = starts[at:at + PAIR_CHUNK].astype(np.uint64) << _START_SHIFT
             lw = h.copy()
-            for axis, cell in enumerate((k >> (by + bz), (k >> bz) & ((1 << by) - 1), k & ((1 << bz) - 1))):
+            cells = self.decode(k)
+            for axis in range(3):
+                cell = cells[:, axis]
                 # Quantised to 1/256 of the cell, a step of margin each way (the rounding of the
                 # scaling never makes a quantised box smaller than the box), clipped to the cell.
                 base = (cell * 256).astype(np.float64)
@@ -323,8 +353,8 @@ class _Grid:
     def probe(self, queries: np.ndarray) -> Blocks:
         """Pairs of finer faces ``queries`` with this slab's faces in the cells they overlap."""
         who, coords, starts = self._entries(queries)
-        inside = ((coords >= 0) & (coords < (1 << np.array(self.bits)))).all(axis=1)
-        who, key = who[inside], self.pack(coords[inside])
+        key, inside = self.encode(coords)
+        who, key = who[inside], key[inside]
         if key.size == 0 or self.cell_key.size == 0:
             return
         at = np.minimum(np.searchsorted(self.cell_key, key), self.cell_key.size - 1)

@@ -163,17 +163,22 @@ def _unfold(kind: np.ndarray, faces: np.ndarray, i: np.ndarray, j: np.ndarray, c
 
 
 def _boxes(points, faces, live):
-    """Boxes of the live faces in float32 about the points' centre (far from the world origin,
-    float32 coordinates would be too coarse: every box 8 wide at 1e8), rounded outwards with a
-    float32 step of margin beyond the float64 rounding of the shift, block by block."""
+    """Boxes of the live faces in float32, about the points' centre and scaled by a power of two
+    to a span near 1 (far from the world origin float32 coordinates would be too coarse, every
+    box 8 wide at 1e8; huge or tiny parts would over- or underflow), rounded outwards with a
+    float32 step of margin beyond the float64 rounding of the shift, block by block. Boxes only
+    choose which pairs are tested: any consistent map that keeps them overlapping does."""
     centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(3)
+    span = float(np.abs(points - centre).max()) if len(points) else 0.0
+    shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
     lo = np.empty((live.size, 3), dtype=np.float32)
     hi = np.empty((live.size, 3), dtype=np.float32)
     for start in range(0, live.size, _BLOCK):
         f = faces[live[start:start + _BLOCK]]
         a, b, c = (np.take(points, f[:, k], axis=0) for k in range(3))
         low, high = np.minimum(a, b), np.maximum(a, b)
-        low, high = np.minimum(low, c, out=low) - centre, np.maximum(high, c, out=high) - centre
+        low = np.ldexp(np.minimum(low, c, out=low) - centre, shift)
+        high = np.ldexp(np.maximum(high, c, out=high) - centre, shift)
         low32, high32 = outward_boxes(low, high)
         lo[start:start + _BLOCK] = np.nextafter(low32, np.float32(-np.inf))
         hi[start:start + _BLOCK] = np.nextafter(high32, np.float32(np.inf))

@@ -54,11 +54,15 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
     count = layout.shells.count
     closed = np.ones(count, dtype=bool)
     closed[layout.open_shells] = False
-    if count == 1 and volume_of_one is not None:
+    if count == 1 and volume_of_one is not None and np.isfinite(volume_of_one) and volume_of_one != 0:
         volume = np.array([float(volume_of_one)])
+        scaled = volume
     else:
-        volume = _shell_volumes(points, faces, labels, count)
-    closed &= volume != 0                       # a flat shell encloses nothing
+        # Signs and comparisons from volumes of the points scaled by a power of two (no
+        # overflow for parts at 1e300, no underflow at 1e-300); what is reported is rescaled.
+        scaled, power = _shell_volumes(points, faces, labels, count)
+        volume = np.ldexp(scaled, power)
+    closed &= scaled != 0                       # a flat shell encloses nothing
     ids = np.flatnonzero(closed)
     sizes = np.bincount(labels, minlength=count)
     if count == 1:
@@ -72,15 +76,15 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
     parent = {int(s): None for s in ids}
     lo, hi = _shell_boxes(points, faces, labels, count) if ids.size > 1 else (None, None)
     if ids.size > 1:
-        _nest(points, faces, labels, ids, volume, relations, parent, lo, hi)
+        _nest(points, faces, labels, ids, scaled, relations, parent, lo, hi)
     winding = {}
-    for s in sorted(ids.tolist(), key=lambda s: -abs(volume[s])):   # outer shells first
+    for s in sorted(ids.tolist(), key=lambda s: -abs(scaled[s])):   # outer shells first
         outer = parent[s]
-        winding[s] = int(np.sign(volume[s])) + (winding[outer] if outer is not None else 0)
+        winding[s] = int(np.sign(scaled[s])) + (winding[outer] if outer is not None else 0)
     twice, negative = _miscounted(volume, parent, winding)
     bound = 0.0
     for (a, b), kind in relations.items():
-        if kind == "crossing" and np.sign(volume[a]) == np.sign(volume[b]):
+        if kind == "crossing" and np.sign(scaled[a]) == np.sign(scaled[b]):
             # Their common region lies in both shells and in both boxes.
             common = float(np.prod(np.clip(np.minimum(hi[a], hi[b]) - np.maximum(lo[a], lo[b]), 0, None)))
             bound += min(abs(float(volume[a])), abs(float(volume[b])), common)
@@ -92,9 +96,14 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
                    {int(s): float(volume[s]) for s in ids})
 
 
-def _shell_volumes(points, faces, labels, count) -> np.ndarray:
-    """Signed volume of every shell: signed tetrahedra from the shell's own first vertex (the
-    sums are local to each shell, so a part far from the origin keeps its digits)."""
+def _shell_volumes(points, faces, labels, count) -> tuple[np.ndarray, int]:
+    """Signed volume of every shell, as ``(v, k)`` with the volume ``v · 2**k``: signed
+    tetrahedra from the shell's own first vertex (the sums are local to each shell, so a part
+    far from the origin keeps its digits), the points scaled by a power of two to a span near
+    1 (exact, and no product over- or underflows)."""
+    span = float(np.abs(points).max()) if len(points) else 0.0
+    shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
+    points = np.ldexp(points, shift)
     first_vertex = np.zeros((count, 3))
     first_vertex[labels[::-1]] = points[faces[::-1, 0]]
     volume = np.zeros(count)
@@ -104,7 +113,7 @@ def _shell_volumes(points, faces, labels, count) -> np.ndarray:
         a, b, c = (points[f[:, k]] - o for k in range(3))
         det = np.einsum("ij,ij->i", a, np.cross(b, c))
         volume += np.bincount(lab, weights=det, minlength=count)
-    return volume / 6.0
+    return volume / 6.0, -3 * shift
 
 
 def _crossing_shells(labels, pairs, closed) -> set[tuple[int, int]]:

@@ -138,6 +138,12 @@ def all_sides(A: np.ndarray, B: np.ndarray, shared: np.ndarray, safe: bool) -> n
     """``orient3d`` of the three corners of each ``B`` ``(k, 3, 3)`` against the plane of ``A``:
     ``(k, 3)`` int8. Corners that are vertices of ``A`` (``shared``) are 0 without arithmetic
     (their difference from ``A``'s first corner is set to zero, which the filter proves)."""
+    if not safe:            # products could overflow: every other corner in integers
+        out = np.zeros(shared.shape, dtype=np.int8)
+        rows, corners = np.nonzero(~shared)
+        if rows.size:
+            out[rows, corners] = exact_orient3d(A[rows, 0], A[rows, 1], A[rows, 2], B[rows, corners])
+        return out
     a = A[:, 0]
     ux, uy, uz = A[:, 1, 0] - a[:, 0], A[:, 1, 1] - a[:, 1], A[:, 1, 2] - a[:, 2]
     vx, vy, vz = A[:, 2, 0] - a[:, 0], A[:, 2, 1] - a[:, 1], A[:, 2, 2] - a[:, 2]
@@ -154,12 +160,9 @@ def all_sides(A: np.ndarray, B: np.ndarray, shared: np.ndarray, safe: bool) -> n
     perm += w[:, :, 1] * pn[1][:, None]
     perm += w[:, :, 2] * pn[2][:, None]
     out = (det > 0).view(np.int8) - (det < 0).view(np.int8)
-    if safe:
-        perm *= O3D_BOUND
-        unsure = np.abs(det) <= perm
-        unsure &= perm != 0
-    else:
-        unsure = ~shared
+    perm *= O3D_BOUND
+    unsure = np.abs(det) <= perm
+    unsure &= perm != 0
     rows, corners = np.nonzero(unsure)
     if rows.size:
         out[rows, corners] = exact_orient3d(A[rows, 0], A[rows, 1], A[rows, 2], B[rows, corners])

@@ -295,3 +295,20 @@ def test_certified_fans_have_no_crossing_pair_and_folded_fans_are_not_certified(
                   for k, a in enumerate(around) for b in around[k + 1:])
         if certified[v]:
             assert not bad
+
+
+@pytest.mark.parametrize("far", [2.0 ** 50, 1e100, 1e300, 1e-300])
+def test_parts_far_apart_huge_or_tiny(far):
+    """A tiny box at the origin and two crossing boxes at ``far``: the grid is too wide for one
+    key (its cells are ranked), float32 boxes would overflow or underflow (they are scaled),
+    products overflow (the integers decide). The same six pairs are found at every scale."""
+    import warnings
+
+    parts = [box([0, 0, 0], [far * 2 ** -60] * 3), box([far] * 3, [far * (1 + 2 ** -40)] * 3),
+             box([far * (1 + 2 ** -41)] * 3, [far * (1 + 2 ** -39)] * 3)]
+    points, faces = indexed(np.concatenate(parts))
+    for fans in (False, True):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")             # nothing of the test over- or underflows
+            result = self_intersections(points, faces, fans=fans)
+        assert result.count == 6 and result.by_kind["crossing"] == 6
