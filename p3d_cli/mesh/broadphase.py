@@ -42,8 +42,8 @@ from typing import Iterator
 
 import numpy as np
 
-#: Candidate pairs handled per vectorised step (the temporaries stay in cache).
-PAIR_CHUNK = 1 << 16
+from p3d_cli.mesh.cell_pairs import BYTE, FIELD, PAIR_CHUNK, START_SHIFT, cell_pairs, items, kept, meet
+
 #: The typical extent: this quantile of the faces' largest box extents (faces above it go to
 #: coarser levels, whose cells are twice as large per level).
 TYPICAL = 0.9
@@ -57,13 +57,6 @@ SLAB = 1 << 18
 
 Pairs = Iterator[tuple[np.ndarray, np.ndarray]]
 Blocks = Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]
-
-_FIELD = 9
-_DATA = np.uint64(sum(0xFF << (_FIELD * k) for k in range(6)))
-_GUARD = np.uint64(sum(0x100 << (_FIELD * k) for k in range(6)))
-_START_SHIFT = np.uint64(6 * _FIELD)
-_SEVEN = np.uint64(7)
-_BYTE = np.uint64(255)
 
 
 def outward_boxes(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -307,7 +300,7 @@ class _Grid:
             k = key[at:at + PAIR_CHUNK]
             face = faces[at:at + PAIR_CHUNK]
             box_lo, box_hi = self.lo[face], self.hi[face]
-            h = starts[at:at + PAIR_CHUNK].astype(np.uint64) << _START_SHIFT
+            h = starts[at:at + PAIR_CHUNK].astype(np.uint64) << START_SHIFT
             lw = h.copy()
             cells = self.decode(k)
             for axis in range(3):
@@ -319,8 +312,8 @@ class _Grid:
                 q_hi = np.floor((box_hi[:, axis] - self.origin[axis]) * scale) - base + 1
                 q_lo = np.clip(q_lo, 0, 255, out=q_lo).astype(np.uint64)
                 q_hi = np.clip(q_hi, 0, 255, out=q_hi).astype(np.uint64)
-                h |= (q_hi << np.uint64(_FIELD * axis)) | ((_BYTE - q_lo) << np.uint64(_FIELD * (axis + 3)))
-                lw |= (q_lo << np.uint64(_FIELD * axis)) | ((_BYTE - q_hi) << np.uint64(_FIELD * (axis + 3)))
+                h |= (q_hi << np.uint64(FIELD * axis)) | ((BYTE - q_lo) << np.uint64(FIELD * (axis + 3)))
+                lw |= (q_lo << np.uint64(FIELD * axis)) | ((BYTE - q_hi) << np.uint64(FIELD * (axis + 3)))
             high[at:at + PAIR_CHUNK], low[at:at + PAIR_CHUNK] = h, lw
         return high, low
 
@@ -340,14 +333,14 @@ class _Grid:
             high, low = self.high[lo:hi], self.low[lo:hi]
             members = self.face[lo:hi]
             pairs, waiting = [], 0
-            for p, q in _cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo):
+            for p, q in cell_pairs(self.cell_start[first:last] - lo, self.cell_end[first:last] - lo):
                 pairs.append((p, q))
                 waiting += p.size
                 if waiting >= 4 * PAIR_CHUNK:       # a crowded cell comes in pieces (memory)
-                    yield _kept(members, high, low, pairs)
+                    yield kept(members, high, low, pairs)
                     pairs, waiting = [], 0
             if pairs:
-                yield _kept(members, high, low, pairs)
+                yield kept(members, high, low, pairs)
             first = last
 
     def probe(self, queries: np.ndarray) -> Blocks:
@@ -362,51 +355,18 @@ class _Grid:
         who, at, key = who[hit], at[hit], key[hit]
         _, low = self._words(key, who, starts[inside][hit].astype(np.uint64))   # the probes' own words
         begin, size = self.cell_start[at], self.cell_end[at] - self.cell_start[at]
-        for index, step in _items(size):        # (probe, every entry of its cell)
+        for index, step in items(size):        # (probe, every entry of its cell)
             entry = begin[index] + step
-            keep = _meet(self.high[entry], low[index])
+            keep = meet(self.high[entry], low[index])
             if keep.any():
                 i, j = who[index][keep], self.face[entry][keep]
                 k = np.arange(i.size)
                 yield np.concatenate([i, j]), k, k + i.size
 
 
-def _kept(members, high, low, pairs):
-    """``(members, p, q)`` of the candidate pairs whose quantised boxes meet in their owner cell."""
-    p = np.concatenate([x for x, _ in pairs]) if len(pairs) > 1 else pairs[0][0]
-    q = np.concatenate([y for _, y in pairs]) if len(pairs) > 1 else pairs[0][1]
-    keep = np.flatnonzero(_meet(np.take(high, q), np.take(low, p)))
-    return members, np.take(p, keep), np.take(q, keep)
-
-
-def _meet(high: np.ndarray, low: np.ndarray) -> np.ndarray:
-    """Whether entries with upper words ``high`` and lower words ``low`` (of the other box)
-    overlap in every quantised field and are owned by their cell (start bits make 7)."""
-    fields = ((high | _GUARD) - (low & _DATA)) & _GUARD
-    return (fields == _GUARD) & ((((high | low) >> _START_SHIFT) & _SEVEN) == _SEVEN)
-
-
 def _slices(members: np.ndarray, step: int = PAIR_CHUNK) -> Iterator[np.ndarray]:
     for lo in range(0, members.size, step):
         yield members[lo:lo + step]
-
-
-def _items(counts: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Chunks of the items ``(t, s)``, ``0 <= s < counts[t]``, in order, as two arrays."""
-    ends = np.cumsum(counts)
-    total = int(ends[-1]) if ends.size else 0
-    for lo in range(0, total, PAIR_CHUNK):
-        hi = min(lo + PAIR_CHUNK, total)
-        a = int(np.searchsorted(ends, lo, side="right"))
-        b = int(np.searchsorted(ends, hi, side="left")) + 1
-        part = counts[a:b].astype(np.int64)
-        skip = lo - (int(ends[a]) - int(counts[a]))
-        part[0] -= skip
-        part[-1] -= int(ends[b - 1]) - hi
-        index = np.repeat(np.arange(a, b), part)
-        step = np.arange(index.size) - np.repeat(np.cumsum(part) - part, part)
-        step[:part[0]] += skip
-        yield index, step
 
 
 def _overlap(lo: np.ndarray, hi: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -416,46 +376,3 @@ def _overlap(lo: np.ndarray, hi: np.ndarray, i: np.ndarray, j: np.ndarray) -> np
     keep &= (a_lo[:, 1] <= b_hi[:, 1]) & (b_lo[:, 1] <= a_hi[:, 1])
     keep &= (a_lo[:, 2] <= b_hi[:, 2]) & (b_lo[:, 2] <= a_hi[:, 2])
     return keep & (i != j)
-
-
-#: Upper-triangle index pairs of an m x m table, by m (the pairs within a cell of m entries).
-_TRIANGLES: dict[int, np.ndarray] = {}
-#: Cells with more entries than this get their pairs a row at a time (bounded memory).
-_BIG_CELL = 256
-
-
-def _triangle(m: int) -> np.ndarray:
-    pairs = _TRIANGLES.get(m)
-    if pairs is None:
-        a, b = np.triu_indices(m, 1)
-        pairs = np.stack([a, b]).astype(np.int32)
-        if m <= _BIG_CELL:
-            _TRIANGLES[m] = pairs
-    return pairs
-
-
-def _cell_pairs(starts: np.ndarray, ends: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Every pair of positions within each cell ``starts[c]:ends[c]``: the cells of one size
-    ``m`` at once, from the ``m x m`` upper triangle (no per-pair index arithmetic)."""
-    size = (ends - starts).astype(np.int64)
-    present = np.bincount(size)                         # the sizes that occur (no sort)
-    order = np.argsort(size, kind="stable") if size.size else size
-    ranges = np.cumsum(present)
-    for m in np.flatnonzero(present[2:]).tolist():
-        m += 2
-        first = starts[order[ranges[m] - present[m]:ranges[m]]].astype(np.int32)
-        if m <= _BIG_CELL:
-            a, b = _triangle(m)
-            yield (first[:, None] + a).ravel(), (first[:, None] + b).ravel()
-        else:
-            for f in first.tolist():
-                # Rows of the triangle, as many as make about PAIR_CHUNK pairs at a time.
-                row = 0
-                while row < m - 1:
-                    rows = max(1, min(m - 1 - row, PAIR_CHUNK // (m - row)))
-                    lead = np.arange(row, row + rows)
-                    count = m - 1 - lead                  # partners after each row's entry
-                    a = np.repeat(lead, count)
-                    b = np.arange(a.size) - np.repeat(np.cumsum(count) - count, count)
-                    yield (f + a).astype(np.int32), (f + a + 1 + b).astype(np.int32)
-                    row += rows
