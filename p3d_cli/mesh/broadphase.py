@@ -269,14 +269,17 @@ class _Grid:
         """The keys of cells ``(k, 3)``, and which of them this grid can hold (the others
         hold none of its faces)."""
         if self.axes is None:
-            valid = ((coords >= 0) & (coords < (1 << np.array(self.bits)))).all(axis=1)
+            valid = np.all((coords >= 0) & (coords < (1 << np.array(self.bits))), axis=1)
             ranks = coords
         else:
             ranks = np.empty_like(coords)
             valid = np.ones(len(coords), dtype=bool)
             for a, axis in enumerate(self.axes):
-                at = np.minimum(np.searchsorted(axis, coords[:, a]), max(axis.size - 1, 0))
-                valid &= axis[at] == coords[:, a] if axis.size else False
+                if not axis.size:
+                    valid[:] = False
+                    continue
+                at = np.minimum(np.searchsorted(axis, coords[:, a]), axis.size - 1)
+                valid &= axis[at] == coords[:, a]
                 ranks[:, a] = at
         by, bz = self.bits[1], self.bits[2]
         ranks = np.where(valid[:, None], ranks, 0)
