@@ -43,6 +43,9 @@ _API = {
     "Sphere": "p3d_cli.shapes",
     "Ellipsoid": "p3d_cli.shapes",
     "EllipticCylinder": "p3d_cli.shapes",
+    # pictures
+    "picture": "p3d_cli.render.picture",
+    "Picture": "p3d_cli.render.image",
     # placing
     "Placement": "p3d_cli.placement",
     "rotation_from_axis_degrees": "p3d_cli.rotation",
@@ -120,6 +123,8 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.mesh.solidity_report import SelfIntersections
     from p3d_cli.mesh.verdicts import CheckResult
     from p3d_cli.placement import Placement
+    from p3d_cli.render.image import Picture
+    from p3d_cli.render.picture import picture
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
     from p3d_cli.rotation import (
         compose_rotations,

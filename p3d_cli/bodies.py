@@ -71,6 +71,10 @@ def with_solidity_warnings(result: PropsResult, mesh: MeshSource) -> PropsResult
     """``result`` with the exact test's warnings; they replace the inertia heuristic's
     ``self-intersecting`` ("probably intersects itself") when the test finds a crossing."""
     report, _ = solidity(mesh)
+    if mesh.length_unit is not None:                # props reports such a file in metres
+        from p3d_cli.units import LENGTHS
+
+        report = report.in_length_unit(LENGTHS[mesh.length_unit])
     extra = solidity_warnings(report)
     if not extra:
         return result

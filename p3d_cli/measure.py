@@ -14,7 +14,7 @@ from typing import Any, BinaryIO, Iterable
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import IDENTITY, Placement, then
+from p3d_cli.placement import IDENTITY, Placement, scaling, then
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
 from p3d_cli.solid import as_solid, names_assembly_file
@@ -117,12 +117,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     system, density, mass = unit_rules.resolve(units, output_units, density, mass)
     user_placement = placement
     if system is not None:
-        placement = then(placement, Placement(scale=np.full(3, system.factor)))
+        placement = then(placement, scaling(system.factor, system.factor_error))
         if about is not None:
             about = np.asarray(about, dtype=np.float64) * system.factor
+    from_unit = system is not None and (density is not None or mass is not None)
     result = measure_solid(solid, placement, method=method, density=density,
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
-                           tolerance=tolerance)
+                           tolerance=tolerance, density_error=unit_rules.DENSITY_ROUNDING if from_unit else 0.0)
     result = finish(result, system, user_placement, density_given)
     if solid.mesh is not None and solid.mesh.tetrahedra is None and (
             intersections or "self-intersecting" in result.warning_codes):
@@ -203,7 +204,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
 
         system, _, _ = resolve(units, output_units)
         if system is not None:
-            placement = then(placement, Placement(scale=np.full(3, system.factor)))
+            placement = then(placement, scaling(system.factor, system.factor_error))
     return solid_bounds(solid, placement, tessellate)
 
 
@@ -219,7 +220,8 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     require : iterable of str, optional
         The checks that must pass (``p3d_cli.mesh.verdicts.CHECKS``; default all).
     min_volume : float, optional
-        Also fail a mesh whose signed volume is below this.
+        Also fail a mesh whose signed volume is below this (in metres³ for a file that
+        declares its unit, as every length and volume of the result is; else mesh units³).
     max_faces : int, optional
         Also fail a mesh with more faces than this.
     format, stdin
@@ -243,6 +245,11 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     unknown = [name for name in required if name not in CHECKS]
     if unknown:
         raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
+    assembly = _assembly(thing) if format is None else None
+    if assembly is not None:   # each mesh part on its own (p3d_cli.assembly_check)
+        from p3d_cli.assembly_check import check_assembly
+
+        return check_assembly(assembly, check, required, min_volume, max_faces)
     solid = as_solid(thing, format=format, stdin=stdin)
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
@@ -251,12 +258,14 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
         from p3d_cli.mesh.weld import check_tolerance
 
         weld = check_tolerance(weld)
-    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, weld)
+    # A file that declares its unit is reported in metres, as props and bounds report it.
+    declared = solid.mesh.length_unit
+    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, weld, declared)
     if not solid.mesh.objects:
         return whole
     # A multi-object file: each object is checked on its own, and the whole (where objects
     # that touch or overlap show as shared edges or duplicate faces).
-    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, weld))
+    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, weld, declared))
                   for name, part in solid.mesh.objects)
     failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
     return dataclasses.replace(whole, failed=failed, parts=parts)

@@ -18,7 +18,8 @@ from p3d_cli.cli.options import (
     inputs_argument,
     json_option,
 )
-from p3d_cli.cli.props import field, output_style, plural
+from p3d_cli.cli.output import plural
+from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.config import Config
 from p3d_cli.errors import UsageError
@@ -28,7 +29,8 @@ from p3d_cli.mesh.verdicts import CHECKS, CheckResult
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
                "outward", "manifold", "boundary_edges", "nonmanifold_edges", "misoriented_edges",
                "nonmanifold_vertices", "degenerate_faces", "zero_area_faces",
-               "faces_with_repeated_vertex", "duplicate_faces", "shells", "self_intersections", "volume", "error")
+               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume",
+               "self_intersections")
 
 _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("nonmanifold_edges", "non-manifold edge", "nonmanifold_edge_samples"),
@@ -43,18 +45,22 @@ def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), confi
     """One input's verdict in ``style`` (text, json, csv or fields), formatted where it was
     computed (module level, so that worker processes can receive it). Without ``require``, the
     project settings' ``require`` for the input applies (default: every check)."""
+    used = None
     if limits.get("require") is None:
-        limits["require"] = parse_require(tuple((config or Config()).get("require", source, ())),
-                                          where=f"{getattr(config, 'path', None)}: require")
+        config = config or Config()
+        limits["require"] = parse_require(tuple(config.get("require", source, ())),
+                                          where=config.where("require", source))
+        used = config.used("check", source)
     result = measure.check(source, **limits)
     if style == "text":
         text = check_text(result)
     else:
         record = check_record(result)
+        record["settings"] = used
         if style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record) if style == "json" else check_csv_line(record)
+            text = output.record_line("check", record) if style == "json" else check_csv_line(record)
     return Report(text, passed=result.ok, source=result.source, failures=failure_messages(result))
 
 
@@ -90,7 +96,7 @@ def error_line(outcome, *, style: str) -> str | None:
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
     if style in ("text", "fields"):
         return None if style == "text" else ""
-    return output.dumps(record) if style == "json" else check_csv_line(record)
+    return output.record_line("check", record) if style == "json" else check_csv_line(record)
 
 
 def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:
@@ -137,7 +143,12 @@ def check_record(result: CheckResult) -> dict:
         "shells": r.shells,
         "shell_list": [{"faces": s.faces, "first_face": s.first_face, "volume": s.volume}
                        for s in r.shell_list],
-        "volume": r.volume,
+        # The volume props reports (the enclosed solid's, positive for an inward mesh) and the
+        # faces' signed volume, in the same units as props.
+        "volume": r.solid_volume,
+        "signed_volume": r.volume,
+        "units": ({"length": "m", "volume": "m^3", "mesh_length": result.declared_unit} if result.declared_unit
+                  else {"length": "mesh unit", "volume": "mesh unit^3"}),
         "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in _COUNTS},
         "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
         # None when the no-self-intersection check was not asked for (it is not computed then).
@@ -181,8 +192,9 @@ def check_text(result: CheckResult) -> str:
     r = result.report
     head = "ok" if result.ok else "FAILED " + ", ".join(result.failed)
     name = output.shown_name(result.source)
+    unit = " m^3" if result.declared_unit else ""
     details = (f"({result.format}, {plural(r.faces, 'face')}, {plural(r.shells, 'shell')}, "
-               f"volume {output.number(r.volume)})")
+               f"volume {output.number(r.solid_volume)}{unit})")
     lines = [f"{name}: {head}  {details}"]
     if len(lines[0]) > 80 and len(name) <= 40:
         # Break before the details when that makes the verdict fit; a name too long for any
@@ -199,9 +211,11 @@ def check_text(result: CheckResult) -> str:
             listed = [_sample_text(sample) for sample in getattr(r, samples)]
             lines += _pack(head + " (e.g. ", listed, ")") if listed else [head]
     lines += _crossing_lines(r) + _nesting_lines(r)
-    if r.volume <= 0:
-        lines += _fit("signed volume is not positive: faces point inward (reverse the winding) or the "
-                      "mesh encloses nothing", "  ")
+    if r.volume < 0:
+        lines += _fit(f"signed volume {output.number(r.volume)}{unit} is negative: faces point inward (reverse the "
+                      "winding); the volume shown is the enclosed solid's, as p3d props reports it", "  ")
+    elif r.volume == 0:
+        lines += _fit("signed volume is 0: the mesh encloses nothing", "  ")
     if r.shells > 1:
         lines.append("  shell volumes:")
         for s in r.shell_list[:10]:
@@ -379,6 +393,8 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
     run = Batch("p3d check", inputs, batch)
     if weld is not None and not weld > 0:
         raise UsageError("--weld", f"{weld} is not positive", "give the largest distance of vertices to merge")
+    if style in ("text", "fields") and required is None:
+        run.note_settings(config, "check")
     work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
                              require=required, min_volume=min_volume, max_faces=max_faces,
                              **({"weld": weld} if weld is not None else {}))

@@ -22,8 +22,13 @@ from p3d_cli.errors import UsageError
 @click.option("--trajectory", type=click.Path(dir_okay=False, writable=True), default=None, metavar="FILE.csv",
               help="Write one CSV row per body per step: t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz "
                    "(x, y, z: the centre of mass).")
+@click.option("--plot", type=click.Path(dir_okay=False), default=None, metavar="FILE.png|svg|pdf",
+              help="With --steps: plot positions, turns, joint errors and energy against time "
+                   "(needs p3d's extra 'render').")
+@click.option("--animate", type=click.Path(dir_okay=False), default=None, metavar="FILE.gif|mp4",
+              help="With --steps: an animation of the bodies (needs p3d's extra 'render'; MP4 also ffmpeg).")
 @json_option
-def solve(scene, steps, dt, trajectory, as_json):
+def solve(scene, steps, dt, trajectory, plot, animate, as_json):
     """Solve ball, hinge and bar constraints between rigid bodies.
 
     Reads a YAML scene (bodies with shapes, meshes, parts as in an assembly file, or plain mass
@@ -39,21 +44,27 @@ def solve(scene, steps, dt, trajectory, as_json):
       p3d solve examples/pendulum.yaml
       p3d solve examples/four_bar.yaml --json
       p3d solve examples/pendulum.yaml --steps 2000 --dt 0.001 --trajectory swing.csv
+      p3d solve examples/hinged_door.yaml --steps 2000 --dt 0.001 --plot door.png --animate door.gif
     """
-    if steps == 0 and (dt is not None or trajectory is not None):
-        option = "--dt" if dt is not None else "--trajectory"
+    if steps == 0 and (dt is not None or trajectory is not None or plot or animate):
+        option = next(name for name, value in (("--dt", dt), ("--trajectory", trajectory), ("--plot", plot),
+                                               ("--animate", animate)) if value is not None)
         raise UsageError(option, "only applies when stepping", "add --steps N")
     if steps > 0 and dt is None:
         raise UsageError("--dt", "stepping needs a time step", "give --dt, e.g. --dt 0.001")
     check_steps(steps, dt)  # the limits that need no scene, before reading it
     parsed = load_scene(scene)
-    if trajectory is None:
+    if plot or animate:
+        from p3d_cli.cli.solve_pictures import solve_with_pictures
+
+        result = solve_with_pictures(scene, parsed, steps, dt, trajectory, plot, animate)
+    elif trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)
     else:
-        with trajectory_writer(trajectory) as record:
+        with trajectory_writer(trajectory, inputs=[scene]) as record:
             result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
     if as_json:
-        click.echo(output.dumps(solve_record(result)))
+        click.echo(output.record_line("solve", solve_record(result)))
     else:
         click.echo(solve_table(scene, result))
 

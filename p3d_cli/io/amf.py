@@ -11,19 +11,27 @@ bombs since expat 2.4): trimesh has no AMF loader, and the format is small. What
   degrees, rotations applied about x, then y, then z (fixed axes), then the translation;
   constellations nest, and only those no other constellation instances are the scene. A file
   without constellations is its objects, each at its own coordinates.
+
+An object is one mesh, all its volumes together whatever their materials. A zipped AMF's
+model is inflated to at most the size the archive declares for it and ``MAX_INFLATED``;
+instances are counted over the constellation graph before any is placed (``MAX_INSTANCES``,
+``p3d_cli.io.limits``), and every vertex index is checked to be a whole number in range.
 """
 
 from __future__ import annotations
 
 import io
 import zipfile
+import zlib
 from xml.etree import ElementTree
 
 import numpy as np
 
-from p3d_cli.errors import FormatError
+from p3d_cli.errors import FormatError, InputError
+from p3d_cli.io.dae_mesh import floats, indices
+from p3d_cli.io.limits import check_instances, read_member
 from p3d_cli.io.raw import RawInput
-from p3d_cli.io.scene import SceneObject, scene_source, unique_names
+from p3d_cli.io.scene import SceneObject, instance_totals, scene_source, unique_names
 from p3d_cli.io.source import MeshSource
 
 #: The ``unit`` values of AMF, in metres (ISO/ASTM 52915 §5.1; "feet" as the standard spells it).
@@ -55,26 +63,56 @@ def _xml(raw: RawInput) -> bytes:
         return data
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            names = [n for n in archive.namelist() if not n.endswith("/")]
-            chosen = [n for n in names if n.lower().endswith(".amf")] or names
+            # (not ZipInfo.is_dir, which fails on an empty member name)
+            members = [m for m in archive.infolist() if m.filename and not m.filename.endswith("/")]
+            chosen = [m for m in members if m.filename.lower().endswith(".amf")] or members
             if not chosen:
                 raise zipfile.BadZipFile("the archive is empty")
-            return archive.read(chosen[0])
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
-        raise FormatError(raw.where, f"is not a readable zipped AMF ({exc})", "export it again") from None
+            return read_member(raw.where, archive, chosen[0], f"the zipped AMF's {chosen[0].filename[:60]!r}")
+    except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError, RuntimeError) as exc:
+        raise FormatError(raw.where, f"is not a readable zipped AMF ({str(exc)[:120]})", "export it again") from None
 
 
 def _mesh(obj, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """An object's vertices and the triangles of all its volumes (whatever their materials)."""
     meshes = _children(obj, "mesh")
     if not meshes:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     mesh = meshes[0]
-    vertices = [(_number(c, "x", where), _number(c, "y", where), _number(c, "z", where))
-                for block in _children(mesh, "vertices") for v in _children(block, "vertex")
-                for c in _children(v, "coordinates")]
-    faces = [(int(_number(t, "v1", where, -1)), int(_number(t, "v2", where, -1)), int(_number(t, "v3", where, -1)))
-             for volume in _children(mesh, "volume") for t in _children(volume, "triangle")]
-    return np.array(vertices, dtype=np.float64).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3)
+    coordinates = [c for block in _children(mesh, "vertices") for v in _children(block, "vertex")
+                   for c in _children(v, "coordinates")]
+    text = " ".join(_text(c, axis) for c in coordinates for axis in "xyz")
+    values = floats(text, where, "the vertex coordinates")
+    if len(values) != 3 * len(coordinates):
+        raise FormatError(where, "a vertex coordinate holds more than one number",
+                          "the file is corrupt; export it again")
+    vertices = values.reshape(-1, 3)
+    found = [t for volume in _children(mesh, "volume") for t in _children(volume, "triangle")]
+    corners = " ".join(_text(t, k, None) or _missing(where, k) for t in found for k in ("v1", "v2", "v3"))
+    values = indices(corners, where, "the triangles")
+    if len(values) != 3 * len(found):
+        raise FormatError(where, "a triangle's v1, v2 or v3 holds more than one index",
+                          "the file is corrupt; export it again")
+    faces = values.reshape(-1, 3)
+    if len(faces) and faces.max() >= len(vertices):
+        raise FormatError(where, f"a triangle refers to vertex {int(faces.max())}, but the object has "
+                          f"{len(vertices)}", "the file is corrupt; export it again")
+    return vertices, faces
+
+
+def _text(node, name: str, default: str | None = "0") -> str:
+    """The text of ``node``'s first ``name`` child (``default`` when there is none)."""
+    found = _children(node, name)
+    if not found:
+        return default or ""
+    text = (found[0].text or "").strip()
+    if not text:
+        return default or ""
+    return text
+
+
+def _missing(where: str, name: str) -> str:
+    raise FormatError(where, f"a triangle has no <{name}>", "the file is corrupt; export it again")
 
 
 def _instance_matrix(instance, where: str) -> np.ndarray:
@@ -88,34 +126,55 @@ def _instance_matrix(instance, where: str) -> np.ndarray:
     matrix = np.eye(4)
     matrix[:3, :3] = rz @ ry @ rx
     matrix[:3, 3] = [_number(instance, k, where) for k in ("deltax", "deltay", "deltaz")]
+    if not np.all(np.isfinite(matrix)):
+        raise FormatError(where, "an instance's displacement is not finite", "export it again")
     return matrix
 
 
-def _placements(root, objects: dict, where: str) -> list[tuple[str, np.ndarray]]:
-    """(object id, whole transform) for every instance in the scene (see the module)."""
+def _placements(root, objects: dict, meshes: dict, where: str) -> list[tuple[str, np.ndarray]]:
+    """(object id, whole transform) for every instance in the scene (see the module), counted
+    over the constellation graph before any is placed, and walked without recursion."""
     constellations = {c.get("id"): c for c in _children(root, "constellation")}
     if not constellations:
         return [(oid, np.eye(4)) for oid in objects]
-    referenced = {i.get("objectid") for c in constellations.values() for i in _children(c, "instance")}
-    out: list[tuple[str, np.ndarray]] = []
-
-    def walk(cid: str, outer: np.ndarray, depth: int) -> None:
-        if depth > len(constellations):
-            raise FormatError(where, f"constellation {cid} instances itself", "the file is corrupt; export it again")
-        for instance in _children(constellations[cid], "instance"):
+    for c in constellations.values():
+        for instance in _children(c, "instance"):
             target = instance.get("objectid")
-            matrix = outer @ _instance_matrix(instance, where)
-            if target in constellations:
-                walk(target, matrix, depth + 1)
-            elif target in objects:
-                out.append((target, matrix))
-            else:
+            if target not in constellations and target not in objects:
                 raise FormatError(where, f"an instance refers to object {target!r}, which the file lacks",
                                   "the file is corrupt; export it again")
+    referenced = {i.get("objectid") for c in constellations.values() for i in _children(c, "instance")}
+    roots = [c for cid, c in constellations.items() if cid not in referenced]
+    if not roots:
+        raise FormatError(where, "every constellation is instanced by another (a cycle of instances)",
+                          "the file is corrupt; export it again")
 
-    for cid in constellations:
-        if cid not in referenced:
-            walk(cid, np.eye(4), 0)
+    def targets(c) -> list:
+        return [i.get("objectid") for i in _children(c, "instance")]
+
+    def inner(c) -> list:
+        return [constellations[t] for t in targets(c) if t in constellations]
+
+    def own(c) -> tuple[int, int]:
+        found = [t for t in targets(c) if t not in constellations]
+        return len(found), sum(len(meshes[t][1]) for t in found)
+
+    instances, faces = instance_totals(where, roots, inner, own, "constellation")
+    check_instances(where, instances, faces, "constellations")
+    out: list[tuple[str, np.ndarray]] = []
+    # A stack of (constellation or object id, whole transform), so that instances come out
+    # in document order, a nested constellation's where it is instanced.
+    stack: list = [(root, np.eye(4)) for root in reversed(roots)]
+    while stack:
+        target, outer = stack.pop()
+        if isinstance(target, str):
+            out.append((target, outer))
+            continue
+        pending = []
+        for instance in _children(target, "instance"):
+            name = instance.get("objectid")
+            pending.append((constellations.get(name, name), outer @ _instance_matrix(instance, where)))
+        stack.extend(reversed(pending))
     return out
 
 
@@ -148,7 +207,13 @@ def load(raw: RawInput) -> MeshSource:
                           "use one of millimeter, inch, feet, meter, micron")
     objects = {obj.get("id"): obj for obj in _children(root, "object")}
     meshes = {oid: _mesh(obj, f"{raw.where}: object {oid}") for oid, obj in objects.items()}
-    placed = _placements(root, objects, raw.where)
+    placed = _placements(root, objects, meshes, raw.where)
+    if not any(len(meshes[oid][1]) for oid, _ in placed):
+        what = (f"its {len(objects)} objects hold no <triangle> in a <mesh><volume>" if objects
+                else "it holds no <object>")
+        raise InputError(raw.where, what + (f" (and its constellations place {len(placed)} instances of them)"
+                                            if placed and len(placed) != len(objects) else ""),
+                         "export the model with its meshes")
     names = unique_names([_name(objects[oid], oid) for oid, _ in placed])
     scene = [SceneObject(name, *meshes[oid], matrix) for name, (oid, matrix) in zip(names, placed)]
     return scene_source("amf", raw.where, scene, UNITS[unit], "instances")

@@ -2,17 +2,19 @@
 
 glTF, 3MF, COLLADA (DAE) and AMF files describe a scene graph: meshes instanced by nodes whose
 transforms compose down the tree, and a length unit for the whole file. Their readers
-(``p3d_cli.io.trimesh_formats``, ``p3d_cli.io.amf``) hand this module a list of
-``SceneObject`` (vertices, faces and the object's whole transform) and the file's unit in
+(``p3d_cli.io.dae``, ``p3d_cli.io.amf``, ``p3d_cli.io.gltf``, ``p3d_cli.io.threemf``) hand
+this module a list of ``SceneObject`` (one per mesh instance: a mesh's vertices and all its
+faces, whatever their materials, and the instance's whole transform) and the file's unit in
 metres; ``scene_source`` turns them into one ``MeshSource``:
 
-- every object's vertices are carried through its transform (float64, one matrix product; an
+- every object's vertices are carried through its transform as its blocks are read (float64,
+  one matrix product, so that many instances of one mesh hold the mesh once; an
   identity transform leaves the stored numbers as they are, float32 included), and faces of an
   object whose transform mirrors (negative determinant) are reversed, as glTF 2.0 (§3.7.4,
   "the determinant of the node's global transform defines the winding order") and 3MF (§4.1)
   say, so that a mirrored solid stays outward;
-- nothing is merged, repaired or dropped: the results are the exact integrals of the file's
-  own triangles, placed;
+- nothing is merged, repaired, dropped or flipped: the results are the exact integrals of the
+  file's own triangles, placed, and a part is a placed mesh, never a material group;
 - the unit becomes ``MeshSource.length_unit`` (a key of ``p3d_cli.units.LENGTHS``): a unit of
   that table keeps the coordinates as stored, any other (DAE ``meter="0.5"``, 3MF ``micron``)
   is folded into the transforms so that the coordinates are in metres;
@@ -22,37 +24,17 @@ metres; ``scene_source`` turns them into one ``MeshSource``:
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
-from types import ModuleType
-from typing import Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from p3d_cli.errors import FormatError, InputError, MissingExtraError
+from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import BLOCK, MeshSource
-
-#: The optional extra that brings the scene readers' libraries.
-EXTRA = "p3d-cli[formats]"
 
 #: Relative tolerance for recognising a declared unit as one of ``LENGTHS`` (``0.0254`` as
 #: written in a file is the inch).
 _UNIT_RTOL = 1e-9
-
-
-def require(module: str, where: str, what: str) -> ModuleType:
-    """Import ``module`` for reading ``what``, or say which extra to install.
-
-    Raises
-    ------
-    MissingExtraError
-    """
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        package = module.split(".")[0]
-        raise MissingExtraError(where, f"reading {what} needs the {package} package, which is not installed",
-                                f"install the formats extra: pip install '{EXTRA}'") from None
 
 
 @dataclass(frozen=True)
@@ -88,15 +70,13 @@ def unit_for(metres: float) -> tuple[str, float]:
     return "m", float(metres)
 
 
-def placed(obj: SceneObject, factor: float, where: str) -> tuple[np.ndarray, np.ndarray, bool]:
-    """``obj``'s vertices through its transform (and ``factor``), its faces (reversed under a
-    mirroring transform), and whether the stored numbers were kept as they are."""
-    matrix = np.asarray(obj.transform, dtype=np.float64)
-    if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
-        raise FormatError(f"{where}#{obj.name}", "the object's transform is not a finite 4 x 4 matrix",
-                          "the file is corrupt; export it again")
-    if factor != 1.0:
-        matrix = np.diag([factor, factor, factor, 1.0]) @ matrix
+def check_object(obj: SceneObject, where: str) -> None:
+    """Refuse an object whose arrays are not a mesh or whose faces name a missing vertex.
+
+    Raises
+    ------
+    FormatError
+    """
     faces = np.asarray(obj.faces)
     vertices = np.asarray(obj.vertices)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
@@ -105,7 +85,35 @@ def placed(obj: SceneObject, factor: float, where: str) -> tuple[np.ndarray, np.
     if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
         raise FormatError(f"{where}#{obj.name}", f"a face refers to a vertex outside 0..{len(vertices) - 1}",
                           "the file is corrupt; export it again")
-    if np.array_equal(matrix, np.eye(4)):
+
+
+def placement_of(obj: SceneObject, factor: float, where: str) -> np.ndarray | None:
+    """``obj``'s whole transform with the unit ``factor`` folded in, or None for the identity
+    (the stored numbers are then integrated as they are).
+
+    Raises
+    ------
+    FormatError
+        Not a finite 4 x 4 matrix.
+    """
+    matrix = np.asarray(obj.transform, dtype=np.float64)
+    if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
+        raise FormatError(f"{where}#{obj.name}", "the object's transform is not a finite 4 x 4 matrix",
+                          "the file is corrupt; export it again")
+    if factor != 1.0:
+        matrix = np.diag([factor, factor, factor, 1.0]) @ matrix
+    return None if np.array_equal(matrix, np.eye(4)) else matrix
+
+
+def placed(obj: SceneObject, factor: float, where: str) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``obj``'s vertices through its transform (and ``factor``), its faces (reversed under a
+    mirroring transform), and whether the stored numbers were kept as they are."""
+    check_object(obj, where)
+    return _place(np.asarray(obj.vertices), np.asarray(obj.faces), placement_of(obj, factor, where))
+
+
+def _place(vertices: np.ndarray, faces: np.ndarray, matrix: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, bool]:
+    if matrix is None:
         return vertices, faces, True
     linear = matrix[:3, :3]
     out = vertices.astype(np.float64) @ linear.T + matrix[:3, 3]
@@ -119,14 +127,16 @@ def _stored_dtype(vertices: np.ndarray) -> str:
 
 
 def object_source(fmt: str, where: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,
-                  unit: str) -> MeshSource:
-    """A ``MeshSource`` over one placed object."""
+                  unit: str, matrix: np.ndarray | None = None) -> MeshSource:
+    """A ``MeshSource`` over one object, placed by ``matrix`` (when given) as its blocks are
+    read: a scene of many instances of one mesh holds the mesh once, never its copies."""
     vertices = vertices if vertices.dtype in (np.float32, np.float64) else vertices.astype(np.float64)
     faces = faces.astype(np.intp, copy=False)
 
     def read_blocks() -> Iterator[np.ndarray]:
-        for start in range(0, len(faces), BLOCK):
-            yield vertices[faces[start:start + BLOCK]]
+        points, corners, _ = _place(vertices, faces, matrix)
+        for start in range(0, len(corners), BLOCK):
+            yield points[corners[start:start + BLOCK]]
 
     return MeshSource(fmt, int(len(faces)), dtype, read_blocks, where=where, length_unit=unit)
 
@@ -142,6 +152,7 @@ def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float
     where : str
         The input's name; an object's is ``where#name``.
     objects : list of SceneObject
+        One per mesh instance: a mesh is one object whatever its materials or primitives.
     metres : float
         The file's length unit in metres.
     kind : str
@@ -149,17 +160,25 @@ def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float
 
     Raises
     ------
+    FormatError
+        An object's faces name a missing vertex, or its transform is not finite.
     InputError
         No object with faces.
     """
     unit, factor = unit_for(metres)
     parts = []
+    checked: set[int] = set()
     for obj in objects:
         if not len(obj.faces):
             continue
-        vertices, faces, kept = placed(obj, factor, where)
-        dtype = _stored_dtype(obj.vertices) if kept else "float64"
-        parts.append((obj.name, object_source(fmt, f"{where}#{obj.name}", vertices, faces, dtype, unit)))
+        if id(obj.faces) not in checked:     # instances share their mesh's arrays: check it once
+            check_object(obj, where)
+            checked.add(id(obj.faces))
+        matrix = placement_of(obj, factor, where)
+        vertices = np.asarray(obj.vertices)
+        dtype = _stored_dtype(vertices) if matrix is None else "float64"
+        parts.append((obj.name, object_source(fmt, f"{where}#{obj.name}", vertices, np.asarray(obj.faces), dtype,
+                                              unit, matrix)))
     if not parts:
         raise InputError(where, "the file holds no triangles (no mesh object with faces)",
                          "export the model with its meshes")
@@ -173,6 +192,58 @@ def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float
     return MeshSource(fmt, sum(s.face_count for _, s in parts), "float32" if dtypes == {"float32"} else "float64",
                       read_blocks, None, tuple(warnings), where, length_unit=unit, objects=listed,
                       object_kind=kind if listed else "")
+
+
+def instance_totals(where: str, roots: list, children: Callable[[Any], list], own: Callable[[Any], tuple[int, int]],
+                    what: str) -> tuple[int, int]:
+    """The mesh instances and triangles a scene graph places from ``roots``, counted without
+    placing anything: each graph node's ``own(node)`` (instances, triangles) plus its
+    ``children(node)``'s totals (a child reached twice counts twice, as it is placed twice).
+    Every node is computed once, by an iterative post-order walk (no recursion a deep file can
+    exhaust). Python's integers do not overflow, so a graph of 2^100 instances is counted too.
+
+    Raises
+    ------
+    FormatError
+        A node reaches itself (``what`` names the kind of graph node in the message).
+    """
+    totals: dict[int, tuple[int, int]] = {}
+    entered: set[int] = set()
+    result = [0, 0]
+    for root in roots:
+        stack = [(root, False)]
+        while stack:
+            node, finished = stack.pop()
+            key = id(node)
+            if finished:
+                count, faces = own(node)
+                for child in children(node):
+                    sub = totals[id(child)]
+                    count, faces = count + sub[0], faces + sub[1]
+                totals[key] = (count, faces)
+                continue
+            if key in totals:
+                continue
+            if key in entered:      # entered and not finished: an ancestor of itself
+                raise FormatError(where, f"{what} {_label(node)} contains itself (a cycle of instances)",
+                                  "the file is corrupt; export it again")
+            entered.add(key)
+            stack.append((node, True))
+            for child in children(node):
+                if id(child) in entered and id(child) not in totals:
+                    raise FormatError(where, f"{what} {_label(child)} contains itself (a cycle of instances)",
+                                      "the file is corrupt; export it again")
+                if id(child) not in totals:
+                    stack.append((child, False))
+        result[0] += totals[id(root)][0]
+        result[1] += totals[id(root)][1]
+    return result[0], result[1]
+
+
+def _label(node) -> str:
+    get = getattr(node, "get", None)
+    name = (get("id") or get("name")) if get is not None else None
+    return repr(name) if name else "(unnamed)"
 
 
 def unique_names(names: list[str]) -> list[str]:

@@ -59,6 +59,12 @@ class MeshSource:
     objects: tuple[tuple[str, "MeshSource"], ...] = field(default_factory=tuple)
     object_kind: str = ""
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the mesh (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def triangles(self) -> np.ndarray:
         """All triangles in one ``(n, 3, 3)`` array (for callers that need them at once)."""
         blocks = list(self.read_blocks())

@@ -3,10 +3,13 @@
 The grammar, line by line (blank lines anywhere, words separated by any whitespace, keywords in
 any case): ``solid [name]`` and ``endsolid [name]`` lines between facets (several solids in one
 file are read as one mesh); each facet is the lines ``facet normal NX NY NZ``, ``outer loop``,
-three or more ``vertex X Y Z`` (a polygon, split as a fan), ``endloop``, ``endfacet``. Numbers
-follow ``p3d_cli.io.numbers``. The stored normals are checked as numbers but not used: the
-winding of the corners is what the integrals use. A file whose last line is not ``endsolid``
-is read with a warning (it may be truncated after a whole facet).
+three or more ``vertex X Y Z`` (a polygon, split as a fan), ``endloop``, ``endfacet``. Vertex
+numbers follow ``p3d_cli.io.numbers``. The stored normal is not used (the winding of the corners
+is what the integrals use), so whatever follows ``facet`` is not read: exporters write
+``+inf``, ``nan`` or words there (PrusaSlicer's test file ``20mmbox-nonstandard.stl``), and
+such files are read, as are words after ``outer loop``, ``endloop`` and ``endfacet``. A file
+whose last line is not ``endsolid`` is read with a warning (it may be truncated after a whole
+facet).
 
 The fast path parses whole chunks of triangle facets at C speed. Instead of trusting numpy with
 the structure, it finds every word with a few vectorised passes, and checks that the words are
@@ -23,7 +26,7 @@ from array import array
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.numbers import to_float
+from p3d_cli.io.numbers import fromstring, to_float
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, array_source
 
@@ -160,7 +163,7 @@ def _triangles(body: bytes) -> np.ndarray | None:
         return None     # a letter inside a number word ('1x'): every letter must be a keyword's
     mapped[table[:, _E_COLUMNS] + _E_OFFSETS] = 32   # the keywords' own e's are no exponents
     try:
-        numbers = np.fromstring(bytes(text), dtype=np.float64, sep=" ")
+        numbers = fromstring(bytes(text), np.float64)
     except ValueError:
         return None
     if numbers.size != 12 * facets or not np.isfinite(numbers).all():
@@ -271,22 +274,22 @@ def parse_lines(where: str, stream) -> np.ndarray:
             if state != "outside":
                 raise FormatError(at, f"'{key.decode()}' inside a facet", _HINT)
         elif key == b"facet":
+            # The normal (whatever follows 'facet') is never used, so it is not read.
             _expect(state == "outside", at, "'facet' inside a facet")
-            _numbers(at, words, 2, "facet normal NX NY NZ", second=b"normal")
             state = "facet"
         elif key == b"outer":
-            _expect(state == "facet" and len(words) == 2 and words[1].lower() == b"loop", at,
+            _expect(state == "facet" and len(words) >= 2 and words[1].lower() == b"loop", at,
                     f"expected 'outer loop' after 'facet normal', found {_show(line)!r}")
             state, loop = "loop", []
         elif key == b"vertex":
             _expect(state == "loop", at, "'vertex' outside 'outer loop'")
             loop.append(_numbers(at, words, 1, "vertex X Y Z"))
         elif key == b"endloop":
-            _expect(state == "loop" and len(words) == 1, at, f"unexpected {_show(line)!r} in ASCII STL")
+            _expect(state == "loop", at, f"unexpected {_show(line)!r} in ASCII STL")
             _expect(len(loop) >= 3, at, "a facet with fewer than 3 vertices")
             state = "endloop"
         elif key == b"endfacet":
-            _expect(state == "endloop" and len(words) == 1, at, f"unexpected {_show(line)!r} in ASCII STL")
+            _expect(state == "endloop", at, f"unexpected {_show(line)!r} in ASCII STL")
             for i in range(1, len(loop) - 1):
                 corners.extend(loop[0] + loop[i] + loop[i + 1])
             state = "outside"
@@ -308,10 +311,10 @@ def _expect(condition: bool, where: str, what: str) -> None:
         raise FormatError(where, what, _HINT)
 
 
-def _numbers(where: str, words: list[bytes], skip: int, form: str, second: bytes | None = None) -> list[float]:
+def _numbers(where: str, words: list[bytes], skip: int, form: str) -> list[float]:
     """The three numbers after the first ``skip`` words, checked to be the whole line."""
     try:
-        if len(words) != skip + 3 or (second is not None and words[1].lower() != second):
+        if len(words) != skip + 3:
             raise ValueError
         return [to_float(w) for w in words[skip:]]
     except ValueError:

@@ -11,6 +11,12 @@ strips (``Strips`` / ``TRIANGLE_STRIPS``) into their triangles, every second one
 that the strip keeps one orientation (the VTK convention). Vertices and lines hold no volume
 and are left out, with a warning. Several pieces are read as one mesh. Points are integrated as
 stored (float32 or float64).
+
+Legacy files written by VTK 9 carry ``METADATA`` blocks (array ranges, component names, ended
+by a blank line) after their arrays: they are read past. Every count and index is checked
+before use (a cell size of -1, a count beyond the file, an index of ``1e20`` or ``nan`` in a
+float array are refused), and every zlib block is inflated to exactly the size the file
+declares for it, all blocks together to at most ``p3d_cli.io.limits.MAX_INFLATED`` bytes.
 """
 
 from __future__ import annotations
@@ -18,12 +24,12 @@ from __future__ import annotations
 import base64
 import binascii
 import re
-import zlib
 from xml.etree import ElementTree
 
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
+from p3d_cli.io.limits import check_declared, inflate
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
 
@@ -59,11 +65,11 @@ def strip_triangles(strip: np.ndarray) -> np.ndarray:
 
 def _cells(connectivity: np.ndarray, offsets: np.ndarray, strips: bool, where: str) -> np.ndarray:
     """Triangles of cells given by ``connectivity`` and end ``offsets`` (polygons or strips)."""
-    ends = offsets.astype(np.int64)
+    ends = _index_array(offsets, where, "cell offsets")
+    connectivity = _index_array(connectivity, where, "cell connectivity")
     starts = np.concatenate([[0], ends[:-1]])
     if len(ends) and (np.any(ends < starts) or ends[-1] > len(connectivity)):
         raise _corrupt(where, "cell offsets are not increasing within the connectivity")
-    connectivity = connectivity.astype(np.int64)
     if not strips:
         return _fans(connectivity, starts, ends - starts)
     pieces = []
@@ -71,6 +77,20 @@ def _cells(connectivity: np.ndarray, offsets: np.ndarray, strips: bool, where: s
         cell = connectivity[start:end]
         pieces.append(strip_triangles(cell))
     return np.concatenate(pieces) if pieces else np.zeros((0, 3), dtype=np.int64)
+
+
+def _index_array(values: np.ndarray, where: str, what: str) -> np.ndarray:
+    """``values`` as int64 when every one is a whole number in 0..2^62 (a file may store its
+    indices in a float array: ``1e20`` or ``nan`` there is no index)."""
+    if values.dtype.kind == "f":
+        bad = ~np.isfinite(values) | (values != np.floor(values)) | (values < 0) | (values >= 2.0 ** 62)
+    elif values.dtype.kind == "u":
+        bad = values >= np.uint64(1 << 62)
+    else:
+        bad = values < 0
+    if bad.any():
+        raise _corrupt(where, f"the {what} hold {values[bad][0].item()!r}, which is no index")
+    return values.astype(np.int64)
 
 
 def _fans(connectivity: np.ndarray, starts: np.ndarray, sizes: np.ndarray) -> np.ndarray:
@@ -113,15 +133,28 @@ class _Xml:
             raise FormatError(where, f"its data are compressed by {compressor}, which p3d does not decode",
                               "write the file uncompressed or with zlib")
         self.compressed = bool(compressor)
+        self.inflated = 0
         self.appended = appended
         self.appended_base64 = appended_base64
 
     def _blocks(self, data: bytes, header: np.ndarray) -> bytes:
+        """The blocks of one compressed array, each inflated to exactly the size the header
+        declares for it, and all arrays together to at most ``MAX_INFLATED`` bytes."""
         count = int(header[0])
+        block, last = (int(header[1]), int(header[2])) if len(header) >= 3 else (0, 0)
+        if count > len(header) - 3:
+            raise _corrupt(self.where, f"a compressed array declares {count} blocks, but its header ends after "
+                           f"{max(len(header) - 3, 0)}")
         sizes = header[3:3 + count].astype(np.int64)
+        if len(sizes) and sizes.min() < 0:
+            raise _corrupt(self.where, "a compressed block's size is negative")
+        declared = (count - 1) * block + (last or block) if count else 0
+        self.inflated += declared
+        check_declared(self.where, self.inflated, "its compressed data")
         out, at = [], 0
-        for size in sizes.tolist():
-            out.append(zlib.decompress(data[at:at + size]))
+        for k, size in enumerate(sizes.tolist()):
+            expected = (last or block) if k == count - 1 else block
+            out.append(inflate(self.where, data[at:at + size], expected, f"zlib block {k} of a DataArray"))
             at += size
         return b"".join(out)
 
@@ -130,6 +163,8 @@ class _Xml:
         size = self.header.itemsize
         count = int(np.frombuffer(data[:size], self.header)[0])
         if not self.compressed:
+            if size + count > len(data):
+                raise _corrupt(self.where, f"a DataArray declares {count} bytes, but the file holds {len(data) - size}")
             return data[size:size + count]
         header = np.frombuffer(data[:size * (3 + count)], self.header)
         return self._blocks(data[size * (3 + count):], header)
@@ -173,7 +208,7 @@ class _Xml:
                 raise _corrupt(self.where, f"a DataArray of unknown format {fmt!r}")
             usable = len(data) - len(data) % dtype.itemsize
             return np.frombuffer(data[:usable], dtype).astype(dtype.newbyteorder("="))
-        except (ValueError, binascii.Error, zlib.error, IndexError) as exc:
+        except (ValueError, OverflowError, binascii.Error, IndexError) as exc:
             raise _corrupt(self.where, f"a DataArray cannot be decoded ({exc})") from None
 
 
@@ -257,6 +292,24 @@ class _Legacy:
                 return text
         return b""
 
+    def keyword_line(self) -> bytes:
+        """The next line that is not blank and not in a METADATA block (which VTK 9 writes
+        after any array with information keys, ended by a blank line)."""
+        while True:
+            text = self.line()
+            if text.split()[:1] != [b"METADATA"]:
+                return text
+            self.skip_block()
+
+    def skip_block(self) -> None:
+        """Move past the lines up to the next blank line (or the end)."""
+        while self.at < len(self.data):
+            end = self.data.find(b"\n", self.at)
+            end = len(self.data) if end < 0 else end
+            text, self.at = self.data[self.at:end].strip(), end + 1
+            if not text:
+                return
+
     def numbers(self, count: int, kind: str) -> np.ndarray:
         dtype = np.dtype(">" + _TYPES[kind])
         if self.binary:
@@ -277,34 +330,56 @@ class _Legacy:
         try:
             # Decimal text is read at float64 whatever type the writer names.
             return np.array(found, dtype=np.float64 if dtype.kind == "f" else np.int64)
-        except ValueError:
+        except (ValueError, OverflowError):
             raise _corrupt(self.where, "a number cannot be read") from None
 
 
 def _legacy_cells(cursor: _Legacy, words: list[bytes], version: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """A cell section's connectivity and end offsets, in the classic or the 5.1 layout."""
-    first, second = int(words[1]), int(words[2])
+    first, second = _count(cursor, words[1]), _count(cursor, words[2])
     if version >= (5, 1):
-        label = cursor.line().split()
+        label = cursor.keyword_line().split()
         offsets = cursor.numbers(first, label[1].decode().lower() if len(label) > 1 else "vtktypeint64")
-        label = cursor.line().split()
+        label = cursor.keyword_line().split()
         connectivity = cursor.numbers(second, label[1].decode().lower() if len(label) > 1 else "vtktypeint64")
         return connectivity, offsets[1:]
-    flat = cursor.numbers(second, "int")
-    counts, at, ends, keep = [], 0, [], np.ones(len(flat), dtype=bool)
+    flat = _index_array(cursor.numbers(second, "int"), cursor.where, "cell sizes and indices")
+    # The classic layout: each cell is its size k, then k indices. All cells of one size (the
+    # common case) are checked at once; otherwise each size is read in turn, every step moving
+    # on by k + 1 >= 1 values, so the walk ends within the list whatever the sizes say.
+    if first and len(flat) % first == 0:
+        k = len(flat) // first - 1
+        table = flat.reshape(first, k + 1)
+        if k >= 0 and (table[:, 0] == k).all():
+            return table[:, 1:].ravel(), np.arange(1, first + 1, dtype=np.int64) * k
+    keep = np.ones(len(flat), dtype=bool)
+    ends: list[int] = []
+    at = 0
+    sizes = flat.tolist()
     for _ in range(first):
-        if at >= len(flat):
+        if at >= len(sizes):
             raise _corrupt(cursor.where, "a cell list is shorter than its count says")
-        k = int(flat[at])
         keep[at] = False
-        counts.append(k)
-        at += k + 1
-        ends.append(at - len(counts))
+        at += sizes[at] + 1
+        ends.append(at - len(ends) - 1)
+    if at != len(sizes):
+        raise _corrupt(cursor.where, f"the cells' sizes add up to {at} values, but the section declares {len(sizes)}")
     return flat[keep], np.array(ends, dtype=np.int64)
 
 
+def _count(cursor: _Legacy, word: bytes) -> int:
+    """A declared count: a non-negative integer no larger than the file could hold."""
+    try:
+        value = int(word)
+    except ValueError:
+        raise _corrupt(cursor.where, f"the count {word[:30].decode(errors='replace')!r} is not an integer") from None
+    if not 0 <= value <= len(cursor.data):
+        raise _corrupt(cursor.where, f"the count {value} is negative or larger than the file could hold")
+    return value
+
+
 _SECTIONS = {b"POLYGONS": False, b"TRIANGLE_STRIPS": True, b"VERTICES": None, b"LINES": None}
-_DATA = (b"POINT_DATA", b"CELL_DATA", b"FIELD", b"METADATA")
+_DATA = (b"POINT_DATA", b"CELL_DATA", b"FIELD")
 
 
 def _load_legacy(raw: RawInput) -> MeshSource:
@@ -323,13 +398,13 @@ def _load_legacy(raw: RawInput) -> MeshSource:
         raise _corrupt(raw.where, "is not a POLYDATA dataset")
     points, triangles, skipped = None, [], 0
     while True:
-        words = cursor.line().split()
+        words = cursor.keyword_line().split()
         if not words or words[0].upper() in _DATA:
             break
         key = words[0].upper()
         try:
             if key == b"POINTS":
-                points = cursor.numbers(3 * int(words[1]), words[2].decode().lower()).reshape(-1, 3)
+                points = cursor.numbers(3 * _count(cursor, words[1]), words[2].decode().lower()).reshape(-1, 3)
             elif key in _SECTIONS and len(words) >= 3:
                 connectivity, offsets = _legacy_cells(cursor, words, version)
                 if _SECTIONS[key] is None:
@@ -338,7 +413,7 @@ def _load_legacy(raw: RawInput) -> MeshSource:
                     triangles.append(_cells(connectivity, offsets, bool(_SECTIONS[key]), raw.where))
             else:
                 raise _corrupt(raw.where, f"unexpected section {key[:30].decode(errors='replace')!r}")
-        except (ValueError, IndexError, KeyError) as exc:
+        except (ValueError, OverflowError, IndexError, KeyError) as exc:
             raise _corrupt(raw.where, f"a {key[:30].decode(errors='replace')} section cannot be read ({exc})") from None
     if points is None:
         raise _corrupt(raw.where, "has no POINTS")

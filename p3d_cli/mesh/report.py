@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from p3d_cli.mesh.solidity_report import Nesting, SelfIntersections
@@ -78,6 +79,7 @@ class TopologyReport:
     shells: int
     shell_list: tuple[Shell, ...]
     volume: float
+    """The faces' signed volume (negative when wound inward)."""
     boundary_edge_samples: tuple[EdgeSample, ...] = ()
     nonmanifold_edge_samples: tuple[EdgeSample, ...] = ()
     misoriented_edge_samples: tuple[EdgeSample, ...] = ()
@@ -102,3 +104,38 @@ class TopologyReport:
     @property
     def manifold(self) -> bool:
         return self.nonmanifold_edges == 0 and self.nonmanifold_vertices == 0
+
+    @property
+    def solid_volume(self) -> float:
+        """The volume ``props`` reports for the same faces: the solid they enclose, so positive
+        for an inward-wound mesh too (``volume`` keeps the sign; docs/method.md, "Inward-wound
+        meshes"). Every command reports this one quantity as the volume."""
+        return abs(self.volume)
+
+    def in_length_unit(self, factor: float) -> "TopologyReport":
+        """This report with its lengths multiplied by ``factor`` (volumes by ``factor³``): the
+        file's declared unit made metres, as every command reports such a file. Counts and
+        verdicts do not change: the topology was found on the coordinates as stored."""
+        if factor == 1.0:
+            return self
+
+        def edges(samples):
+            return tuple(EdgeSample(e.faces, tuple(_scaled(p, factor) for p in e.points)) for e in samples)
+
+        cube = factor ** 3
+        return dataclasses.replace(
+            self, volume=self.volume * cube,
+            shell_list=tuple(Shell(s.faces, s.first_face, s.volume * cube) for s in self.shell_list),
+            boundary_edge_samples=edges(self.boundary_edge_samples),
+            nonmanifold_edge_samples=edges(self.nonmanifold_edge_samples),
+            misoriented_edge_samples=edges(self.misoriented_edge_samples),
+            nonmanifold_vertex_samples=tuple(VertexSample(v.faces, _scaled(v.point, factor))
+                                             for v in self.nonmanifold_vertex_samples),
+            self_intersections=None if self.self_intersections is None
+            else self.self_intersections.in_length_unit(factor),
+            nesting=None if self.nesting is None else self.nesting.in_length_unit(factor))
+
+
+def _scaled(point, factor: float):
+    x, y, z = point
+    return (x * factor, y * factor, z * factor)

@@ -3,7 +3,7 @@ kinds and where they meet) and the nesting of its closed shells."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -58,6 +58,12 @@ class SelfIntersections:
     pairs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64), repr=False)
     kinds: tuple[str, ...] = field(default=(), repr=False)
     faces_tested: int = 0
+
+    def in_length_unit(self, factor: float) -> "SelfIntersections":
+        """These pairs with their points' coordinates multiplied by ``factor``."""
+        samples = tuple(replace(c, point=(c.point[0] * factor, c.point[1] * factor, c.point[2] * factor))
+                        for c in self.samples)
+        return replace(self, samples=samples)
 
     def to_dict(self, all_pairs: bool = False) -> dict:
         """The JSON record (``all_pairs``: every pair, not only the samples)."""
@@ -133,6 +139,14 @@ class Nesting:
         """Whether the shells nest as a solid's (nothing counted twice or negative, no crossing)."""
         return (self.counted_twice == 0 and self.counted_negative == 0
                 and not any(kind != "inside" for _, _, kind in self.relations))
+
+    def in_length_unit(self, factor: float) -> "Nesting":
+        """This nesting with its volumes multiplied by ``factor³``."""
+        cube = factor ** 3
+        return replace(self, shells=tuple(replace(s, volume=s.volume * cube) for s in self.shells),
+                       counted_twice=self.counted_twice * cube, counted_negative=self.counted_negative * cube,
+                       crossing_bound=self.crossing_bound * cube,
+                       volumes={k: v * cube for k, v in self.volumes.items()})
 
     def to_dict(self) -> dict:
         return {"ok": self.ok, "closed_shells": self.closed_shells,

@@ -64,6 +64,10 @@ class CheckResult:
         For a file of several objects (glTF nodes, 3MF build items), each object's verdict.
     weld : Weld or None
         With a weld tolerance: what was merged before the checks (``p3d_cli.mesh.weld``).
+    declared_unit : str or None
+        The unit the file declares (glTF, 3MF, DAE, AMF; a key of ``p3d_cli.units.LENGTHS``):
+        the report's lengths and volumes are then in metres, as ``props`` reports them; None:
+        in the mesh's own unit.
     """
 
     source: str
@@ -73,14 +77,22 @@ class CheckResult:
     failed: tuple[str, ...]
     parts: tuple = ()
     weld: Weld | None = None
+    declared_unit: str | None = None
 
     @property
     def ok(self) -> bool:
         return not self.failed
 
+    def _repr_html_(self) -> str:
+        """In a notebook: the verdict, the counts, and the mesh with its defects drawn."""
+        from p3d_cli.render.notebook import check_html
+
+        return check_html(self)
+
 
 def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
-                 max_faces: int | None = None, weld: float | None = None) -> CheckResult:
+                 max_faces: int | None = None, weld: float | None = None,
+                 declared_unit: str | None = None) -> CheckResult:
     """Check a loaded mesh against the required checks and limits.
 
     The triangles are read block by block (twice, and once more for the volumes of several
@@ -100,6 +112,9 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
     weld : float, optional
         Merge vertices within this distance (the file's units) before the checks; never done
         without it (``p3d_cli.mesh.weld``).
+    declared_unit : str, optional
+        The unit the file declares (``MeshSource.length_unit``): lengths and volumes (and
+        ``min_volume``'s comparison) are then in metres.
 
     Raises
     ------
@@ -127,12 +142,17 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         from p3d_cli.mesh.solidity import with_solidity
 
         report = with_solidity(report, mesh.read_blocks, layout)
+    if declared_unit is not None:
+        from p3d_cli.units import LENGTHS
+
+        report = report.in_length_unit(LENGTHS[declared_unit])
     failed = [name for name in required if not passes(report, name)]
     if min_volume is not None and not report.volume >= min_volume:
         failed.append("min-volume")
     if max_faces is not None and report.faces > max_faces:
         failed.append("max-faces")
-    return CheckResult(source, mesh.format, report, required, tuple(failed), weld=welded)
+    return CheckResult(source, mesh.format, report, required, tuple(failed), weld=welded,
+                       declared_unit=declared_unit)
 
 
 def _finite(mesh, where: str):

@@ -79,6 +79,12 @@ class Capsule:
     def is_stretched(self) -> bool:
         return self.stretch != (1.0, 1.0, 1.0)
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the shape (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def spec(self) -> str:
         base = f"capsule:{self.r:g},{self.h:g}"
         return base if not self.is_stretched else base + " stretched " + ",".join(f"{s:g}" for s in self.stretch)

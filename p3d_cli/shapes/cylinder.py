@@ -51,6 +51,12 @@ class Cylinder:
     def scale(self) -> np.ndarray:
         return np.array([self.r, self.r, self.h], dtype=np.float64)
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the shape (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def spec(self) -> str:
         return f"cylinder:{self.r:g},{self.r:g},{self.h:g}"
 

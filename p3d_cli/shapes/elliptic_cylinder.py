@@ -45,6 +45,12 @@ class EllipticCylinder:
     def scale(self) -> np.ndarray:
         return np.array([self.a, self.b, self.h], dtype=np.float64)
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the shape (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def spec(self) -> str:
         return f"ecylinder:{self.a:g},{self.b:g},{self.h:g}"
 

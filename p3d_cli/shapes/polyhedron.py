@@ -102,6 +102,12 @@ class ScaledPolyhedron:
     def scale(self) -> np.ndarray:
         return np.array([self.sx, self.sy, self.sz], dtype=np.float64)
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the shape (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def spec(self) -> str:
         return f"{self.name}:{self.sx:g},{self.sy:g},{self.sz:g}"
 

@@ -41,6 +41,12 @@ class Sphere:
     def scale(self) -> np.ndarray:
         return np.full(3, self.r, dtype=np.float64)
 
+    def _repr_png_(self) -> bytes:
+        """In a notebook: a picture of the shape (``p3d_cli.render``)."""
+        from p3d_cli.render.notebook import png_of
+
+        return png_of(self)
+
     def spec(self) -> str:
         return f"sphere:{self.r:g}"
 

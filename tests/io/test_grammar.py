@@ -422,16 +422,15 @@ def ref_stl(text: str):
         key = words[0]
         if key in ("solid", "endsolid") and state == "out":
             continue
-        if key == "facet" and state == "out" and len(words) == 5 and words[1] == "normal" and \
-                None not in [ref_number(w) for w in words[2:]]:
+        if key == "facet" and state == "out":      # the normal is not used: not read
             state = "facet"
-        elif words == ["outer", "loop"] and state == "facet":
+        elif words[:2] == ["outer", "loop"] and state == "facet":
             state, loop = "loop", []
         elif key == "vertex" and state == "loop" and len(words) == 4 and None not in [ref_number(w) for w in words[1:]]:
             loop.append([float(w) for w in words[1:]])
-        elif words == ["endloop"] and state == "loop" and len(loop) >= 3:
+        elif key == "endloop" and state == "loop" and len(loop) >= 3:
             state = "endloop"
-        elif words == ["endfacet"] and state == "endloop":
+        elif key == "endfacet" and state == "endloop":
             triangles += [[loop[0], loop[i], loop[i + 1]] for i in range(1, len(loop) - 1)]
             state = "out"
         else:

@@ -296,14 +296,15 @@ def test_scene_file_in_an_assembly_is_scaled_from_its_unit(tmp_path):
         p3d.props(tmp_path / "b.yaml")
 
 
-def test_dae_strips_are_refused_not_left_out(tmp_path):
-    from p3d_cli.errors import FormatError
-
+def test_dae_strips_are_read(tmp_path):
+    """Triangle strips were refused (trimesh's reader left them out); they are read now."""
     path = tmp_path / "strips.dae"
     path.write_text(dae("1", '<node id="a"><instance_geometry url="#tet"/></node>').replace(
-        "</mesh>", '<tristrips count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 3</p></tristrips></mesh>'))
-    with pytest.raises(FormatError, match="tristrips"):
-        p3d.props(path)
+        "</mesh>", '<tristrips count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>1 2 3 0</p></tristrips></mesh>'))
+    strip = np.array([[1, 2, 3], [3, 2, 0]])     # the second reversed: (s1, s0, s2) of (2, 3, 0)
+    vertices = np.array(TET.split(), dtype=np.float64).reshape(-1, 3)
+    faces = np.concatenate([np.array(TET_FACES.split(), dtype=np.int64).reshape(-1, 3), strip])
+    assert_exact(p3d.props(path), vertices[faces])
 
 
 def test_dae_library_nodes_are_instanced(tmp_path):
@@ -372,5 +373,4 @@ def test_nothing_is_merged(tmp_path, kind):
         path.write_bytes(trimesh.Trimesh(vertices, faces, process=False).export(file_type=kind))
     result = p3d.props(path, output_units="m" if kind == "dae" else "mm")
     assert result.facts.closed is False
-    stored = vertices.astype(np.float32) if kind == "dae" else vertices   # pycollada reads float32
-    assert_exact(result, stored.astype(np.float64)[faces])
+    assert_exact(result, vertices[faces])

@@ -8,6 +8,7 @@ big-endian binary, classic and 5.1 cell layouts; polygons and triangle strips.
 from __future__ import annotations
 
 import base64
+import json
 import struct
 import zlib
 
@@ -157,3 +158,111 @@ def test_polygons_of_mixed_sizes_are_fans():
 
     triangles = _cells(np.arange(14), np.array([3, 7, 12, 14]), False, "x")
     assert triangles.tolist() == [[0, 1, 2], [3, 4, 5], [3, 5, 6], [7, 8, 9], [7, 9, 10], [7, 10, 11]]
+
+
+METADATA = (b"METADATA\nINFORMATION 2\nNAME L2_NORM_RANGE LOCATION vtkDataArray\nDATA 2 0.2 1.4\n"
+            b"NAME L2_NORM_FINITE_RANGE LOCATION vtkDataArray\nDATA 2 0.2 1.4\n\n")
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_vtk9_metadata_blocks_are_read_past(tmp_path, binary):
+    """VTK 9's legacy writer puts a METADATA block (array ranges, ended by a blank line) after
+    the points and after each cell array; such files were refused as 'no faces'."""
+    text = legacy(binary, new_layout=True)
+    text = text.replace(b"POLYGONS", METADATA + b"POLYGONS", 1)
+    text = text.replace(b"CONNECTIVITY", METADATA.replace(b"L2_NORM", b"COMPONENT") + b"CONNECTIVITY", 1)
+    text = text.replace(b"POINT_DATA", METADATA + b"POINT_DATA", 1)
+    path = tmp_path / "vtk9.vtk"
+    path.write_bytes(text)
+    assert_blob(p3d.props(path), "float32" if binary else "float64")
+
+
+CELLS = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 3 0 0 0 2 0 0 0 5\n"
+
+
+@pytest.mark.parametrize("cells, match", [
+    ("POLYGONS 4 16\n-1 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", "-1, which is no index"),
+    ("POLYGONS 400000000 16\n-1 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", "larger than the file could hold"),
+    ("POLYGONS 4 16\n3 0 2 1\n3 0 1 3\n3 0 3 2\n7 1 2 3\n", "add up to 20 values"),
+    ("POLYGONS 2 16\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", "add up to 8 values"),
+    ("POLYGONS 4 16\n3 0 2 1e20\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", "cannot be read"),
+    ("POLYGONS -4 16\n3 0 2 1\n", "negative"),
+    ("POINTS 1e20 float\n", "not an integer"),
+])
+def test_legacy_cell_counts_are_checked_before_use(tmp_path, cells, match):
+    """A cell size of -1 made the classic-layout walk stand still: a hang (and in a --jobs batch
+    every later result waited for it)."""
+    path = tmp_path / "bad.vtk"
+    path.write_text(CELLS + cells)
+    with pytest.raises(FormatError, match=match):
+        p3d.props(path)
+
+
+def test_a_hostile_vtk_in_a_batch_loses_no_result(tmp_path):
+    from click.testing import CliRunner
+
+    from p3d_cli.cli.main import cli
+
+    (tmp_path / "a.vtk").write_text(CELLS + "POLYGONS 4 16\n-1 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+    (tmp_path / "b.vtk").write_text(CELLS + "POLYGONS 4 16\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+    run = CliRunner().invoke(cli, ["props", str(tmp_path / "a.vtk"), str(tmp_path / "b.vtk"), "--json",
+                                   "--jobs", "2"])
+    assert run.exit_code == 2
+    records = [json.loads(line) for line in run.output.splitlines() if line.startswith("{")]
+    assert [r.get("volume") for r in records if "error" not in r] == [pytest.approx(5.0)]
+
+
+def vtp_of(connectivity: np.ndarray, offsets: np.ndarray, kind: str = "Float64") -> bytes:
+    points = " ".join(map(str, [0, 0, 0, 3, 0, 0, 0, 2, 0, 0, 0, 5]))
+    return (f'<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="{len(offsets)}">'
+            f'<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{points}</DataArray></Points>'
+            f'<Polys><DataArray type="{kind}" Name="connectivity" format="ascii">'
+            f'{" ".join(map(repr, connectivity.tolist()))}</DataArray>'
+            f'<DataArray type="{kind}" Name="offsets" format="ascii">{" ".join(map(repr, offsets.tolist()))}'
+            "</DataArray></Polys></Piece></PolyData></VTKFile>").encode()
+
+
+@pytest.mark.parametrize("bad", [1e20, float("nan"), -1.0, 2.5])
+@pytest.mark.parametrize("where", ["connectivity", "offsets"])
+def test_vtp_indices_that_are_no_index(tmp_path, bad, where):
+    connectivity = np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3], dtype=float)
+    offsets = np.array([3, 6, 9, 12], dtype=float)
+    (connectivity if where == "connectivity" else offsets)[1] = bad
+    path = tmp_path / "bad.vtp"
+    path.write_bytes(vtp_of(connectivity, offsets))
+    with pytest.raises(FormatError, match="which is no index"):
+        p3d.props(path)
+    good = tmp_path / "good.vtp"
+    good.write_bytes(vtp_of(np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3.0]), np.array([3, 6, 9, 12.0])))
+    assert p3d.props(good).properties.volume == pytest.approx(5.0)
+
+
+def zlib_bomb(inflated: int, declared: int | None = None) -> bytes:
+    """A VTP whose points array is one zlib block of ``inflated`` zero bytes, declared as
+    ``declared`` (default: the truth)."""
+    block = zlib.compress(b"\0" * inflated, 9)
+    head = struct.pack("<4I", 1, declared or inflated, declared or inflated, len(block))
+    text = base64.b64encode(head) + base64.b64encode(block)
+    return (b'<VTKFile type="PolyData" header_type="UInt32" compressor="vtkZLibDataCompressor"><PolyData>'
+            b'<Piece><Points><DataArray type="Float32" NumberOfComponents="3" format="binary">' + text
+            + b"</DataArray></Points></Piece></PolyData></VTKFile>")
+
+
+def test_zlib_bomb_is_refused_by_its_declared_size(tmp_path, monkeypatch):
+    """The 2 MB -> 2.3 GB bomb, scaled down: with a limit of 1 MB, 4 MB of zeros are refused
+    before anything is inflated."""
+    from p3d_cli.io import limits
+
+    monkeypatch.setattr(limits, "MAX_INFLATED", 1 << 20)
+    path = tmp_path / "bomb.vtp"
+    path.write_bytes(zlib_bomb(4 << 20))
+    assert path.stat().st_size < 10_000
+    with pytest.raises(FormatError, match="more than p3d inflates"):
+        p3d.props(path)
+
+
+def test_zlib_block_inflating_past_its_declared_size_stops_there(tmp_path):
+    path = tmp_path / "liar.vtp"
+    path.write_bytes(zlib_bomb(4 << 20, declared=48))
+    with pytest.raises(FormatError, match="inflates to more than the 48 bytes"):
+        p3d.props(path)
