@@ -104,3 +104,17 @@ def test_open_shells_take_no_part():
     cube = box([0, 0, 0], [3, 3, 3])
     result = nesting(np.concatenate([cube, box([1, 1, 1], [2, 2, 2])[1:]]))
     assert result.closed_shells == 1 and result.ok
+
+
+def test_a_declared_unit_scales_the_crossings_points_and_the_nesting_volumes():
+    # A scene file in millimetres is reported in metres (check's in_length_unit): the crossing
+    # points by the factor, the volumes counted twice by its cube; the counts stay.
+    report = p3d.check(np.concatenate([box([0, 0, 0], [2, 2, 2]), box([1, 1, 1], [3, 3, 4])])).report
+    metres = report.in_length_unit(1e-3)
+    found, scaled = report.self_intersections, metres.self_intersections
+    assert scaled.count == found.count > 0
+    for before, after in zip(found.samples, scaled.samples):
+        assert after.faces == before.faces and after.point == tuple(x * 1e-3 for x in before.point)
+    assert metres.nesting.crossing_bound == report.nesting.crossing_bound * 1e-9
+    assert [s.volume for s in metres.nesting.shells] == [s.volume * 1e-9 for s in report.nesting.shells]
+    assert metres.nesting.relations == report.nesting.relations
