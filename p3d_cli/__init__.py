@@ -47,13 +47,13 @@ _API = {
     "picture": "p3d_cli.render.picture",
     "Picture": "p3d_cli.render.image",
     # placing
-    "Placement": "p3d_cli.placement",
-    "rotation_from_axis_degrees": "p3d_cli.rotation",
-    "rotation_from_quaternion": "p3d_cli.rotation",
-    "quaternion_matrix": "p3d_cli.rotation",
-    "compose_rotations": "p3d_cli.rotation",
+    "Placement": "p3d_cli.geometry.placement",
+    "rotation_from_axis_degrees": "p3d_cli.geometry.rotation",
+    "rotation_from_quaternion": "p3d_cli.geometry.rotation",
+    "quaternion_matrix": "p3d_cli.geometry.rotation",
+    "compose_rotations": "p3d_cli.geometry.rotation",
     # from moments to mass properties
-    "mass_properties": "p3d_cli.inertia",
+    "mass_properties": "p3d_cli.geometry.inertia",
     # results
     "PropsResult": "p3d_cli.results",
     "BoundsResult": "p3d_cli.results",
@@ -115,18 +115,18 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
         UnknownFormatError,
         UsageError,
     )
-    from p3d_cli.inertia import mass_properties
+    from p3d_cli.geometry.inertia import mass_properties
     from p3d_cli.io import load_mesh
     from p3d_cli.io.formats import FORMATS
     from p3d_cli.io.source import MeshSource
     from p3d_cli.measure import bounds, check, props, self_intersections
     from p3d_cli.mesh.solidity_report import SelfIntersections
     from p3d_cli.mesh.verdicts import CheckResult
-    from p3d_cli.placement import Placement
+    from p3d_cli.geometry.placement import Placement
     from p3d_cli.render.image import Picture
     from p3d_cli.render.picture import picture
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
-    from p3d_cli.rotation import (
+    from p3d_cli.geometry.rotation import (
         compose_rotations,
         quaternion_matrix,
         rotation_from_axis_degrees,

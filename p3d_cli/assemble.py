@@ -18,7 +18,7 @@ import numpy as np
 
 from p3d_cli.assembly import Assembly, Part
 from p3d_cli.errors import InputError, P3DError, UsageError
-from p3d_cli.placement import Placement, converted, scaling, then
+from p3d_cli.geometry.placement import Placement, converted, scaling, then
 from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
 from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, exact_length, length_factor, parse_output_units
 
@@ -132,7 +132,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     ------
     InputError, UsageError
     """
-    from p3d_cli.inertia import combine_mass_properties, implausibilities
+    from p3d_cli.geometry.inertia import combine_mass_properties, implausibilities
     from p3d_cli.single import finish, measure_solid
     from p3d_cli.solid import as_solid
 
@@ -318,7 +318,7 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
         found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}
-    from p3d_cli.bounding import checked_bounds
+    from p3d_cli.geometry.bounding import checked_bounds
 
     with np.errstate(over="ignore"):
         union = _union([r.bounds for r in found])

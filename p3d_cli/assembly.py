@@ -19,8 +19,8 @@ An assembly file is YAML recognised by its content (a top-level ``parts:`` list)
 Each part is measured exactly as a single input is (``p3d_cli.measure``), placed in the
 assembly's frame, and the parts are summed: masses and volumes add, the centre of mass is
 the mass-weighted mean, and second moments about it add with the parallel-axis terms
-(``p3d_cli.inertia.combine_mass_properties``). Placement keys are read by the one placement
-parser (``p3d_cli.placement_text.placement_from_mapping``), as for scenes and the command line.
+(``p3d_cli.geometry.inertia.combine_mass_properties``). Placement keys are read by the one placement
+parser (``p3d_cli.geometry.placement_text.placement_from_mapping``), as for scenes and the command line.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from p3d_cli.errors import InputError, P3DError, UsageError
-from p3d_cli.placement import IDENTITY, Placement
-from p3d_cli.placement_text import placement_from_mapping
+from p3d_cli.geometry.placement import IDENTITY, Placement
+from p3d_cli.geometry.placement_text import placement_from_mapping
 from p3d_cli.solid import names_assembly_file
 
 #: Keys of one part.

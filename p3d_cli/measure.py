@@ -14,7 +14,7 @@ from typing import Any, BinaryIO, Iterable
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import IDENTITY, Placement, scaling, then
+from p3d_cli.geometry.placement import IDENTITY, Placement, scaling, then
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
 from p3d_cli.solid import as_solid, names_assembly_file

@@ -10,7 +10,7 @@ from typing import Protocol
 
 import numpy as np
 
-from p3d_cli.inertia import density_for, inertia_from_second_moments
+from p3d_cli.geometry.inertia import density_for, inertia_from_second_moments
 from p3d_cli.results import Bounds
 
 

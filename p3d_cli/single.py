@@ -12,7 +12,7 @@ from typing import Iterable
 import numpy as np
 
 from p3d_cli.errors import InputError, UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.solid import Solid
 
@@ -35,7 +35,7 @@ def measure_solid(solid: Solid, placement: Placement, *, method: str, density, m
 def finish(result: PropsResult, system, user_placement: Placement, density_given: bool = False) -> PropsResult:
     """Say the units, keep the user's placement in the record, add the plausibility warnings
     (``density_given``: the density was the user's, so the unit-slip warning applies)."""
-    from p3d_cli.inertia import implausibilities
+    from p3d_cli.geometry.inertia import implausibilities
     from p3d_cli.units import MESH_UNITS, slip_warning
 
     details = dict(result.details)
@@ -59,9 +59,9 @@ def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = No
     Raises
     ------
     RangeError
-        The bounds overflow float64 (``p3d_cli.bounding.checked_bounds``).
+        The bounds overflow float64 (``p3d_cli.geometry.bounding.checked_bounds``).
     """
-    from p3d_cli.bounding import checked_bounds
+    from p3d_cli.geometry.bounding import checked_bounds
 
     with np.errstate(over="ignore", invalid="ignore"):     # refused below, in one error
         result = _solid_bounds(solid, placement, tessellate)

@@ -203,7 +203,7 @@ PLACEMENT_HELP = ("Placement order: --scale (in the solid's own frame), then the
 
 def placement_options(f):
     """``--scale``, ``--rotate``, ``--quat``, ``--translate``, ``--tessellate``, handed to the
-    command as ``placement: p3d_cli.placement.Placement`` and ``tessellate: int | None``."""
+    command as ``placement: p3d_cli.geometry.placement.Placement`` and ``tessellate: int | None``."""
     import functools
 
     @functools.wraps(f)
@@ -249,7 +249,7 @@ def make_placement(scale, turns, quat, translate, rpy=None):
     UsageError
         A malformed turn, quaternion or rpy, a zero scale, or two ways of giving the rotation.
     """
-    from p3d_cli.placement_text import make_placement as placement
+    from p3d_cli.geometry.placement_text import make_placement as placement
 
     return placement(scale=scale, turns=turns or None, quat=quat, rpy=rpy, translate=translate,
                      names=("--rotate", "--quat", "--rpy"))

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.errors import P3DError, RangeError, SceneError
-from p3d_cli.inertia import mass_properties
+from p3d_cli.geometry.inertia import mass_properties
 from p3d_cli.results import Moments
 
 
@@ -66,7 +66,7 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     SceneError
         Unreadable or corrupt mesh, or a solid with no positive volume.
     """
-    from p3d_cli.moments import shape_moments as closed_form
+    from p3d_cli.geometry.moments import shape_moments as closed_form
 
     shape = parse_shape_spec(spec_or_path, where)
     # Out-of-range moments end in one RangeError (checked where they are made), as for p3d props:
@@ -164,7 +164,7 @@ def _parts_inertial(body) -> Inertial:
     whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
     """
     from p3d_cli.assemble import assembly_props
-    from p3d_cli.placement import IDENTITY
+    from p3d_cli.geometry.placement import IDENTITY
 
     from p3d_cli.warning_codes import code_of
 

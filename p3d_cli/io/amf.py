@@ -117,7 +117,7 @@ def _missing(where: str, name: str) -> str:
 
 def _instance_matrix(instance, where: str) -> np.ndarray:
     from p3d_cli.errors import UsageError
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
     try:
         rx, ry, rz = (rotation_from_axis_degrees(axis, _number(instance, "r" + axis, where)) for axis in "xyz")

@@ -130,7 +130,7 @@ def _numbers(element, count: int, where: str) -> np.ndarray:
 
 
 def _transform(kind: str, element, factor: float, where: str) -> np.ndarray:
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
     out = np.eye(4)
     if kind == "matrix":

@@ -32,7 +32,7 @@ from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combin
 from p3d_cli.mesh.closed import (_column_hashes, _lex_less, _side_keys, column_edge_keys, key_groups,
                                   sides_of_edges)
 from p3d_cli.mesh.columns import columns
-from p3d_cli.mesh.expansions import two_sum
+from p3d_cli.geometry.expansions import two_sum
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
 #: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).

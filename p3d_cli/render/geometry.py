@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from p3d_cli.placement import IDENTITY, Placement
+from p3d_cli.geometry.placement import IDENTITY, Placement
 
 #: Segments of a round shape's polyhedron in a picture (a sphere: 64 around, 32 stacks).
 ROUND_SEGMENTS = 64
@@ -110,7 +110,7 @@ def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
 
 def _place(triangles: np.ndarray, placement: Placement) -> np.ndarray:
     """Triangles after ``placement`` (a mirror also swaps two corners, keeping the winding
-    outward, as ``p3d_cli.placement`` does for the measurement)."""
+    outward, as ``p3d_cli.geometry.placement`` does for the measurement)."""
     if placement.is_identity:
         return triangles
     shape = triangles.shape

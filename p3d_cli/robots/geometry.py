@@ -2,7 +2,7 @@
 
 Each collision (or visual) geom is one part, placed in the link frame by its own placement
 (mesh scale, rotation, translation); the link's mass properties are the parts' summed with the
-parallel-axis terms (``p3d_cli.inertia.combine_mass_properties``), in the description's units
+parallel-axis terms (``p3d_cli.geometry.inertia.combine_mass_properties``), in the description's units
 (SI). Geoms that overlap are counted twice, as MuJoCo counts them.
 """
 
@@ -15,7 +15,7 @@ from p3d_cli.assembly import Assembly, Part
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
-from p3d_cli.placement import IDENTITY, Placement
+from p3d_cli.geometry.placement import IDENTITY, Placement
 from p3d_cli.results import MassProperties, PropsResult
 from p3d_cli.robots.model import Geom, Link
 

@@ -16,7 +16,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.moments import scale_moments
+from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes.closed_form import canonical_moments
 

@@ -12,7 +12,7 @@ from conftest import cube_triangles, write_binary_stl
 from p3d_cli.constraints import load_scene, parse_scene, solve_scene
 from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.errors import SceneError
-from p3d_cli.rotation import rotation_from_rpy
+from p3d_cli.geometry.rotation import rotation_from_rpy
 
 
 def _box(m: float, half) -> tuple[float, np.ndarray]:
@@ -144,7 +144,7 @@ def test_the_placement_vocabulary_is_a_body_pose(pose, same):
 
 
 def test_rpy_pose_is_the_urdf_rotation():
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     body = parse_scene(__import__("yaml").safe_load("bodies:\n  b: {fixed: true, rpy: [0.1, -0.7, 2.0]}\n"),
                        "s", ".").body("b")

@@ -21,7 +21,7 @@ from exact import exact_moments
 from p3d_cli.assembly import Assembly, Part
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 
 RTOL = 1e-12
 

@@ -32,7 +32,7 @@ def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rota
     blocks : (n, 3, 3) array, or an iterable of such blocks (float32 or float64)
         A streamed mesh is never held whole: each block is projected and dropped.
     scale : (3,) array_like, optional
-        Already checked (``p3d_cli.placement.check_scale``).
+        Already checked (``p3d_cli.geometry.placement.check_scale``).
     rotation : (3, 3) array_like, optional
     translation : (3,) array_like, optional
     """

@@ -1,7 +1,7 @@
 """Placing a solid: a diagonal scale, then a rotation about the world origin, then a translation.
 
 Mass properties are placed from the unplaced solid's moments: eq. 9 of the Physics3D note
-(``p3d_cli.moments.scale_moments``) for the scale, ``C' = R C Rᵀ`` for the rotation (so
+(``p3d_cli.geometry.moments.scale_moments``) for the scale, ``C' = R C Rᵀ`` for the rotation (so
 ``I' = R I Rᵀ``), and the centre moved by the translation (docs/method.md, "Placement").
 Bounds are placed exactly: shapes by their closed forms, triangles by projecting every corner.
 
@@ -23,11 +23,11 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from p3d_cli.bounding import triangles_bounds
+from p3d_cli.geometry.bounding import triangles_bounds
 from p3d_cli.errors import UsageError
 from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.expansions import rounded_sums
-from p3d_cli.moments import rotate_moments, scale_moments, translate_moments
+from p3d_cli.geometry.expansions import rounded_sums
+from p3d_cli.geometry.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
 
 
@@ -160,7 +160,7 @@ class Placement:
         Non-zero diagonal scale factors (one number is a uniform scale); a negative factor
         mirrors the solid (see the module's note on winding).
     rotation : (3, 3) float64 or None
-        A proper rotation matrix (``p3d_cli.rotation``).
+        A proper rotation matrix (``p3d_cli.geometry.rotation``).
     translation : (3,) float64 or None
     errors : PlacementErrors or None
         How far these floats may be from the exact placement they stand for, when they were
