@@ -17,13 +17,14 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hypothesis import given, note, strategies as st
+from helpers.exact_assembly import EXACT_LENGTHS, ExactPart, combine, error_ratios, whole_of
+from hypothesis import given, note
+from hypothesis import strategies as st
 
 import p3d_cli as p3d
-from helpers.exact_assembly import EXACT_LENGTHS, ExactPart, combine, error_ratios, whole_of
-from p3d_cli.assembly import Assembly, Part
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_quaternion
+from p3d_cli.measure.assembly import Assembly, Part
 
 CUBE = p3d.parse_shape("box:1,1,1").triangles()
 #: Every error/bound ratio per quantity over the run (summarised at the end with -s).

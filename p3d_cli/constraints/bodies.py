@@ -73,14 +73,14 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     # numpy's overflow warnings on the way would only repeat it.
     with np.errstate(all="ignore"):
         if shape is not None:
-            try:   # closed forms: p3d_cli.exact (and the mesh readers it imports) is not needed
+            try:   # closed forms: p3d_cli.measure.exact (and the mesh readers it imports) is not needed
                 moments = closed_form(shape, spec_or_path)
             except RangeError as exc:      # named by the body that gives the shape
                 raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
         else:
             path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
-            from p3d_cli.exact import solid_moments
-            from p3d_cli.solid import as_solid
+            from p3d_cli.measure.exact import solid_moments
+            from p3d_cli.measure.solid import as_solid
 
             try:
                 moments = solid_moments(as_solid(path))
@@ -158,14 +158,13 @@ NOT_A_SOLID = frozenset({"open", "inward", "flat", "self-intersecting", "implaus
 
 
 def _parts_inertial(body) -> Inertial:
-    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.assemble``).
+    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.measure.assemble``).
 
     The body's ``density`` is the default of the parts that give none, its ``mass`` the
     whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
     """
-    from p3d_cli.assemble import assembly_props
     from p3d_cli.geometry.placement import IDENTITY
-
+    from p3d_cli.measure.assemble import assembly_props
     from p3d_cli.warning_codes import code_of
 
     where = f"{body.where}.parts"

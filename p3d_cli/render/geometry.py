@@ -56,9 +56,9 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
     P3DError
         As ``p3d.props`` for an input it cannot read.
     """
-    from p3d_cli.assembly import find_assembly
     from p3d_cli.errors import UsageError
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure.assembly import find_assembly
+    from p3d_cli.measure.solid import as_solid
 
     placement = IDENTITY if placement is None else placement
     found = find_assembly(thing) if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly" \
@@ -82,8 +82,8 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
 
 def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
     """Every part placed, in the assembly's own length unit (its numbers read as written)."""
-    from p3d_cli.assemble import declared_scale, leaves
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure.assemble import declared_scale, leaves
+    from p3d_cli.measure.solid import as_solid
     from p3d_cli.units import UnitSystem
 
     units = assembly.units

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import cube_triangles, write_binary_stl
+
 from p3d_cli.constraints import load_scene, parse_scene, solve_scene
 from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.errors import SceneError
@@ -243,7 +243,7 @@ def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
 
 
 def test_parts_bodies_are_measured_only_when_the_solve_needs_them(monkeypatch):
-    from p3d_cli import assemble
+    from p3d_cli.measure import assemble
 
     calls = []
     real = assemble.assembly_props

@@ -1,4 +1,4 @@
-"""Measuring an assembly (``p3d_cli.assembly``): every part placed in one frame, then the whole.
+"""Measuring an assembly (``p3d_cli.measure.assembly``): every part placed in one frame, then the whole.
 
 Units: an assembly's ``units`` (or the caller's, for a file that names none) is the length
 unit of its meshes and translations; a nested file without ``units`` inherits its parent's.
@@ -16,9 +16,9 @@ from typing import Iterator
 
 import numpy as np
 
-from p3d_cli.assembly import Assembly, Part
 from p3d_cli.errors import InputError, P3DError, UsageError
 from p3d_cli.geometry.placement import Placement, converted, scaling, then
+from p3d_cli.measure.assembly import Assembly, Part
 from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
 from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, exact_length, length_factor, parse_output_units
 
@@ -133,8 +133,8 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     InputError, UsageError
     """
     from p3d_cli.geometry.inertia import combine_mass_properties, implausibilities
-    from p3d_cli.single import finish, measure_solid
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure.single import finish, measure_solid
+    from p3d_cli.measure.solid import as_solid
 
     system = _system(assembly, units, output_units)
     factor = 1.0 if system is None else system.factor
@@ -306,8 +306,8 @@ def _union(boxes):
 def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, output_units=None,
                     tessellate=None) -> BoundsResult:
     """The exact bounds of every placed part, and their union."""
-    from p3d_cli.single import solid_bounds
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure.single import solid_bounds
+    from p3d_cli.measure.solid import as_solid
 
     system = _system(assembly, units, output_units)
     outer = converted(placement, _factor(system.mesh_length if system else None, system))

@@ -32,7 +32,7 @@ from typing import Any
 from p3d_cli.errors import InputError, P3DError, UsageError
 from p3d_cli.geometry.placement import IDENTITY, Placement
 from p3d_cli.geometry.placement_text import placement_from_mapping
-from p3d_cli.solid import names_assembly_file
+from p3d_cli.measure.solid import names_assembly_file
 
 #: Keys of one part.
 PART_KEYS = ("name", "mesh", "shape", "assembly", "density", "mass", "translate", "rotate", "quat", "rpy",

@@ -13,13 +13,13 @@ import numpy as np
 
 from p3d_cli.errors import UsageError
 from p3d_cli.geometry.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
-from p3d_cli.mesh.analysis import MeshAnalysis, analyze
-from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.geometry.moments import check_range, shape_moments
 from p3d_cli.geometry.placement import IDENTITY, Placement, prescaled, watch_bounds
+from p3d_cli.measure.solid import Solid
+from p3d_cli.mesh.analysis import MeshAnalysis, analyze
+from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
-from p3d_cli.solid import Solid
 from p3d_cli.warning_codes import CodedWarning
 
 #: A float32 file whose coordinate spacing exceeds this fraction of the part's size is
