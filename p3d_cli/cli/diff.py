@@ -9,7 +9,7 @@ import os
 
 import click
 
-from p3d_cli import baseline as bl
+from p3d_cli.cli import baseline as bl
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import batch_options, density_options, format_option, json_option, warning_options

@@ -302,7 +302,7 @@ def make_warning_filter(ignore, thresholds, no_config: bool):
     UsageError, FormatError
     """
     from p3d_cli.cli.settings import WarningFilter, parse_thresholds
-    from p3d_cli.config import Config, load_config
+    from p3d_cli.cli.settings_file import Config, load_config
 
     config = Config() if no_config else load_config()
     limits = parse_thresholds((f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items()),
@@ -333,7 +333,7 @@ def config_option(f):
 
     @functools.wraps(f)
     def command(*args, no_config, **kwargs):
-        from p3d_cli.config import Config, load_config
+        from p3d_cli.cli.settings_file import Config, load_config
 
         return f(*args, config=Config() if no_config else load_config(), **kwargs)
 
