@@ -14,8 +14,8 @@ import numpy as np
 
 from p3d_cli.constraints import values
 from p3d_cli.constraints.rotation import quat_to_matrix
-from p3d_cli.constraints.yaml_loader import read_yaml
 from p3d_cli.errors import InputError, SceneError
+from p3d_cli.io.yaml_loader import read_yaml
 
 TOP_KEYS = ("gravity", "bodies", "constraints")
 BODY_KEYS = ("shape", "parts", "density", "mass", "inertia", "center_of_mass", "fixed", "position",

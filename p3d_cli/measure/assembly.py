@@ -174,7 +174,7 @@ def load_assembly(path: str, _seen: tuple[str, ...] = (), _loaded: dict | None =
 
 
 def _read_assembly(path: str, seen: tuple[str, ...], loaded: dict) -> Assembly:
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict) or not isinstance(data.get("parts"), list) or not data["parts"]:

@@ -228,7 +228,7 @@ def test_the_documented_scene_format_loads_and_solves(tmp_path):
 def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
     """YAML 1.1 (PyYAML) reads ``1e8`` as text; scenes and assemblies read it as every language
     (and YAML 1.2) does, and keep quoted text as text."""
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     path = tmp_path / "n.yaml"
     path.write_text("a: [1e8, -2.5e-3, +3E2, 1.0e+8, 7, 1_0, '1e8', 1e, e5, 0x10]\n")
@@ -264,7 +264,7 @@ constraints:
 def test_plain_scalars_yaml_cannot_build_are_one_scene_error(tmp_path, value):
     """PyYAML takes these for a binary int or a date, then fails to build them with a bare
     ValueError (found by fuzzing the scene loader)."""
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     path = tmp_path / "s.yaml"
     path.write_text(f"bodies:\n  a: {{fixed: true, position: [{value}, 0, 0]}}\n")
