@@ -68,7 +68,7 @@ _API = {
     "check_robot": "p3d_cli.robots",
     "fill_robot": "p3d_cli.robots",
     # assemblies
-    "load_assembly": "p3d_cli.measure.assembly",
+    "load_assembly": "p3d_cli.measure.assembly.parts",
     # constraint scenes
     "load_scene": "p3d_cli.constraints",
     "parse_scene": "p3d_cli.constraints",

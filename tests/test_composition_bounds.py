@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 import p3d_cli as p3d
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_quaternion
-from p3d_cli.measure.assembly import Assembly, Part
+from p3d_cli.measure.assembly.parts import Assembly, Part
 
 CUBE = p3d.parse_shape("box:1,1,1").triangles()
 #: Every error/bound ratio per quantity over the run (summarised at the end with -s).

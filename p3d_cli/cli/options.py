@@ -249,7 +249,7 @@ def make_placement(scale, turns, quat, translate, rpy=None):
     UsageError
         A malformed turn, quaternion or rpy, a zero scale, or two ways of giving the rotation.
     """
-    from p3d_cli.geometry.placement_text import make_placement as placement
+    from p3d_cli.io.placements import make_placement as placement
 
     return placement(scale=scale, turns=turns or None, quat=quat, rpy=rpy, translate=translate,
                      names=("--rotate", "--quat", "--rpy"))

@@ -79,8 +79,7 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
                 raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
         else:
             path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
-            from p3d_cli.measure.exact import solid_moments
-            from p3d_cli.measure.solid import as_solid
+            from p3d_cli.measure import as_solid, solid_moments
 
             try:
                 moments = solid_moments(as_solid(path))
@@ -158,19 +157,18 @@ NOT_A_SOLID = frozenset({"open", "inward", "flat", "self-intersecting", "implaus
 
 
 def _parts_inertial(body) -> Inertial:
-    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.measure.assemble``).
+    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.measure.props``).
 
     The body's ``density`` is the default of the parts that give none, its ``mass`` the
     whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
     """
-    from p3d_cli.geometry.placement import IDENTITY
-    from p3d_cli.measure.assemble import assembly_props
+    from p3d_cli.measure import props
     from p3d_cli.warning_codes import code_of
 
     where = f"{body.where}.parts"
     try:
         with np.errstate(all="ignore"):     # an overflow is one RangeError, as for a shape
-            result = assembly_props(body.parts, IDENTITY, density=body.density, mass=body.mass)
+            result = props(body.parts, density=body.density, mass=body.mass)
     except SceneError:
         raise
     except P3DError as exc:

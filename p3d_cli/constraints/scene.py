@@ -253,7 +253,7 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
 
 def _parts(value, place: str, directory: str):
     """A body made of parts: the assembly-file syntax, in the body's frame."""
-    from p3d_cli.measure.assembly import parts_assembly
+    from p3d_cli.measure import parts_assembly
 
     try:
         parts = parts_assembly(value, place, f"{place}.parts", directory)
@@ -265,7 +265,7 @@ def _parts(value, place: str, directory: str):
 
 def _bare_amounts(assembly) -> None:
     """A scene has no length unit, so a part's density or mass cannot carry one."""
-    from p3d_cli.measure.assembly import Assembly
+    from p3d_cli.measure import Assembly
     from p3d_cli.units import has_unit
 
     for part in assembly.parts:

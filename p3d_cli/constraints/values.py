@@ -206,7 +206,7 @@ def pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
     orientation = rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
     if not given:
         return position, orientation
-    from p3d_cli.geometry.placement_text import placement_from_mapping
+    from p3d_cli.io.placements import placement_from_mapping
     from p3d_cli.geometry.rotation import matrix_quaternion
 
     try:

@@ -16,16 +16,14 @@ inward-wound input stays inward-wound (its volume stays negative), as it should.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import numpy as np
 
 from p3d_cli.geometry.bounding import triangles_bounds
 from p3d_cli.errors import UsageError
-from p3d_cli.io.source import MeshSource
 from p3d_cli.geometry.expansions import rounded_sums
 from p3d_cli.geometry.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
@@ -289,32 +287,6 @@ def placed_bounds(shape_or_triangles, scale=None, rotation=None, translation=Non
     if hasattr(shape_or_triangles, "bounds") and hasattr(shape_or_triangles, "scaled"):
         return placement.shape_bounds(shape_or_triangles)
     return placement.triangles_bounds(shape_or_triangles)
-
-
-def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Callable[[], Bounds | None]]:
-    """``mesh`` with its blocks also projected as they stream past, and a getter for the bounds.
-
-    One pass serves both the integrals and the placed bounds, so standard input (which reads
-    once) and large files are not read twice.
-    """
-    seen: list[Bounds] = []
-    if mesh.tetrahedra is not None:
-        tetrahedra = np.asarray(mesh.tetrahedra)
-        return mesh, lambda: placement.triangles_bounds(tetrahedra)
-
-    def blocks() -> Iterator[np.ndarray]:
-        seen.clear()
-        for block in mesh.read_blocks():
-            if len(block):
-                seen.append(placement.triangles_bounds(block))
-            yield block
-
-    def bounds() -> Bounds | None:
-        if not seen:
-            return None
-        return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
-
-    return dataclasses.replace(mesh, read_blocks=blocks), bounds
 
 
 def then(first: Placement, second: Placement) -> Placement:

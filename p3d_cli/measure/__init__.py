@@ -4,7 +4,9 @@ A thing (a path, ``-``, a shape spec or object, a triangle array, a ``(vertices,
 pair, a loaded mesh, an assembly) is resolved once, into a ``Solid`` (``solid``) or an
 ``Assembly`` (``assembly``); a solid is then measured exactly (``exact``: closed forms, the
 divergence theorem) or by sampling (``montecarlo``), and an assembly part by part, then as a
-whole. Everything outside this folder calls the names below, never the modules behind them.
+whole. Everything outside this folder calls the names below, never the modules behind them:
+the three measurements, the input resolved (``as_solid``, ``solid_moments``), and assemblies
+(their values, their files, and their parts placed, for those that draw them).
 
 Names are imported on first use, so that ``p3d props part.stl`` reads no assembly or Monte
 Carlo module it does not need.
@@ -23,6 +25,17 @@ _FACE = {
     "self_intersections": "p3d_cli.measure.measurements",
     "check_props_options": "p3d_cli.measure.measurements",
     "METHODS": "p3d_cli.measure.measurements",
+    "Solid": "p3d_cli.measure.solid",
+    "as_solid": "p3d_cli.measure.solid",
+    "names_assembly_file": "p3d_cli.measure.solid",
+    "solid_moments": "p3d_cli.measure.exact",
+    "Assembly": "p3d_cli.measure.assembly.parts",
+    "Part": "p3d_cli.measure.assembly.parts",
+    "combine": "p3d_cli.measure.assembly.parts",
+    "find_assembly": "p3d_cli.measure.assembly.parts",
+    "load_assembly": "p3d_cli.measure.assembly.parts",
+    "parts_assembly": "p3d_cli.measure.assembly.parts",
+    "placed_parts": "p3d_cli.measure.assembly.whole",
 }
 
 __all__ = list(_FACE)
@@ -40,4 +53,8 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # what type checkers and readers see; nothing is imported at run time
+    from p3d_cli.measure.assembly.parts import Assembly, Part, combine, find_assembly, load_assembly, parts_assembly
+    from p3d_cli.measure.assembly.whole import placed_parts
+    from p3d_cli.measure.exact import solid_moments
     from p3d_cli.measure.measurements import METHODS, bounds, check, check_props_options, props, self_intersections
+    from p3d_cli.measure.solid import Solid, as_solid, names_assembly_file

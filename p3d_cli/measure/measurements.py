@@ -15,8 +15,9 @@ import numpy as np
 
 from p3d_cli.errors import UsageError
 from p3d_cli.geometry.placement import IDENTITY, Placement, scaling, then
-from p3d_cli.measure.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
 from p3d_cli.measure.solid import as_solid, names_assembly_file
+from p3d_cli.measure.solid_result import (declared_units, finish, measure_solid, scene_assembly, scene_record,
+                                          solid_bounds)
 from p3d_cli.results import BoundsResult, PropsResult
 
 #: The values of ``props(method=...)``.
@@ -68,7 +69,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         Measure each closed shell of a mesh (with the cavities inside it) as a part of an
         assembly: the bodies of a multi-body export (implies ``intersections``).
 
-    A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.measure.assembly``) or an
+    A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.measure.assembly.parts``) or an
     ``Assembly`` gives the whole, with each part's result in ``result.parts``.
 
     Returns
@@ -104,7 +105,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
 
             found, extra = shells_assembly(solid, found)
     if found is not None:
-        from p3d_cli.measure.assemble import assembly_props
+        from p3d_cli.measure.assembly.whole import assembly_props
 
         result = assembly_props(found, placement, units=units, output_units=output_units,
                                 density=density, mass=mass, about=about, method=method,
@@ -140,7 +141,7 @@ def _assembly(thing):
 
     if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly":
         if type(thing).__name__ == "Assembly" or names_assembly_file(thing):
-            from p3d_cli.measure.assembly import find_assembly
+            from p3d_cli.measure.assembly.parts import find_assembly
 
             return find_assembly(thing)
     return None
@@ -194,7 +195,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
     placement = IDENTITY if placement is None else placement
     found = _assembly(thing)
     if found is not None:
-        from p3d_cli.measure.assemble import assembly_bounds
+        from p3d_cli.measure.assembly.whole import assembly_bounds
 
         return assembly_bounds(found, placement, units=units, output_units=output_units, tessellate=tessellate)
     solid = as_solid(thing, format=format, stdin=stdin)
@@ -246,8 +247,8 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if unknown:
         raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
     assembly = _assembly(thing) if format is None else None
-    if assembly is not None:   # each mesh part on its own (p3d_cli.measure.assembly_check)
-        from p3d_cli.measure.assembly_check import check_assembly
+    if assembly is not None:   # each mesh part on its own (p3d_cli.measure.assembly.check)
+        from p3d_cli.measure.assembly.check import check_assembly
 
         return check_assembly(assembly, check, required, min_volume, max_faces)
     solid = as_solid(thing, format=format, stdin=stdin)

@@ -37,7 +37,7 @@ from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.geometry.inertia import density_for, inertia_from_second_moments, mass_properties
 from p3d_cli.geometry.placement import IDENTITY, Placement
 from p3d_cli.measure.exact import mesh_facts, mesh_warnings
-from p3d_cli.measure.montecarlo_bounds import _PAIRS, ALPHA, _central, clopper_pearson, conservative_errors  # noqa: F401
+from p3d_cli.measure.confidence import _PAIRS, ALPHA, _central, clopper_pearson, conservative_errors  # noqa: F401
 from p3d_cli.measure.solid import Solid
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult

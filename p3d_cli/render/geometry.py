@@ -57,8 +57,7 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
         As ``p3d.props`` for an input it cannot read.
     """
     from p3d_cli.errors import UsageError
-    from p3d_cli.measure.assembly import find_assembly
-    from p3d_cli.measure.solid import as_solid
+    from p3d_cli.measure import as_solid, find_assembly
 
     placement = IDENTITY if placement is None else placement
     found = find_assembly(thing) if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly" \
@@ -82,17 +81,12 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
 
 def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
     """Every part placed, in the assembly's own length unit (its numbers read as written)."""
-    from p3d_cli.measure.assemble import declared_scale, leaves
-    from p3d_cli.measure.solid import as_solid
-    from p3d_cli.units import UnitSystem
+    from p3d_cli.measure import placed_parts
 
     units = assembly.units
-    system = None if units is None else UnitSystem(units, units, "kg")
     pieces = []
     count = 0
-    for leaf in leaves(assembly, placement, system, units):
-        solid = as_solid(leaf.part.thing)
-        total = declared_scale(solid, leaf.part, leaf.units, system, leaf.placement)
+    for solid, total in placed_parts(assembly, placement, units):
         if solid.shape is not None:
             shape = total.shape(solid.shape)
             triangles = shape.triangles() if shape.polyhedral else shape.tessellate(segments)

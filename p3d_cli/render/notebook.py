@@ -1,10 +1,11 @@
 """How p3d's values show themselves in Jupyter: a picture for shapes and meshes (``_repr_png_``),
 the numbers and a thumbnail for results (``_repr_html_``).
 
-The values call these from their display methods; pictures are made through the package's
-public face (``p3d_cli.picture``), so that this module imports no part of
-the road below it. A result whose input cannot be drawn again (an array given from Python, a
-file since moved) shows its numbers alone.
+The values call these from their display methods (``_repr_*_``): callbacks that Jupyter calls,
+never part of the road from an input to a result, so values below ``render`` import this
+module inside those methods and nowhere else. Pictures are made by ``p3d_cli.render.picture``.
+A result whose input cannot be drawn again (an array given from Python, a file since moved)
+shows its numbers alone.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ THUMBNAIL = (480, 360)
 
 def png_of(thing, show=()) -> bytes:
     """A PNG picture of anything ``p3d.render`` takes."""
-    import p3d_cli
+    from p3d_cli.render.picture import picture
 
-    return p3d_cli.picture(thing, show=show, size=THUMBNAIL).to_png()
+    return picture(thing, show=show, size=THUMBNAIL).to_png()
 
 
 def _thumbnail(source: str, show) -> str:

@@ -1,4 +1,4 @@
-"""A link measured from its geometry: an assembly of its geoms (``p3d_cli.measure.assemble``).
+"""A link measured from its geometry: an assembly of its geoms (``p3d_cli.measure.props``).
 
 Each collision (or visual) geom is one part, placed in the link frame by its own placement
 (mesh scale, rotation, translation); the link's mass properties are the parts' summed with the
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
-from p3d_cli.geometry.placement import IDENTITY, Placement
-from p3d_cli.measure.assembly import Assembly, Part
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.measure import Assembly, Part
 from p3d_cli.results import MassProperties, PropsResult
 from p3d_cli.robots.model import Geom, Link
 
@@ -62,7 +62,7 @@ def _in_metres(geom: Geom) -> tuple[object, Placement]:
     """The geom's solid and placement with its coordinates in metres, the description's unit: a
     mesh file that declares its own length unit (COLLADA's ``<unit meter>``, glTF's metres) is
     scaled from it first, in its own frame, before the geom's scale and placement."""
-    from p3d_cli.measure.solid import as_solid
+    from p3d_cli.measure import as_solid
     from p3d_cli.units import LENGTHS
 
     solid = as_solid(geom.thing)
@@ -114,13 +114,13 @@ def measure_link(link: Link, role: str, source: str, *, density: float | None = 
 
 
 def _measured(assembly: Assembly, link: Link, role: str, source: str, density, mass) -> LinkGeometry:
-    from p3d_cli.measure.assemble import assembly_props
+    from p3d_cli.measure import props
 
     try:
         # Sizes near float64's limit overflow inside the closed forms: p3d reports them as one
         # RangeError, so numpy's warnings would only be noise.
         with np.errstate(all="ignore"):
-            result = assembly_props(assembly, IDENTITY, density=1.0 if density is None else density)
+            result = props(assembly, density=1.0 if density is None else density)
     except UsageError as exc:
         if exc.where != "parts":
             raise
@@ -174,7 +174,7 @@ def _hulled(assembly: Assembly, link: Link, role: str, source: str, density, mas
 
 def _shell(assembly: Assembly, link: Link, source: str, mass, first: LinkGeometry) -> LinkGeometry:
     """The link as a thin shell of ``mass`` over its whole surface."""
-    from p3d_cli.measure.solid import as_solid
+    from p3d_cli.measure import as_solid
     from p3d_cli.robots.open_mesh import placed_triangles, shell_properties
 
     where = f"{source}: link {link.name!r}"

@@ -243,11 +243,11 @@ def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
 
 
 def test_parts_bodies_are_measured_only_when_the_solve_needs_them(monkeypatch):
-    from p3d_cli.measure import assemble
+    from p3d_cli.measure.assembly import whole
 
     calls = []
-    real = assemble.assembly_props
-    monkeypatch.setattr(assemble, "assembly_props", lambda *a, **k: calls.append(a[0].source) or real(*a, **k))
+    real = whole.assembly_props
+    monkeypatch.setattr(whole, "assembly_props", lambda *a, **k: calls.append(a[0].source) or real(*a, **k))
     scene = parse_scene(__import__("yaml").safe_load("""
 bodies:
   ground: {fixed: true, parts: [{shape: box}]}

@@ -21,7 +21,7 @@ import p3d_cli as p3d
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
 from p3d_cli.geometry.placement import Placement
-from p3d_cli.measure.assembly import Assembly, Part
+from p3d_cli.measure.assembly.parts import Assembly, Part
 
 RTOL = 1e-12
 

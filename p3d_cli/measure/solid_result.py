@@ -1,7 +1,7 @@
 """One resolved solid measured: the step that single inputs and every part of an assembly share.
 
 ``p3d_cli.measure`` resolves what the user gave (units, assemblies) and calls these;
-``p3d_cli.measure.assemble`` calls them once per part.
+``p3d_cli.measure.assembly.whole`` calls them once per part.
 """
 
 from __future__ import annotations
@@ -133,7 +133,7 @@ def scene_assembly(solid: Solid):
     mesh = solid.mesh
     if mesh is None or not mesh.objects:
         return None
-    from p3d_cli.measure.assembly import Assembly, Part
+    from p3d_cli.measure.assembly.parts import Assembly, Part
 
     parts = tuple(Part(name, source, where=source.where) for name, source in mesh.objects)
     return Assembly(solid.source, parts, mesh.length_unit)

@@ -20,7 +20,7 @@ Each part is measured exactly as a single input is (``p3d_cli.measure``), placed
 assembly's frame, and the parts are summed: masses and volumes add, the centre of mass is
 the mass-weighted mean, and second moments about it add with the parallel-axis terms
 (``p3d_cli.geometry.inertia.combine_mass_properties``). Placement keys are read by the one placement
-parser (``p3d_cli.geometry.placement_text.placement_from_mapping``), as for scenes and the command line.
+parser (``p3d_cli.io.placements.placement_from_mapping``), as for scenes and the command line.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from typing import Any
 
 from p3d_cli.errors import InputError, P3DError, UsageError
 from p3d_cli.geometry.placement import IDENTITY, Placement
-from p3d_cli.geometry.placement_text import placement_from_mapping
+from p3d_cli.io.placements import placement_from_mapping
 from p3d_cli.measure.solid import names_assembly_file
 
 #: Keys of one part.
