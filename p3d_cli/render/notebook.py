@@ -2,10 +2,11 @@
 the numbers and a thumbnail for results (``_repr_html_``).
 
 The values call these from their display methods (``_repr_*_``): callbacks that Jupyter calls,
-never part of the road from an input to a result, so values below ``render`` import this
-module inside those methods and nowhere else. Pictures are made by ``p3d_cli.render.picture``.
-A result whose input cannot be drawn again (an array given from Python, a file since moved)
-shows its numbers alone.
+no part of the road from an input to a result, and the only place a value below ``render``
+imports this module. Pictures are made through the package's public face (``p3d_cli.picture``),
+as a user makes them, so that this module imports no part of the road below it. A result
+whose input cannot be drawn again (an array given from Python, a file since moved) shows its
+numbers alone.
 """
 
 from __future__ import annotations
@@ -19,9 +20,9 @@ THUMBNAIL = (480, 360)
 
 def png_of(thing, show=()) -> bytes:
     """A PNG picture of anything ``p3d.render`` takes."""
-    from p3d_cli.render.picture import picture
+    import p3d_cli
 
-    return picture(thing, show=show, size=THUMBNAIL).to_png()
+    return p3d_cli.picture(thing, show=show, size=THUMBNAIL).to_png()
 
 
 def _thumbnail(source: str, show) -> str:
