@@ -17,6 +17,8 @@ from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
+from p3d_cli.mesh.kernels import compiled
+from p3d_cli.mesh.kernels import takes as kernel_takes
 from p3d_cli.results import Bounds, Moments
 
 
@@ -95,7 +97,21 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     filled = seen = 0
     factor = 1.0
     exponent = 0
+    fast = compiled()
     for block in source.read_blocks():
+        if fast is not None and exponent == 0 and kernel_takes(block) and len(block):
+            # The compiled pass: the same bounds, keys and sums, bit for bit, from the file's
+            # own records (no float64 copy); None leaves the block to the numpy code below.
+            done = _compiled_block(fast, block, sums, keys, filled, rescale)
+            if done is not None:
+                block_lo, block_hi, written, sums = done
+                if lo is None:
+                    lo, hi = block_lo, block_hi
+                else:
+                    lo, hi = np.minimum(lo, block_lo), np.maximum(hi, block_hi)
+                filled += written
+                seen += len(block)
+                continue
         # One widening copy per block, in the layout the integrals want; everything else
         # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
         # file records.
@@ -157,6 +173,28 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         moments = sums.moments()
     return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary,
                         scale_exponent=exponent)
+
+
+def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.ndarray | None, filled: int,
+                    rescale: bool):
+    """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
+    ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
+    code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
+    sign numpy's min and max decide; the first block of a part to be rescaled)."""
+    if sums is None:
+        box, finite = fast.bounds(block)
+        box = np.array(box)
+        if not finite or not box.all():
+            return None
+        if rescale and _exponent(float((box[3:] - box[:3]).max())):
+            return None
+        sums = MomentSums(origin_from_bounds(box[:3], box[3:], block.dtype == np.float32))
+    box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
+    box = np.array(box)
+    if not finite or not box.all():
+        return None
+    sums.add_sums(np.array(totals), magnitude, np.array(weighted), len(block))
+    return box[:3], box[3:], written, sums
 
 
 def _exponent(extent: float) -> int:

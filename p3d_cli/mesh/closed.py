@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.kernels import sort
 
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
@@ -132,7 +133,7 @@ def keys_pair_up(keys: np.ndarray) -> bool:
 
     Sorts ``keys`` in place.
     """
-    keys.sort()
+    sort(keys)
     if keys.size == 0 or keys.size % 2:
         return False
     pairs = keys.reshape(-1, 2)

@@ -1,0 +1,52 @@
+"""The compiled kernels, when they are built: ``p3d_cli.mesh._kernels`` (C, optional).
+
+``pip install`` compiles ``_kernels.c`` when a C compiler is there and skips it otherwise; every
+caller then runs the numpy code it replaces, which gives the same results bit for bit (the
+kernels replay the same IEEE operations in the same order, numpy's pairwise sums included:
+docs/performance.md, "The compiled kernels"). ``P3D_PURE_NUMPY=1`` in the environment switches
+them off, for comparisons and for the tests of the numpy code.
+"""
+
+from __future__ import annotations
+
+import os
+from types import ModuleType
+
+import numpy as np
+
+
+def _load() -> ModuleType | None:
+    if os.environ.get("P3D_PURE_NUMPY", "") not in ("", "0"):
+        return None
+    try:
+        from p3d_cli.mesh import _kernels
+    except ImportError:
+        return None
+    return _kernels
+
+
+#: The compiled module, or None (not built, or switched off). Tests set it to None to run the
+#: numpy code in process.
+KERNELS: ModuleType | None = _load()
+
+
+def compiled() -> ModuleType | None:
+    """The compiled kernels, or None when p3d runs on numpy alone."""
+    return KERNELS
+
+
+def takes(block) -> bool:
+    """Whether the kernels read ``block`` as it is: a ``(k, 3, 3)`` numpy array of native
+    float32 or float64 (any strides, such as a binary STL's 50-byte records)."""
+    return (isinstance(block, np.ndarray) and block.ndim == 3 and block.shape[1:] == (3, 3)
+            and block.dtype.isnative and block.dtype in (np.float32, np.float64))
+
+
+def sort(keys: np.ndarray) -> None:
+    """Sort a contiguous uint64 array in place: the compiled radix sort when there is one (its
+    time per key stays flat with size; numpy's grows), else ``ndarray.sort``. Same result."""
+    kernels = KERNELS
+    if kernels is not None and keys.dtype == np.uint64 and keys.flags.c_contiguous and keys.flags.writeable:
+        kernels.sort(keys)
+    else:
+        keys.sort()
