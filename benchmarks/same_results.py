@@ -2,7 +2,7 @@
 """Byte-for-byte: the ``--json`` output of two source trees of p3d on the same files.
 
 A speed change must not change any result. This runs ``p3d props FILE --json`` and
-``p3d check FILE --json`` with one tree, then the other (``PYTHONPATH``), on the sample meshes,
+``p3d check FILE --json`` with one tree, then the other (``tree.py``), on the sample meshes,
 on the real meshes of ``../shared/real-meshes`` (beside the repository, when present) and on
 any further files named (the benchmark meshes), and compares exit status, standard output and
 standard error byte for byte. With ``--pure-numpy`` the current tree also runs once more
@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent.parent
+TREE = Path(__file__).resolve().parent / "tree.py"
 MESH_SUFFIXES = {".stl", ".obj", ".off", ".ply", ".glb", ".gltf", ".3mf", ".dae", ".amf", ".vtp", ".vtk"}
 
 
@@ -38,11 +39,13 @@ def inputs(extra: list[str]) -> list[Path]:
 
 
 def run(tree: Path, args: list[str], pure: bool = False) -> tuple[int, bytes, bytes]:
-    env = dict(os.environ, PYTHONPATH=str(tree))
+    """Exit status, stdout and stderr of ``p3d ARGS`` run from ``tree`` (``tree.py``: an editable
+    install of either tree would otherwise answer for both)."""
+    env = dict(os.environ)
     env.pop("P3D_PURE_NUMPY", None)
     if pure:
         env["P3D_PURE_NUMPY"] = "1"
-    done = subprocess.run([sys.executable, "-m", "p3d_cli", *args], env=env, capture_output=True,
+    done = subprocess.run([sys.executable, str(TREE), str(tree), *args], env=env, capture_output=True,
                           stdin=subprocess.DEVNULL)
     return done.returncode, done.stdout, done.stderr
 

@@ -51,18 +51,6 @@ typedef struct {
     int f32;
 } Block;
 
-static inline double coord(const Block *b, Py_ssize_t t, int v, int a) {
-    const char *p = b->base + t * b->st + v * b->sv + a * b->sa;
-    if (b->f32) {
-        float f;
-        memcpy(&f, p, 4);
-        return (double)f;
-    }
-    double d;
-    memcpy(&d, p, 8);
-    return d;
-}
-
 static int get_block(PyObject *obj, Py_buffer *view, Block *b) {
     if (PyObject_GetBuffer(obj, view, PyBUF_STRIDES | PyBUF_FORMAT) < 0)
         return -1;
@@ -111,28 +99,94 @@ static inline double leaf_sum(const double *a, Py_ssize_t n) {
     return res;
 }
 
+/* The state of one block's pass: its origin, where its keys go, its bounds so far. */
 typedef struct {
     const Block *b;
     double o[3];
-} Terms;
+    uint64_t *keys; /* NULL: no keys wanted */
+    Py_ssize_t written;
+    double lo[3], hi[3];
+    int finite;
+} Pass;
 
-/* The 14 sums of triangles [t0, t0 + n), n <= 128, as p3d_cli.mesh.integrals.tetra_terms
- * computes each term (same operations, same order). */
-static void leaf_terms(const Terms *c, Py_ssize_t t0, Py_ssize_t n, double out[NSUMS]) {
+/* Corners of triangles [t0, t0 + n) widened to float64: p[k][3 v + a]. */
+static void load(const Block *b, Py_ssize_t t0, Py_ssize_t n, double p[][9]) {
+    for (Py_ssize_t k = 0; k < n; k++) {
+        const char *tri = b->base + (t0 + k) * b->st;
+        for (int v = 0; v < 3; v++)
+            for (int a = 0; a < 3; a++) {
+                const char *q = tri + v * b->sv + a * b->sa;
+                if (b->f32) {
+                    float f;
+                    memcpy(&f, q, 4);
+                    p[k][3 * v + a] = (double)f;
+                } else
+                    memcpy(&p[k][3 * v + a], q, 8);
+            }
+    }
+}
+
+/* Bounds and the finite test of loaded corners. */
+static void bound(Pass *c, const double p[][9], Py_ssize_t n) {
+    for (Py_ssize_t k = 0; k < n; k++)
+        for (int i = 0; i < 9; i++) {
+            double x = p[k][i];
+            int a = i % 3;
+            if (!isfinite(x))
+                c->finite = 0;
+            if (x < c->lo[a])
+                c->lo[a] = x;
+            if (x > c->hi[a])
+                c->hi[a] = x;
+        }
+}
+
+/* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
+ * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller). */
+static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
+    uint64_t *keys = c->keys + c->written;
+    Py_ssize_t w = 0;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        uint64_t h[3];
+        for (int v = 0; v < 3; v++) {
+            uint64_t z = mix(bits_of(p[k][3 * v]) ^ GOLDEN);
+            z = mix(z ^ bits_of(p[k][3 * v + 1]));
+            h[v] = mix(z ^ bits_of(p[k][3 * v + 2]));
+        }
+        for (int v = 0; v < 3; v++) {
+            uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+            if (start == end)
+                continue; /* a side whose ends hash alike bounds nothing */
+            uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
+            keys[w++] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+        }
+    }
+    c->written += w;
+}
+
+/* The 14 sums of triangles [t0, t0 + n), n <= 128, each term as
+ * p3d_cli.mesh.integrals.tetra_terms computes it (same operations, same order); also their
+ * bounds and edge keys, from the same loaded corners. */
+static void leaf(Pass *c, Py_ssize_t t0, Py_ssize_t n, double out[NSUMS]) {
     double buf[NSUMS][LEAF];
+    double raw[LEAF][9];
     static const int PI[6] = {0, 1, 2, 0, 0, 1}, PJ[6] = {0, 1, 2, 1, 2, 2};
+    static const int I[3] = {0, 1, 2}, J[3] = {1, 2, 0}, K[3] = {2, 0, 1};
+    load(c->b, t0, n, raw);
+    bound(c, raw, n);
+    if (c->keys)
+        edge_keys(c, raw, n);
     for (Py_ssize_t k = 0; k < n; k++) {
         double p[3][3];
         for (int v = 0; v < 3; v++)
             for (int a = 0; a < 3; a++)
-                p[v][a] = coord(c->b, t0 + k, v, a) - c->o[a];
+                p[v][a] = raw[k][3 * v + a] - c->o[a];
         double e1[3], e2[3];
         for (int a = 0; a < 3; a++) {
             e1[a] = p[1][a] - p[0][a];
             e2[a] = p[2][a] - p[0][a];
         }
         double det = 0.0, mag = 0.0;
-        static const int I[3] = {0, 1, 2}, J[3] = {1, 2, 0}, K[3] = {2, 0, 1};
         for (int r = 0; r < 3; r++) {
             double t = e1[J[r]] * e2[K[r]];
             double u = e1[K[r]] * e2[J[r]];
@@ -163,41 +217,30 @@ static void leaf_terms(const Terms *c, Py_ssize_t t0, Py_ssize_t n, double out[N
         out[r] = leaf_sum(buf[r], n);
 }
 
-static void pairwise_terms(const Terms *c, Py_ssize_t t0, Py_ssize_t n, double out[NSUMS]) {
+/* numpy's pairwise recursion over the block, leaf by leaf in file order. */
+static void pairwise(Pass *c, Py_ssize_t t0, Py_ssize_t n, double out[NSUMS]) {
     if (n <= LEAF) {
-        leaf_terms(c, t0, n, out);
+        leaf(c, t0, n, out);
         return;
     }
     Py_ssize_t n2 = n / 2;
     n2 -= n2 % 8;
     double right[NSUMS];
-    pairwise_terms(c, t0, n2, out);
-    pairwise_terms(c, t0 + n2, n - n2, right);
+    pairwise(c, t0, n2, out);
+    pairwise(c, t0 + n2, n - n2, right);
     for (int r = 0; r < NSUMS; r++)
         out[r] = out[r] + right[r];
 }
 
-/* bounds(block) -> (lo0, lo1, lo2, hi0, hi1, hi2, finite) over the widened coordinates. */
-static int bounds_of(const Block *b, double lo[3], double hi[3]) {
-    int finite = 1;
+static void start_bounds(Pass *c) {
+    c->finite = 1;
     for (int a = 0; a < 3; a++) {
-        lo[a] = INFINITY;
-        hi[a] = -INFINITY;
+        c->lo[a] = INFINITY;
+        c->hi[a] = -INFINITY;
     }
-    for (Py_ssize_t t = 0; t < b->n; t++)
-        for (int v = 0; v < 3; v++)
-            for (int a = 0; a < 3; a++) {
-                double x = coord(b, t, v, a);
-                if (!isfinite(x))
-                    finite = 0;
-                if (x < lo[a])
-                    lo[a] = x;
-                if (x > hi[a])
-                    hi[a] = x;
-            }
-    return finite;
 }
 
+/* bounds(block) -> ((lo0, lo1, lo2, hi0, hi1, hi2), finite) over the widened coordinates. */
 static PyObject *py_bounds(PyObject *self, PyObject *args) {
     PyObject *obj;
     if (!PyArg_ParseTuple(args, "O", &obj))
@@ -206,41 +249,26 @@ static PyObject *py_bounds(PyObject *self, PyObject *args) {
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
-    double lo[3], hi[3];
-    int finite;
+    Pass c = {&b};
+    start_bounds(&c);
     Py_BEGIN_ALLOW_THREADS
-    finite = bounds_of(&b, lo, hi);
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
+        Py_ssize_t k = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+        load(&b, t0, k, raw);
+        bound(&c, raw, k);
+    }
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
-    return Py_BuildValue("(dddddd)O", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], finite ? Py_True : Py_False);
-}
-
-/* Edge keys of the block's sides into keys[offset...]: returns how many were written. */
-static Py_ssize_t edge_keys(const Block *b, uint64_t *keys) {
-    Py_ssize_t w = 0;
-    for (Py_ssize_t t = 0; t < b->n; t++) {
-        uint64_t h[3];
-        for (int v = 0; v < 3; v++) {
-            uint64_t z = mix(bits_of(coord(b, t, v, 0)) ^ GOLDEN);
-            z = mix(z ^ bits_of(coord(b, t, v, 1)));
-            h[v] = mix(z ^ bits_of(coord(b, t, v, 2)));
-        }
-        for (int v = 0; v < 3; v++) {
-            uint64_t start = h[v], end = h[(v + 1) % 3];
-            if (start == end)
-                continue; /* a side whose ends hash alike bounds nothing */
-            uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
-            uint64_t key = mix(lo * GOLDEN + hi);
-            keys[w++] = (key & ~(uint64_t)1) | (uint64_t)(start < end);
-        }
-    }
-    return w;
+    return Py_BuildValue("(dddddd)O", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
+                         c.finite ? Py_True : Py_False);
 }
 
 /* block(tri, ox, oy, oz, keys or None, offset) ->
  *   ((lo0, lo1, lo2, hi0, hi1, hi2), finite, (10 sums), magnitude sum, (3 weighted), keys written)
- * The sums are those of p3d_cli.mesh.integrals.MomentSums.add_columns about the origin o;
- * nothing is summed (zeros) when a coordinate is not finite. */
+ * The sums are those of p3d_cli.mesh.integrals.MomentSums.add_columns about the origin o, the
+ * keys those of p3d_cli.mesh.closed.column_edge_keys (in another order). When a coordinate is
+ * not finite, the other results mean nothing (the numpy code then words the error). */
 static PyObject *py_block(PyObject *self, PyObject *args) {
     PyObject *obj, *keyobj;
     double o[3];
@@ -266,29 +294,23 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
         }
         keys = (uint64_t *)kview.buf + offset;
     }
-    double lo[3], hi[3], sums[NSUMS];
-    int finite;
-    Py_ssize_t written = 0;
+    double sums[NSUMS];
+    Pass c = {&b, {o[0], o[1], o[2]}, keys, 0};
+    start_bounds(&c);
     Py_BEGIN_ALLOW_THREADS
-    finite = bounds_of(&b, lo, hi);
     memset(sums, 0, sizeof sums);
-    if (finite) {
-        if (keys)
-            written = edge_keys(&b, keys);
-        Terms c = {&b, {o[0], o[1], o[2]}};
-        if (b.n)
-            pairwise_terms(&c, 0, b.n, sums);
-        /* numpy's reduction starts from the identity: 0.0 + sum (a sum of -0.0 is 0.0) */
-        for (int r = 0; r < NSUMS; r++)
-            sums[r] = 0.0 + sums[r];
-    }
+    if (b.n)
+        pairwise(&c, 0, b.n, sums);
+    /* numpy's reduction starts from the identity: 0.0 + sum (a sum of -0.0 is 0.0) */
+    for (int r = 0; r < NSUMS; r++)
+        sums[r] = 0.0 + sums[r];
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
     if (have_keys)
         PyBuffer_Release(&kview);
-    return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
-                         finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5], sums[6],
-                         sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], written);
+    return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)n", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
+                         c.finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5],
+                         sums[6], sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], c.written);
 }
 
 /* ---- sorting ------------------------------------------------------------------------------ */
@@ -310,36 +332,47 @@ static int cmp_u64(const void *x, const void *y) {
     return (a > b) - (a < b);
 }
 
-#define DIGIT 11
-#define RADIX (1 << DIGIT)
-/* Buckets up to this many keys are finished by LSD passes in a buffer of their size (it and
- * the bucket stay in the 1 MB L2 cache); bigger ones are split again by the next digit. */
-#define SMALL (1 << 15)
+/* Buckets up to SMALL keys are finished by LSD passes in a buffer of their size (it and the
+ * bucket stay in the 1 MB L2 cache); bigger ones are split by their next digit, in place. */
+#define SMALL (1 << 18)
+#define LSD_BITS 11
+#define LSD_PASSES 3
+/* The widest MSD digit: 256 buckets, whose heads stay in L1 while keys are dealt to them. */
+#define MSD_BITS 8
 
-/* LSD radix sort of a[0..n) on the bits below `shift` (the bits above are common to all),
- * using tmp[0..n). */
+/* LSD radix sort of a[0..n) on the LSD_PASSES * LSD_BITS bits below `shift` (the bits at and
+ * above it are common to all), through tmp[0..n), one counting pass for all digits; then an
+ * insertion sort finishes the ties in the lower bits (about one pass for hashed keys, whose
+ * ties are the two sides of an edge; past a budget, qsort does it). */
 static void lsd(uint64_t *a, uint64_t *tmp, Py_ssize_t n, int shift) {
-    int low = shift - 3 * DIGIT;
+    int low = shift - LSD_PASSES * LSD_BITS;
     if (low < 0)
         low = 0;
+    int passes = (shift - low + LSD_BITS - 1) / LSD_BITS;
+    Py_ssize_t count[LSD_PASSES][1 << LSD_BITS];
+    const uint64_t mask = (1 << LSD_BITS) - 1;
+    memset(count, 0, sizeof count);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        uint64_t x = a[i] >> low;
+        for (int p = 0; p < passes; p++)
+            count[p][(x >> (p * LSD_BITS)) & mask]++;
+    }
     uint64_t *src = a, *dst = tmp;
-    Py_ssize_t count[RADIX];
-    for (int s = low; s < shift; s += DIGIT) {
-        int width = shift - s < DIGIT ? shift - s : DIGIT;
-        uint64_t mask = ((uint64_t)1 << width) - 1;
-        memset(count, 0, sizeof(Py_ssize_t) << width);
-        for (Py_ssize_t i = 0; i < n; i++)
-            count[(src[i] >> s) & mask]++;
-        if (count[(src[0] >> s) & mask] == n)
+    for (int p = 0; p < passes; p++) {
+        int s = low + p * LSD_BITS;
+        Py_ssize_t *c = count[p];
+        if (c[(src[0] >> s) & mask] == n)
             continue; /* one value of this digit: nothing to move */
         Py_ssize_t total = 0;
-        for (Py_ssize_t d = 0; d <= (Py_ssize_t)mask; d++) {
-            Py_ssize_t c = count[d];
-            count[d] = total;
-            total += c;
+        for (int d = 0; d <= (int)mask; d++) {
+            Py_ssize_t k = c[d];
+            c[d] = total;
+            total += k;
         }
-        for (Py_ssize_t i = 0; i < n; i++)
-            dst[count[(src[i] >> s) & mask]++] = src[i];
+        for (Py_ssize_t i = 0; i < n; i++) {
+            uint64_t x = src[i];
+            dst[c[(x >> s) & mask]++] = x;
+        }
         uint64_t *t = src;
         src = dst;
         dst = t;
@@ -347,8 +380,6 @@ static void lsd(uint64_t *a, uint64_t *tmp, Py_ssize_t n, int shift) {
     if (src != a)
         memcpy(a, src, n * sizeof(uint64_t));
     if (low > 0) {
-        /* Ties in the bits sorted so far are in file order: insertion sort finishes them, in
-         * about one pass when the keys are hashes; it falls back to qsort past a budget. */
         Py_ssize_t moves = 0, budget = 8 * n + 64;
         for (Py_ssize_t i = 1; i < n; i++) {
             uint64_t x = a[i];
@@ -368,19 +399,28 @@ static void lsd(uint64_t *a, uint64_t *tmp, Py_ssize_t n, int shift) {
 }
 
 /* Sort a[0..n) whose bits at and above `shift` are common to all: MSD by the next digit (in
- * place, American flag), then each bucket on its own. */
+ * place, American flag; wide enough that the buckets come out near SMALL / 4 keys when the
+ * keys are hashes), then each bucket on its own. */
 static void msd(uint64_t *a, Py_ssize_t n, int shift, uint64_t *tmp) {
     if (n <= 32) {
         insertion(a, n);
         return;
     }
-    if (n <= SMALL || shift <= DIGIT) {
+    if (shift == 0)
+        return; /* all equal */
+    if (n <= SMALL) {
         lsd(a, tmp, n, shift);
         return;
     }
-    int s = shift - DIGIT;
-    Py_ssize_t *count = calloc(RADIX, sizeof(Py_ssize_t)), *next = malloc(RADIX * sizeof(Py_ssize_t)),
-               *end = malloc(RADIX * sizeof(Py_ssize_t));
+    int width = 4;
+    while (width < MSD_BITS && (n >> width) > SMALL / 4)
+        width++;
+    if (width > shift)
+        width = shift;
+    int s = shift - width;
+    Py_ssize_t radix = (Py_ssize_t)1 << width, dmask = radix - 1;
+    Py_ssize_t *count = calloc(radix, sizeof(Py_ssize_t)), *next = malloc(radix * sizeof(Py_ssize_t)),
+               *end = malloc(radix * sizeof(Py_ssize_t));
     if (!count || !next || !end) {
         free(count);
         free(next);
@@ -389,28 +429,28 @@ static void msd(uint64_t *a, Py_ssize_t n, int shift, uint64_t *tmp) {
         return;
     }
     for (Py_ssize_t i = 0; i < n; i++)
-        count[(a[i] >> s) & (RADIX - 1)]++;
+        count[(a[i] >> s) & dmask]++;
     Py_ssize_t total = 0;
-    for (int d = 0; d < RADIX; d++) {
+    for (Py_ssize_t d = 0; d < radix; d++) {
         next[d] = total;
         total += count[d];
         end[d] = total;
     }
-    for (int d = 0; d < RADIX; d++) {
+    for (Py_ssize_t d = 0; d < radix; d++) {
         while (next[d] < end[d]) {
             uint64_t x = a[next[d]];
-            int e = (int)((x >> s) & (RADIX - 1));
+            Py_ssize_t e = (Py_ssize_t)((x >> s) & dmask);
             while (e != d) {
                 uint64_t y = a[next[e]];
                 a[next[e]++] = x;
                 x = y;
-                e = (int)((x >> s) & (RADIX - 1));
+                e = (Py_ssize_t)((x >> s) & dmask);
             }
             a[next[d]++] = x;
         }
     }
     Py_ssize_t start = 0;
-    for (int d = 0; d < RADIX; d++) {
+    for (Py_ssize_t d = 0; d < radix; d++) {
         if (count[d] > 1)
             msd(a + start, count[d], s, tmp);
         start += count[d];

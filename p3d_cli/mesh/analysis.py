@@ -17,7 +17,7 @@ from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
-from p3d_cli.mesh.kernels import compiled
+from p3d_cli.mesh.kernels import compiled, key_buffer
 from p3d_cli.mesh.kernels import takes as kernel_takes
 from p3d_cli.results import Bounds, Moments
 
@@ -93,7 +93,7 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
     sums = None
     lo = hi = None
-    keys = np.empty(3 * source.face_count, dtype=np.uint64) if closed else None
+    keys = key_buffer(3 * source.face_count) if closed else None
     filled = seen = 0
     factor = 1.0
     exponent = 0

@@ -50,3 +50,18 @@ def sort(keys: np.ndarray) -> None:
         kernels.sort(keys)
     else:
         keys.sort()
+
+
+def key_buffer(count: int) -> np.ndarray:
+    """An uninitialised ``(count,)`` uint64 array for edge keys, in memory of its own.
+
+    Anonymous ``mmap`` memory in ordinary pages, returned to the system when the array goes:
+    numpy asks for transparent huge pages for large arrays, and where the kernel compacts memory
+    to find them (``defrag`` = ``madvise``, common in VMs), a 24 MB array took 0.05-0.2 s of
+    system time to appear, more than filling it (measured for issue 32).
+    """
+    import mmap
+
+    if count * 8 < 1 << 22:
+        return np.empty(count, dtype=np.uint64)
+    return np.frombuffer(mmap.mmap(-1, count * 8), dtype=np.uint64)
