@@ -105,6 +105,11 @@ typedef struct {
     double o[3];
     uint64_t *keys; /* NULL: no keys wanted */
     Py_ssize_t written;
+    /* Bucketed keys: key k goes to bucket k >> shift, at keys[b * cap + fill[b]]; NULL fill:
+     * one after the other from keys[0]. A full bucket sets overflow (its key is dropped). */
+    int64_t *fill;
+    Py_ssize_t cap;
+    int shift, overflow;
     double lo[3], hi[3];
     int finite;
 } Pass;
@@ -144,7 +149,7 @@ static void bound(Pass *c, const double p[][9], Py_ssize_t n) {
 /* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
  * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller). */
 static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
-    uint64_t *keys = c->keys + c->written;
+    uint64_t *keys = c->fill ? c->keys : c->keys + c->written;
     Py_ssize_t w = 0;
     for (Py_ssize_t k = 0; k < n; k++) {
         uint64_t h[3];
@@ -158,10 +163,87 @@ static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
             if (start == end)
                 continue; /* a side whose ends hash alike bounds nothing */
             uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
-            keys[w++] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+            uint64_t key = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+            if (c->fill) {
+                uint64_t b = key >> c->shift;
+                if (c->fill[b] == c->cap) {
+                    c->overflow = 1;
+                    continue;
+                }
+                keys[b * c->cap + c->fill[b]++] = key;
+                w++;
+            } else
+                keys[w++] = key;
         }
     }
     c->written += w;
+}
+
+/* The terms' loop runs over the triangles of a leaf in columns (one array per coordinate), so
+ * that the compiler vectorises it; on x86-64 with GCC a copy for AVX2 is also built and chosen
+ * at run time. Vector lanes round each operation exactly as scalar code does, and no FMA is
+ * enabled, so every copy gives the same bits. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define CLONES
+#endif
+
+CLONES
+static void leaf_terms(const double (*P)[LEAF], Py_ssize_t n, double (*buf)[LEAF]) {
+    const double *x1 = P[0], *y1 = P[1], *z1 = P[2], *x2 = P[3], *y2 = P[4], *z2 = P[5], *x3 = P[6], *y3 = P[7],
+                 *z3 = P[8];
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double ex1 = x2[k] - x1[k], ey1 = y2[k] - y1[k], ez1 = z2[k] - z1[k];
+        double ex2 = x3[k] - x1[k], ey2 = y3[k] - y1[k], ez2 = z3[k] - z1[k];
+        /* D = p1 . ((p2 - p1) x (p3 - p1)), in the order of integrals.determinants */
+        double t0 = ey1 * ez2, u0 = ez1 * ey2;
+        double t1 = ez1 * ex2, u1 = ex1 * ez2;
+        double t2 = ex1 * ey2, u2 = ey1 * ex2;
+        double det = 0.0;
+        det += (t0 - u0) * x1[k];
+        det += (t1 - u1) * y1[k];
+        det += (t2 - u2) * z1[k];
+        double mag = 0.0;
+        mag += (fabs(t0) + fabs(u0)) * fabs(x1[k]);
+        mag += (fabs(t1) + fabs(u1)) * fabs(y1[k]);
+        mag += (fabs(t2) + fabs(u2)) * fabs(z1[k]);
+        double sx = (x1[k] + x2[k]) + x3[k], sy = (y1[k] + y2[k]) + y3[k], sz = (z1[k] + z2[k]) + z3[k];
+        buf[0][k] = det;
+        buf[1][k] = det * sx;
+        buf[2][k] = det * sy;
+        buf[3][k] = det * sz;
+        double qxx = x1[k] * x1[k], qyy = y1[k] * y1[k], qzz = z1[k] * z1[k];
+        double qxy = x1[k] * y1[k], qxz = x1[k] * z1[k], qyz = y1[k] * z1[k];
+        qxx += x2[k] * x2[k];
+        qyy += y2[k] * y2[k];
+        qzz += z2[k] * z2[k];
+        qxy += x2[k] * y2[k];
+        qxz += x2[k] * z2[k];
+        qyz += y2[k] * z2[k];
+        qxx += x3[k] * x3[k];
+        qyy += y3[k] * y3[k];
+        qzz += z3[k] * z3[k];
+        qxy += x3[k] * y3[k];
+        qxz += x3[k] * z3[k];
+        qyz += y3[k] * z3[k];
+        qxx += sx * sx;
+        qyy += sy * sy;
+        qzz += sz * sz;
+        qxy += sx * sy;
+        qxz += sx * sz;
+        qyz += sy * sz;
+        buf[4][k] = qxx * det;
+        buf[5][k] = qyy * det;
+        buf[6][k] = qzz * det;
+        buf[7][k] = qxy * det;
+        buf[8][k] = qxz * det;
+        buf[9][k] = qyz * det;
+        buf[10][k] = mag;
+        buf[11][k] = mag * qxx;
+        buf[12][k] = mag * qyy;
+        buf[13][k] = mag * qzz;
+    }
 }
 
 /* The 14 sums of triangles [t0, t0 + n), n <= 128, each term as
@@ -170,49 +252,17 @@ static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
 static void leaf(Pass *c, Py_ssize_t t0, Py_ssize_t n, double out[NSUMS]) {
     double buf[NSUMS][LEAF];
     double raw[LEAF][9];
-    static const int PI[6] = {0, 1, 2, 0, 0, 1}, PJ[6] = {0, 1, 2, 1, 2, 2};
-    static const int I[3] = {0, 1, 2}, J[3] = {1, 2, 0}, K[3] = {2, 0, 1};
+    double P[9][LEAF];
     load(c->b, t0, n, raw);
     bound(c, raw, n);
     if (c->keys)
         edge_keys(c, raw, n);
-    for (Py_ssize_t k = 0; k < n; k++) {
-        double p[3][3];
-        for (int v = 0; v < 3; v++)
-            for (int a = 0; a < 3; a++)
-                p[v][a] = raw[k][3 * v + a] - c->o[a];
-        double e1[3], e2[3];
-        for (int a = 0; a < 3; a++) {
-            e1[a] = p[1][a] - p[0][a];
-            e2[a] = p[2][a] - p[0][a];
-        }
-        double det = 0.0, mag = 0.0;
-        for (int r = 0; r < 3; r++) {
-            double t = e1[J[r]] * e2[K[r]];
-            double u = e1[K[r]] * e2[J[r]];
-            double cross = (t - u) * p[0][I[r]];
-            det += cross;
-            double m = (fabs(t) + fabs(u)) * fabs(p[0][I[r]]);
-            mag += m;
-        }
-        double s[3];
-        for (int a = 0; a < 3; a++)
-            s[a] = (p[0][a] + p[1][a]) + p[2][a];
-        buf[0][k] = det;
-        for (int a = 0; a < 3; a++)
-            buf[1 + a][k] = det * s[a];
-        for (int r = 0; r < 6; r++) {
-            int i = PI[r], j = PJ[r];
-            double q = p[0][i] * p[0][j];
-            q += p[1][i] * p[1][j];
-            q += p[2][i] * p[2][j];
-            q += s[i] * s[j];
-            if (i == j)
-                buf[11 + i][k] = mag * q;
-            buf[4 + r][k] = q * det;
-        }
-        buf[10][k] = mag;
+    for (int i = 0; i < 9; i++) {
+        double o = c->o[i % 3];
+        for (Py_ssize_t k = 0; k < n; k++)
+            P[i][k] = raw[k][i] - o;
     }
+    leaf_terms((const double (*)[LEAF])P, n, buf);
     for (int r = 0; r < NSUMS; r++)
         out[r] = leaf_sum(buf[r], n);
 }
@@ -273,9 +323,13 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
     PyObject *obj, *keyobj;
     double o[3];
     Py_ssize_t offset;
-    if (!PyArg_ParseTuple(args, "OdddOn", &obj, &o[0], &o[1], &o[2], &keyobj, &offset))
+    PyObject *fillobj = Py_None;
+    Py_ssize_t cap = 0;
+    int shift = 0;
+    if (!PyArg_ParseTuple(args, "OdddOn|Oni", &obj, &o[0], &o[1], &o[2], &keyobj, &offset, &fillobj, &cap, &shift))
         return NULL;
-    Py_buffer view, kview;
+    Py_buffer view, kview, fview;
+    int64_t *fill = NULL;
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
@@ -286,16 +340,31 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
             PyBuffer_Release(&view);
             return NULL;
         }
-        if (kview.itemsize != 8 || offset < 0 || kview.len / 8 - offset < 3 * b.n) {
+        if (fillobj != Py_None) {
+            if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+                PyBuffer_Release(&view);
+                PyBuffer_Release(&kview);
+                return NULL;
+            }
+            fill = (int64_t *)fview.buf;
+            if (fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
+                (fview.len / 8) != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < (fview.len / 8) * cap) {
+                PyBuffer_Release(&view);
+                PyBuffer_Release(&kview);
+                PyBuffer_Release(&fview);
+                PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+                return NULL;
+            }
+        } else if (kview.itemsize != 8 || offset < 0 || kview.len / 8 - offset < 3 * b.n) {
             PyBuffer_Release(&view);
             PyBuffer_Release(&kview);
             PyErr_SetString(PyExc_ValueError, "the keys buffer is too small");
             return NULL;
         }
-        keys = (uint64_t *)kview.buf + offset;
+        keys = (uint64_t *)kview.buf + (fill ? 0 : offset);
     }
     double sums[NSUMS];
-    Pass c = {&b, {o[0], o[1], o[2]}, keys, 0};
+    Pass c = {&b, {o[0], o[1], o[2]}, keys, 0, fill, cap, shift, 0};
     start_bounds(&c);
     Py_BEGIN_ALLOW_THREADS
     memset(sums, 0, sizeof sums);
@@ -308,6 +377,10 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
     PyBuffer_Release(&view);
     if (have_keys)
         PyBuffer_Release(&kview);
+    if (fill)
+        PyBuffer_Release(&fview);
+    if (c.overflow)
+        c.written = -1;
     return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)n", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
                          c.finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5],
                          sums[6], sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], c.written);
@@ -487,9 +560,61 @@ static PyObject *py_sort(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
+/* finish(keys, fill, cap, shift) -> count: sorts each bucket of bucketed keys (block(...,
+ * fill, cap, shift)) in place and moves them together, ascending, to keys[0..count). */
+static PyObject *py_finish(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOni", &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer kview, fview;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    Py_ssize_t buckets = fview.len / 8;
+    const int64_t *fill = (const int64_t *)fview.buf;
+    int bad = kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 ||
+              buckets != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < buckets * cap;
+    for (Py_ssize_t b = 0; !bad && b < buckets; b++)
+        bad = fill[b] < 0 || fill[b] > cap;
+    if (bad) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+        return NULL;
+    }
+    uint64_t *a = kview.buf, *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
+    if (!tmp) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        return PyErr_NoMemory();
+    }
+    Py_ssize_t total = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t b = 0; b < buckets; b++) {
+        uint64_t *bucket = a + b * cap;
+        msd(bucket, fill[b], shift, tmp);
+        if (total != b * cap)
+            memmove(a + total, bucket, fill[b] * sizeof(uint64_t));
+        total += fill[b];
+    }
+    Py_END_ALLOW_THREADS
+    free(tmp);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return PyLong_FromSsize_t(total);
+}
+
 static PyMethodDef methods[] = {
+    {"finish", py_finish, METH_VARARGS, "finish(keys, fill, cap, shift) -> count: sort bucketed keys together"},
     {"bounds", py_bounds, METH_VARARGS, "bounds(block) -> ((lo, hi) 6 floats, finite)"},
-    {"block", py_block, METH_VARARGS, "block(block, ox, oy, oz, keys, offset) -> bounds, finite, sums, keys written"},
+    {"block", py_block, METH_VARARGS,
+     "block(block, ox, oy, oz, keys, offset[, fill, cap, shift]) -> bounds, finite, sums, keys written (-1: a bucket "
+     "overflowed)"},
     {"sort", py_sort, METH_VARARGS, "sort(keys): in-place ascending sort of uint64 keys"},
     {NULL, NULL, 0, NULL}};
 

@@ -17,7 +17,7 @@ from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
-from p3d_cli.mesh.kernels import compiled, key_buffer
+from p3d_cli.mesh.kernels import Buckets, compiled, key_buffer
 from p3d_cli.mesh.kernels import takes as kernel_takes
 from p3d_cli.results import Bounds, Moments
 
@@ -93,16 +93,23 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
     sums = None
     lo = hi = None
-    keys = key_buffer(3 * source.face_count) if closed else None
+    fast = compiled()
+    buckets = None
+    if closed and fast is not None and 3 * source.face_count >= 1 << 16:
+        # The compiled pass deals the keys to buckets as it makes them: the sort then needs
+        # no pass over all of them (p3d_cli.mesh.kernels.Buckets).
+        buckets = Buckets(3 * source.face_count)
+        keys = None
+    else:
+        keys = key_buffer(3 * source.face_count) if closed else None
     filled = seen = 0
     factor = 1.0
     exponent = 0
-    fast = compiled()
     for block in source.read_blocks():
         if fast is not None and exponent == 0 and kernel_takes(block) and len(block):
             # The compiled pass: the same bounds, keys and sums, bit for bit, from the file's
             # own records (no float64 copy); None leaves the block to the numpy code below.
-            done = _compiled_block(fast, block, sums, keys, filled, rescale)
+            done = _compiled_block(fast, block, sums, keys, filled, rescale, buckets)
             if done is not None:
                 block_lo, block_hi, written, sums = done
                 if lo is None:
@@ -139,6 +146,8 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
             block_keys = column_edge_keys(cols)     # before the sums shift cols in place
             keys[filled:filled + block_keys.size] = block_keys
             filled += block_keys.size
+        elif buckets is not None and not buckets.overflow:
+            buckets.add(column_edge_keys(cols))
         if exponent:
             cols *= factor
         sums.add_columns(cols)
@@ -149,9 +158,18 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     is_closed = bounding = None
     boundary = 0
     moments = None
+    presorted = False
+    if buckets is not None:
+        if buckets.overflow:                        # keys crowding one bucket: made again in order
+            del buckets
+            keys = _keys_in_order(source)
+        else:
+            keys, presorted = buckets.sorted_keys(), True
+            del buckets
+        filled = keys.size
     if keys is not None:
         keys = keys[:filled]
-        is_closed = bounding = keys_pair_up(keys)
+        is_closed = bounding = keys_pair_up(keys, presorted)
         if not is_closed:
             unbalanced = unbalanced_groups(keys)
             # A 64-bit hash collision can only make a closed mesh look open: most failures
@@ -175,8 +193,19 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
                         scale_exponent=exponent)
 
 
+def _keys_in_order(source: MeshSource) -> np.ndarray:
+    """The edge keys of every block, one after the other (a second pass over the file)."""
+    keys = key_buffer(3 * source.face_count)
+    filled = 0
+    for block in source.read_blocks():
+        block_keys = column_edge_keys(columns(block))
+        keys[filled:filled + block_keys.size] = block_keys
+        filled += block_keys.size
+    return keys[:filled]
+
+
 def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.ndarray | None, filled: int,
-                    rescale: bool):
+                    rescale: bool, buckets: Buckets | None = None):
     """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
     ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
     code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
@@ -189,10 +218,20 @@ def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.n
         if rescale and _exponent(float((box[3:] - box[:3]).max())):
             return None
         sums = MomentSums(origin_from_bounds(box[:3], box[3:], block.dtype == np.float32))
-    box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
+    if buckets is not None and not buckets.overflow:
+        before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
+        box, finite, totals, magnitude, weighted, written = fast.block(
+            block, *sums.origin, buckets.keys, 0, buckets.fill, buckets.cap, buckets.shift)
+    else:
+        box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
     box = np.array(box)
     if not finite or not box.all():
+        if buckets is not None and not buckets.overflow:
+            buckets.fill[:] = before
         return None
+    if written < 0:                                 # a bucket overflowed
+        buckets.overflow = True
+        written = 0
     sums.add_sums(np.array(totals), magnitude, np.array(weighted), len(block))
     return box[:3], box[3:], written, sums
 

@@ -128,12 +128,13 @@ def column_edge_keys(columns: np.ndarray) -> np.ndarray:
     return _side_keys(_column_hashes(columns, scratch), scratch)[0]
 
 
-def keys_pair_up(keys: np.ndarray) -> bool:
+def keys_pair_up(keys: np.ndarray, presorted: bool = False) -> bool:
     """True when the sorted keys come in (direction 0, direction 1) pairs of one edge each.
 
-    Sorts ``keys`` in place.
+    Sorts ``keys`` in place (unless ``presorted``: they are sorted already).
     """
-    sort(keys)
+    if not presorted:
+        sort(keys)
     if keys.size == 0 or keys.size % 2:
         return False
     pairs = keys.reshape(-1, 2)

@@ -65,3 +65,53 @@ def key_buffer(count: int) -> np.ndarray:
     if count * 8 < 1 << 22:
         return np.empty(count, dtype=np.uint64)
     return np.frombuffer(mmap.mmap(-1, count * 8), dtype=np.uint64)
+
+
+class Buckets:
+    """Edge keys dealt by the compiled pass to buckets of their top bits as they are made, so
+    that sorting them needs no pass over all of them (a bucket is sorted in cache, then moved
+    down beside the one before: ``sorted_keys``).
+
+    A bucket holds ``cap`` keys: the mean plus eight standard deviations of the count a bucket
+    gets when the keys are hashes (the two sides of an edge share a bucket, so the count is
+    twice a Poisson count of edges). The buffer is anonymous ``mmap`` memory, and pages never
+    written take no memory: the slack costs address space, not resident memory. A mesh whose keys crowd
+    one bucket (the same edge thousands of times) overflows it: ``overflow`` is then set and
+    the caller makes the keys again, one after the other.
+    """
+
+    #: Keys per bucket on average: a bucket and the sort's buffer of its size stay in a 1 MB
+    #: L2 cache.
+    MEAN = 1 << 15
+
+    def __init__(self, count: int) -> None:
+        import math
+
+        # 2**k buckets by the top k bits (at least two: the sort takes the bits below them).
+        bits = max(1, (count // self.MEAN).bit_length() - 1)
+        self.shift = 64 - bits
+        buckets = 1 << bits
+        mean = count / buckets
+        self.cap = int(math.ceil(mean + 8 * math.sqrt(2 * mean) + 64))
+        self.keys = key_buffer(buckets * self.cap)
+        self.fill = np.zeros(buckets, dtype=np.int64)
+        self.overflow = False
+
+    def add(self, block_keys: np.ndarray) -> None:
+        """Deal keys made by the numpy code (a block the compiled pass left to it)."""
+        bucket = (block_keys >> np.uint64(self.shift)).astype(np.int64)
+        counts = np.bincount(bucket, minlength=self.fill.size)
+        if (self.fill + counts > self.cap).any():
+            self.overflow = True
+            return
+        order = np.argsort(bucket, kind="stable")
+        bucket = bucket[order]
+        rank = np.arange(bucket.size) - (np.cumsum(counts) - counts)[bucket]
+        self.keys[bucket * self.cap + self.fill[bucket] + rank] = block_keys[order]
+        self.fill += counts
+
+    def sorted_keys(self) -> np.ndarray:
+        """All the keys, sorted (a view of the start of the buffer)."""
+        kernels = KERNELS
+        assert kernels is not None and not self.overflow  # noqa: S101 - made only with the kernels
+        return self.keys[:kernels.finish(self.keys, self.fill, self.cap, self.shift)]

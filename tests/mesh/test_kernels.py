@@ -1,0 +1,243 @@
+"""The compiled kernels (``p3d_cli.mesh._kernels``) give the numpy code's results, bit for bit.
+
+Each test runs the same input through the kernels and through the numpy code they replace
+(``kernels.KERNELS`` set to None) and compares the bits. Skipped where the kernels are not
+built (no compiler at install time: p3d then runs the numpy code, which is what the rest of the
+suite tests), except under CI, whose install compiles them.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from conftest import REPO
+from p3d_cli.io import load_mesh
+from p3d_cli.io.source import array_source
+from p3d_cli.mesh import kernels
+from p3d_cli.mesh.analysis import analyze
+from p3d_cli.mesh.closed import column_edge_keys
+from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.integrals import tetra_terms
+
+KERNELS = kernels.KERNELS
+if KERNELS is None and os.environ.get("CI") != "true":
+    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
+
+REAL = REPO.parent / "shared" / "real-meshes"
+RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
+
+
+def test_built_under_ci():
+    """CI installs with a compiler: the kernels must be there (else they are never tested)."""
+    assert KERNELS is not None
+
+
+def numpy_block(triangles: np.ndarray, origin: np.ndarray):
+    """What ``MomentSums.add_columns`` and ``column_edge_keys`` make of one block."""
+    cols = columns(triangles)
+    keys = np.sort(column_edge_keys(cols))
+    cols -= origin[None, :, None]
+    terms, magnitude, weighted = tetra_terms(cols[0], cols[1], cols[2])
+    return terms.sum(axis=1), float(magnitude.sum()), weighted, keys
+
+
+def bits(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.float64).view(np.uint64)
+
+
+SIZES = [1, 2, 7, 8, 9, 16, 17, 127, 128, 129, 130, 255, 1000, 4097, 16383, 16384]
+
+
+@pytest.mark.parametrize("n", SIZES)
+@pytest.mark.parametrize("layout", ["float32", "float64", "stl-records"])
+def test_block_sums_and_keys_are_numpys(n, layout):
+    rng = np.random.default_rng(n)
+    triangles = rng.normal(size=(n, 3, 3)) * 10.0 ** rng.integers(-3, 6) + rng.normal(size=3) * 50
+    triangles[::5, 1] = triangles[::5, 0]               # sides whose ends coincide: no key
+    triangles[::7] = np.round(triangles[::7])           # zeros, repeats, -0.0 after the shift
+    triangles[::11, :, 2] = -0.0
+    dtype = np.float64 if layout == "float64" else np.float32
+    triangles = triangles.astype(dtype)
+    if layout == "stl-records":                         # the file's strided 50-byte records
+        records = np.zeros(n, RECORD)
+        records["corners"] = triangles
+        triangles = records["corners"]
+    origin = rng.normal(size=3)
+    if dtype == np.float32:
+        origin = origin.astype(np.float32).astype(np.float64)
+    totals, magnitude, weighted, keys = numpy_block(triangles, origin)
+    got_keys = np.zeros(3 * n, np.uint64)
+    _, finite, got, got_magnitude, got_weighted, written = KERNELS.block(triangles, *origin, got_keys, 0)
+    assert finite
+    assert np.array_equal(bits(got), bits(totals))
+    assert bits(got_magnitude) == bits(magnitude)
+    assert np.array_equal(bits(got_weighted), bits(weighted))
+    got_keys = got_keys[:written]
+    KERNELS.sort(got_keys)
+    assert np.array_equal(got_keys, keys)
+
+
+def test_bounds_and_nonfinite():
+    triangles = np.arange(27, dtype=np.float32).reshape(3, 3, 3) - 13
+    box, finite = KERNELS.bounds(triangles)
+    flat = triangles.reshape(-1, 3).astype(np.float64)
+    assert finite and box == tuple(flat.min(axis=0)) + tuple(flat.max(axis=0))
+    for bad in (np.nan, np.inf, -np.inf):
+        broken = triangles.copy()
+        broken[1, 2, 0] = bad
+        assert KERNELS.bounds(broken)[1] is False
+        assert KERNELS.block(broken, 0.0, 0.0, 0.0, None, 0)[1] is False
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(0, 2**64 - 1), max_size=3000), st.integers(0, 63))
+def test_sort_is_numpys(values, shift):
+    # Narrow keys (shifted) and many equal ones take the radix sort's other branches.
+    keys = np.array(values, dtype=np.uint64) >> np.uint64(shift)
+    got = keys.copy()
+    KERNELS.sort(got)
+    assert np.array_equal(got, np.sort(keys))
+
+
+@pytest.mark.parametrize("case", ["hashes", "pairs", "few values", "narrow", "zeros"])
+def test_sort_large(case):
+    rng = np.random.default_rng(1)
+    n = 700_000                                          # past the in-cache size: the MSD split
+    keys = {"hashes": lambda: rng.integers(0, 2**64 - 1, n, dtype=np.uint64, endpoint=True),
+            "pairs": lambda: np.repeat(rng.integers(0, 2**63, n // 2, dtype=np.uint64) * np.uint64(2), 2)
+            + np.tile(np.array([0, 1], np.uint64), n // 2),
+            "few values": lambda: rng.integers(0, 5, n, dtype=np.uint64) << np.uint64(60),
+            "narrow": lambda: rng.integers(0, 2**20, n, dtype=np.uint64),
+            "zeros": lambda: np.zeros(n, np.uint64)}[case]()
+    rng.shuffle(keys)
+    got = keys.copy()
+    KERNELS.sort(got)
+    assert np.array_equal(got, np.sort(keys))
+
+
+def test_buckets_sort_what_they_are_dealt():
+    rng = np.random.default_rng(2)
+    keys = rng.integers(0, 2**64 - 1, 300_000, dtype=np.uint64, endpoint=True)
+    buckets = kernels.Buckets(keys.size)
+    buckets.add(keys[:1000])                             # the numpy road's blocks
+    triangles = rng.normal(size=(20_000, 3, 3))
+    _, _, _, _, _, written = KERNELS.block(triangles, 0.0, 0.0, 0.0, buckets.keys, 0, buckets.fill, buckets.cap,
+                                           buckets.shift)
+    assert written == int(buckets.fill.sum()) - 1000
+    expected = np.sort(np.concatenate([keys[:1000], column_edge_keys(columns(triangles))]))
+    assert np.array_equal(buckets.sorted_keys(), expected)
+
+
+def test_a_crowded_bucket_overflows_and_the_keys_are_made_again():
+    """The same triangle 30,000 times: every key lands in a handful of buckets, which overflow;
+    the analysis then makes the keys again in order and finds what the numpy code finds."""
+    triangle = np.array([[0.5, 0.25, 1.0], [2.0, 0.5, 1.0], [1.0, 3.0, 1.5]], dtype=np.float32)
+    source = array_source("stl-binary", np.repeat(triangle[None], 30_000, axis=0), "float32")
+    compiled = analyze(source, "x")
+    assert compiled.closed is False and compiled.bounding is False
+    assert_same_analysis(source)
+
+
+def attempt(source, options):
+    try:
+        return analyze(source, "x", **options)
+    except Exception as exc:  # noqa: BLE001 - the same refusal is the same result
+        return f"{type(exc).__name__}: {exc}"
+
+
+def assert_same_analysis(source, **options):
+    fast = attempt(source, options)
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = attempt(source, options)
+    finally:
+        kernels.KERNELS = saved
+    if isinstance(slow, str) or isinstance(fast, str):
+        assert fast == slow
+        return
+    assert (fast.closed, fast.bounding, fast.boundary_edges, fast.face_count, fast.scale_exponent) == \
+        (slow.closed, slow.bounding, slow.boundary_edges, slow.face_count, slow.scale_exponent)
+    assert np.array_equal(bits(fast.bounds.min), bits(slow.bounds.min))
+    assert np.array_equal(bits(fast.bounds.max), bits(slow.bounds.max))
+    a, b = fast.moments, slow.moments
+    assert bits(a.volume) == bits(b.volume)
+    if b.center is not None:
+        assert np.array_equal(bits(a.center), bits(b.center))
+        assert np.array_equal(bits(a.central), bits(b.central))
+    for name in ("volume", "center", "central"):
+        assert np.array_equal(bits(getattr(a.errors, name)), bits(getattr(b.errors, name)))
+
+
+def real_meshes():
+    if not REAL.is_dir():
+        return []
+    return sorted(p for p in REAL.iterdir() if p.suffix.lower() in {".stl", ".ply", ".obj", ".off"})
+
+
+@pytest.mark.parametrize("path", real_meshes() + sorted((REPO / "sample_meshes").glob("*.[so][tfb][lfj]")),
+                         ids=lambda p: p.name)
+def test_real_and_sample_meshes_analyse_alike(path):
+    assert_same_analysis(load_mesh(str(path)))
+
+
+def test_real_meshes_are_here_under_ci():
+    if os.environ.get("CI") == "true":
+        assert real_meshes(), f"{REAL} is missing"
+
+
+@pytest.mark.parametrize("at", [(0.0, 0.0, 0.0), (1e8, -1e8, 3.0), (1e-70, 0.0, 0.0)])
+@pytest.mark.parametrize("scale", [1.0, 1e-40, 1e40])
+def test_tori_anywhere_analyse_alike(at, scale):
+    """A closed torus and the same with a hole, far away, tiny and huge (the rescaled road)."""
+    u, v = 40, 24
+    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
+    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
+    ring = 3.0 + np.cos(phi)
+    points = (np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3) * scale
+              + np.array(at))
+    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
+    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    for chosen in (faces, faces[1:]):
+        for dtype in (np.float64, np.float32):
+            with np.errstate(over="ignore"):            # 1e40 in float32: infinities, refused alike
+                triangles = points.astype(dtype)[chosen]
+            source = array_source("stl-binary", triangles, np.dtype(dtype).name)
+            assert_same_analysis(source)
+            assert_same_analysis(source, rescale=True)
+            assert_same_analysis(source, closed=False)
+
+
+def test_pure_numpy_switch(monkeypatch):
+    monkeypatch.setenv("P3D_PURE_NUMPY", "1")
+    assert kernels._load() is None
+    monkeypatch.setenv("P3D_PURE_NUMPY", "0")
+    assert kernels._load() is KERNELS
+
+
+def test_json_output_alike(tmp_path):
+    """The whole command: ``p3d props --json`` on a binary STL with the kernels and without."""
+    import subprocess
+    import sys
+
+    records = np.zeros(5000, RECORD)
+    rng = np.random.default_rng(3)
+    records["corners"] = rng.normal(size=(5000, 3, 3)).astype(np.float32)
+    path = tmp_path / "soup.stl"
+    with open(path, "wb") as f:
+        f.write(b"\0" * 80 + np.uint32(5000).tobytes() + records.tobytes())
+    outputs = []
+    for pure in ("0", "1"):
+        env = dict(os.environ, P3D_PURE_NUMPY=pure)
+        done = subprocess.run([sys.executable, "-m", "p3d_cli", "props", str(path), "--json"], env=env,
+                              capture_output=True, check=False)
+        outputs.append((done.returncode, done.stdout))
+    assert outputs[0] == outputs[1]
+    assert json.loads(outputs[0][1])["closed"] is False
