@@ -33,6 +33,7 @@ from p3d_cli.mesh.closed import (_column_hashes, _lex_less, _side_keys, column_e
                                   sides_of_edges)
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.expansions import two_sum
+from p3d_cli.mesh.kernels import sort
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
 #: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).
@@ -144,7 +145,7 @@ def unbalanced_of(source_blocks) -> Unbalanced:
     """``unbalanced_groups`` of the triangles read once from ``source_blocks()`` (a callable)."""
     keys = [column_edge_keys(columns(block)) for block in source_blocks()]
     flat = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
-    flat.sort()
+    sort(flat)  # radix, when compiled: the same order
     return unbalanced_groups(flat)
 
 

@@ -44,6 +44,7 @@ from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
 from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
 from p3d_cli.mesh.volume import SignedVolume
+from p3d_cli.mesh.kernels import sort
 
 #: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
 _NEXT = np.array([1, 1, -2], dtype=np.int64)
@@ -99,7 +100,7 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
         return None
     keys, zero, volume = first
     del first                           # memory: the keys go as soon as they are read
-    keys.sort()
+    sort(keys)  # radix, when compiled: the same order
     pi = _orbit_map(keys, bits, blocks)
     del keys
     if pi is None:
