@@ -609,7 +609,156 @@ static PyObject *py_finish(PyObject *self, PyObject *args) {
     return PyLong_FromSsize_t(total);
 }
 
+/* side_keys(block, keys, keep) -> sides whose ends hash alike. Writes the key of side `slot`
+ * (corner slot to slot + 1) of face f at keys[slot * k + f] and whether the side has two
+ * distinct ends at keep[slot * k + f]: the layout of p3d_cli.mesh.closed._side_keys before it
+ * drops the degenerate sides. */
+static PyObject *py_side_keys(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *keepobj;
+    if (!PyArg_ParseTuple(args, "OOO", &obj, &keyobj, &keepobj))
+        return NULL;
+    Py_buffer view, kview, mview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(keepobj, &mview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    Py_ssize_t k = b.n, degenerate = 0;
+    if (kview.itemsize != 8 || kview.len / 8 < 3 * k || mview.itemsize != 1 || mview.len < 3 * k) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&mview);
+        PyErr_SetString(PyExc_ValueError, "the keys or keep buffer is too small");
+        return NULL;
+    }
+    uint64_t *keys = kview.buf;
+    uint8_t *keep = mview.buf;
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < k; t0 += LEAF) {
+        Py_ssize_t m = k - t0 < LEAF ? k - t0 : LEAF;
+        load(&b, t0, m, raw);
+        for (Py_ssize_t j = 0; j < m; j++) {
+            uint64_t h[3];
+            for (int v = 0; v < 3; v++) {
+                uint64_t z = mix(bits_of(raw[j][3 * v]) ^ GOLDEN);
+                z = mix(z ^ bits_of(raw[j][3 * v + 1]));
+                h[v] = mix(z ^ bits_of(raw[j][3 * v + 2]));
+            }
+            for (int v = 0; v < 3; v++) {
+                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+                Py_ssize_t at = v * k + t0 + j;
+                keep[at] = start != end;
+                if (start == end) {
+                    degenerate++;
+                    keys[at] = 0;
+                    continue;
+                }
+                uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
+                keys[at] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&mview);
+    return PyLong_FromSsize_t(degenerate);
+}
+
+/* groups(keys) -> (unbalanced ids, net boundary edges, their sides, doubtful ids or None).
+ * One scan of sorted side keys, grouped by edge (key >> 1), with the answers of
+ * p3d_cli.mesh.boundary.unbalanced_groups (groups whose directions are used unequally often:
+ * their ids, the sum of |forward - backward|, their sides) and p3d_cli.mesh.closed.doubtful_edges
+ * (the balanced groups of 4 or more sides, or None when some group other than one use each way
+ * is not such: proven open). The ids come as bytes of uint64, ascending. */
+static PyObject *py_groups(PyObject *self, PyObject *args) {
+    PyObject *keyobj;
+    if (!PyArg_ParseTuple(args, "O", &keyobj))
+        return NULL;
+    Py_buffer kview;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_C_CONTIGUOUS) < 0)
+        return NULL;
+    if (kview.itemsize != 8) {
+        PyBuffer_Release(&kview);
+        PyErr_SetString(PyExc_TypeError, "expected 64-bit keys");
+        return NULL;
+    }
+    const uint64_t *keys = kview.buf;
+    Py_ssize_t n = kview.len / 8, nu = 0, nd = 0, cu = 64, cd = 64;
+    long long edges = 0, sides = 0;
+    int proven_open = 0;
+    uint64_t *unbalanced = malloc(cu * 8), *doubtful = malloc(cd * 8);
+    int failed = !unbalanced || !doubtful;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t i = 0; i < n && !failed;) {
+        uint64_t edge = keys[i] >> 1;
+        Py_ssize_t j = i, forward = 0;
+        while (j < n && (keys[j] >> 1) == edge) {
+            forward += keys[j] & 1;
+            j++;
+        }
+        Py_ssize_t count = j - i;
+        long long net = 2 * (long long)forward - count;
+        if (net != 0) {
+            if (nu == cu) {
+                uint64_t *grown = realloc(unbalanced, (cu *= 2) * 8);
+                if (!grown) {
+                    failed = 1;
+                    break;
+                }
+                unbalanced = grown;
+            }
+            unbalanced[nu++] = edge;
+            edges += net < 0 ? -net : net;
+            sides += count;
+        }
+        if (!(count == 2 && forward == 1) && !proven_open) {
+            if (count < 4 || 2 * forward != count)
+                proven_open = 1;
+            else {
+                if (nd == cd) {
+                    uint64_t *grown = realloc(doubtful, (cd *= 2) * 8);
+                    if (!grown) {
+                        failed = 1;
+                        break;
+                    }
+                    doubtful = grown;
+                }
+                doubtful[nd++] = edge;
+            }
+        }
+        i = j;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&kview);
+    PyObject *result = NULL;
+    if (failed)
+        PyErr_NoMemory();
+    else {
+        PyObject *d = proven_open ? (Py_INCREF(Py_None), Py_None)
+                                  : PyBytes_FromStringAndSize((const char *)doubtful, nd * 8);
+        PyObject *u = PyBytes_FromStringAndSize((const char *)unbalanced, nu * 8);
+        if (d && u)
+            result = Py_BuildValue("OLLO", u, edges, sides, d);
+        Py_XDECREF(d);
+        Py_XDECREF(u);
+    }
+    free(unbalanced);
+    free(doubtful);
+    return result;
+}
+
 static PyMethodDef methods[] = {
+    {"side_keys", py_side_keys, METH_VARARGS, "side_keys(block, keys, keep) -> sides whose ends hash alike"},
+    {"groups", py_groups, METH_VARARGS, "groups(sorted keys) -> (unbalanced ids, edges, sides, doubtful ids or None)"},
     {"finish", py_finish, METH_VARARGS, "finish(keys, fill, cap, shift) -> count: sort bucketed keys together"},
     {"bounds", py_bounds, METH_VARARGS, "bounds(block) -> ((lo, hi) 6 floats, finite)"},
     {"block", py_block, METH_VARARGS,

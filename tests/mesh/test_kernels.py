@@ -241,3 +241,56 @@ def test_json_output_alike(tmp_path):
         outputs.append((done.returncode, done.stdout))
     assert outputs[0] == outputs[1]
     assert json.loads(outputs[0][1])["closed"] is False
+
+
+def numpy_road(function, *args):
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        return function(*args)
+    finally:
+        kernels.KERNELS = saved
+
+
+@pytest.mark.parametrize("degenerate", [False, True])
+def test_side_keys_are_numpys(degenerate):
+    from p3d_cli.mesh.closed import side_keys
+
+    rng = np.random.default_rng(4)
+    triangles = rng.normal(size=(3000, 3, 3))
+    if degenerate:
+        triangles[::3, 2] = triangles[::3, 0]
+    cols = columns(triangles)
+    keys, keep = side_keys(cols)
+    want_keys, want_keep = numpy_road(side_keys, cols)
+    assert np.array_equal(keys, want_keys)
+    assert (keep is None) == (want_keep is None) == (not degenerate)
+    if degenerate:
+        assert np.array_equal(keep, want_keep)
+
+
+@pytest.mark.parametrize("case", ["closed", "holes", "collisions", "soup", "none"])
+def test_groups_are_numpys(case):
+    """``unbalanced_groups`` and ``doubtful_edges`` from the one compiled scan."""
+    from p3d_cli.mesh.boundary import unbalanced_groups
+    from p3d_cli.mesh.closed import doubtful_edges
+
+    rng = np.random.default_rng(5)
+    edges = rng.integers(0, 2**62, 50_000, dtype=np.uint64) * np.uint64(2)
+    keys = np.concatenate([edges, edges + np.uint64(1)])        # every edge once each way
+    if case == "holes":
+        keys = keys[rng.random(keys.size) > 0.01]
+    elif case == "collisions":                                   # balanced groups of four
+        keys = np.concatenate([keys, keys[:100], keys[50_000:50_100]])
+    elif case == "soup":
+        keys = edges | rng.integers(0, 2, edges.size, dtype=np.uint64)
+    elif case == "none":
+        keys = keys[:0]
+    keys = np.sort(keys)
+    got, want = unbalanced_groups(keys), numpy_road(unbalanced_groups, keys)
+    assert np.array_equal(got.ids, want.ids) and got.ids.dtype == want.ids.dtype
+    assert (got.edges, got.sides, got.total) == (want.edges, want.sides, want.total)
+    got, want = doubtful_edges(keys), numpy_road(doubtful_edges, keys)
+    assert np.array_equal(got, want) and got.dtype == want.dtype
+    if case == "collisions":
+        assert got.size == 100
