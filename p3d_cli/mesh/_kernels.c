@@ -756,7 +756,224 @@ static PyObject *py_groups(PyObject *self, PyObject *args) {
     return result;
 }
 
+/* pairs(keys, bits, pi) -> whether the sorted side keys of p3d check's fast path pair up.
+ * Keys are (edge hash) | direction << bits | side; a clean mesh's sorted keys come in pairs
+ * (direction 0, direction 1) of one edge. For each pair (a, b) of sides it sets
+ * pi[a] = next(b) and pi[b] = next(a), next(3 f + k) = 3 f + (k + 1) % 3, as
+ * p3d_cli.mesh.paired._orbit_map does; False (pi partly written) when some pair is not one
+ * edge each way. pi: int32 or int64, as long as the keys. */
+static PyObject *py_pairs(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *piobj;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OiO", &keyobj, &bits, &piobj))
+        return NULL;
+    Py_buffer kview, pview;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_C_CONTIGUOUS) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(piobj, &pview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    Py_ssize_t n = kview.len / 8;
+    int wide = pview.itemsize == 8;
+    if (kview.itemsize != 8 || !(pview.itemsize == 4 || wide) || pview.len / pview.itemsize != n || bits < 1 ||
+        bits > 62 || (!wide && n > 2147483647)) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&pview);
+        PyErr_SetString(PyExc_ValueError, "pairs: keys and pi do not match");
+        return NULL;
+    }
+    const uint64_t *keys = kview.buf, mask = ((uint64_t)1 << bits) - 1;
+    int clean = n % 2 == 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t i = 0; clean && i < n; i += 2) {
+        uint64_t a = keys[i], b = keys[i + 1];
+        if (((a ^ b) >> bits) != 1) {
+            clean = 0;
+            break;
+        }
+        int64_t sa = (int64_t)(a & mask), sb = (int64_t)(b & mask);
+        int64_t na = sa % 3 == 2 ? sa - 2 : sa + 1, nb = sb % 3 == 2 ? sb - 2 : sb + 1;
+        if (wide) {
+            ((int64_t *)pview.buf)[sa] = nb;
+            ((int64_t *)pview.buf)[sb] = na;
+        } else {
+            ((int32_t *)pview.buf)[sa] = (int32_t)nb;
+            ((int32_t *)pview.buf)[sb] = (int32_t)na;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&pview);
+    if (clean)
+        Py_RETURN_TRUE;
+    Py_RETURN_FALSE;
+}
+
+/* confirm(block, fan, first, axes) -> whether every corner of the block equals its fan's first
+ * corner (p3d_cli.mesh.paired._confirm, one block): fan and first are the block's corners'
+ * fan numbers (int32 or int64) and first-corner flags (bytes), in corner order 3 f + k;
+ * axes is (3, fans) float64, the fans' coordinates, set from their first corners here. Values
+ * compare as numbers (-0.0 equals 0.0). */
+static PyObject *py_confirm(PyObject *self, PyObject *args) {
+    PyObject *obj, *fanobj, *firstobj, *axesobj;
+    if (!PyArg_ParseTuple(args, "OOOO", &obj, &fanobj, &firstobj, &axesobj))
+        return NULL;
+    Py_buffer view, fview, mview, aview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(fanobj, &fview, PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(firstobj, &mview, PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&fview);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(axesobj, &aview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&fview);
+        PyBuffer_Release(&mview);
+        return NULL;
+    }
+    Py_ssize_t corners = 3 * b.n, fans = aview.len / 24;
+    int wide = fview.itemsize == 8, same = 1, bad = 0;
+    if (!(fview.itemsize == 4 || wide) || fview.len / fview.itemsize != corners || mview.itemsize != 1 ||
+        mview.len != corners || aview.itemsize != 8 || aview.len != 24 * fans)
+        bad = 1;
+    double *axes = aview.buf;
+    if (!bad) {
+        Py_BEGIN_ALLOW_THREADS
+        double raw[LEAF][9];
+        const uint8_t *first = mview.buf;
+        /* A fan's first corner is its earliest, in this block or before: set them first. */
+        for (int pass = 0; pass < 2 && same && !bad; pass++)
+            for (Py_ssize_t t0 = 0; t0 < b.n && same && !bad; t0 += LEAF) {
+                Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+                load(&b, t0, m, raw);
+                for (Py_ssize_t j = 0; j < m && same; j++)
+                    for (int v = 0; v < 3; v++) {
+                        Py_ssize_t c = 3 * (t0 + j) + v;
+                        int64_t f = wide ? ((const int64_t *)fview.buf)[c] : ((const int32_t *)fview.buf)[c];
+                        if (f < 0 || f >= fans) {
+                            bad = 1;
+                            break;
+                        }
+                        if (pass == 0) {
+                            if (first[c])
+                                for (int a = 0; a < 3; a++)
+                                    axes[a * fans + f] = raw[j][3 * v + a];
+                        } else if (axes[f] != raw[j][3 * v] || axes[fans + f] != raw[j][3 * v + 1] ||
+                                   axes[2 * fans + f] != raw[j][3 * v + 2]) {
+                            same = 0;
+                            break;
+                        }
+                    }
+            }
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&view);
+    PyBuffer_Release(&fview);
+    PyBuffer_Release(&mview);
+    PyBuffer_Release(&aview);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "confirm: the block, fans and axes do not match");
+        return NULL;
+    }
+    if (same)
+        Py_RETURN_TRUE;
+    Py_RETURN_FALSE;
+}
+
+/* paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)
+ * The side keys of p3d check's fast path (p3d_cli.mesh.paired._keyed_pass): for side k of face
+ * f, (edge hash with its low bits + 1 bits cleared) | direction << bits | 3 f + k, dealt to
+ * buckets by their top bits (as block(..., fill, cap, shift)); s1 = sum of the cleared hashes
+ * of the sides running forward and s2 = sum of all of them, mod 2^64 (the balance test).
+ * degenerate: a side whose ends hash alike was met (nothing else means anything then);
+ * written -1: a bucket overflowed. */
+static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *fillobj;
+    int bits, shift;
+    Py_ssize_t first, cap;
+    if (!PyArg_ParseTuple(args, "OinOOni", &obj, &bits, &first, &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer view, kview, fview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    Py_ssize_t buckets = fview.len / 8;
+    if (kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 || bits < 1 ||
+        bits > 62 || first < 0 || buckets != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < buckets * cap ||
+        (uint64_t)(3 * (first + b.n)) > ((uint64_t)1 << bits)) {
+        PyBuffer_Release(&view);
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        PyErr_SetString(PyExc_ValueError, "paired_keys: the buffers do not fit");
+        return NULL;
+    }
+    uint64_t *keys = kview.buf, s1 = 0, s2 = 0, low = ((uint64_t)1 << (bits + 1)) - 1;
+    int64_t *fill = fview.buf;
+    int degenerate = 0, overflow = 0;
+    Py_ssize_t written = 0;
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < b.n && !degenerate; t0 += LEAF) {
+        Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+        load(&b, t0, m, raw);
+        for (Py_ssize_t j = 0; j < m && !degenerate; j++) {
+            uint64_t h[3];
+            for (int v = 0; v < 3; v++) {
+                uint64_t z = mix(bits_of(raw[j][3 * v]) ^ GOLDEN);
+                z = mix(z ^ bits_of(raw[j][3 * v + 1]));
+                h[v] = mix(z ^ bits_of(raw[j][3 * v + 2]));
+            }
+            for (int v = 0; v < 3; v++) {
+                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+                if (start == end) {
+                    degenerate = 1;
+                    break;
+                }
+                uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
+                uint64_t key = mix(lo * GOLDEN + hi) & ~low, forward = start < end;
+                s1 += key * forward;
+                s2 += key;
+                key |= forward << bits;
+                key += 3 * (uint64_t)(first + t0 + j) + v;
+                uint64_t bucket = key >> shift;
+                if (fill[bucket] == cap) {
+                    overflow = 1;
+                    continue;
+                }
+                keys[bucket * cap + fill[bucket]++] = key;
+                written++;
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return Py_BuildValue("OKKn", degenerate ? Py_True : Py_False, (unsigned long long)s1, (unsigned long long)s2,
+                         overflow ? (Py_ssize_t)-1 : written);
+}
+
 static PyMethodDef methods[] = {
+    {"paired_keys", py_paired_keys, METH_VARARGS,
+     "paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)"},
+    {"pairs", py_pairs, METH_VARARGS, "pairs(keys, bits, pi) -> whether the sorted side keys pair up"},
+    {"confirm", py_confirm, METH_VARARGS, "confirm(block, fan, first, axes) -> whether every corner is its fan's"},
     {"side_keys", py_side_keys, METH_VARARGS, "side_keys(block, keys, keep) -> sides whose ends hash alike"},
     {"groups", py_groups, METH_VARARGS, "groups(sorted keys) -> (unbalanced ids, edges, sides, doubtful ids or None)"},
     {"finish", py_finish, METH_VARARGS, "finish(keys, fill, cap, shift) -> count: sort bucketed keys together"},

@@ -21,7 +21,7 @@ import numpy as np
 from p3d_cli.mesh.closed import _column_hashes, corner_hashes
 from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.volume import SignedVolume
-from p3d_cli.mesh.kernels import sort
+from p3d_cli.mesh.kernels import key_buffer, sort
 
 #: Corners handled per vectorised step of the passes over the sorted keys (cache-sized).
 CHUNK = 1 << 16
@@ -107,7 +107,7 @@ def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None 
 def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
     """Pass 1: the packed keys ``(hash high bits) | corner index``, and the first block's
     bounds and dtype (the local origin's, as in ``p3d_cli.mesh.analysis``)."""
-    keys = np.empty(3 * n, dtype=np.uint64)
+    keys = key_buffer(3 * n)            # ordinary pages: see kernels.key_buffer
     high = np.uint64(((1 << 64) - 1) ^ ((1 << bits) - 1))
     lo = hi = None
     float32 = False

@@ -294,3 +294,48 @@ def test_groups_are_numpys(case):
     assert np.array_equal(got, want) and got.dtype == want.dtype
     if case == "collisions":
         assert got.size == 100
+
+
+def torus_triangles(u: int, v: int) -> np.ndarray:
+    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
+    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
+    ring = 3.0 + np.cos(phi)
+    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3) + [12.5, -7.25, 3]
+    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
+    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    return points.astype(np.float32)[faces]
+
+
+@pytest.mark.parametrize("case", ["closed", "holes", "flipped", "duplicate", "two shells", "degenerate"])
+def test_commands_alike_on_large_meshes(tmp_path, case):
+    """``p3d check`` and ``p3d props`` (``--json``) with the kernels and without, on meshes large
+    enough for the bucketed keys (over 65,536 sides) and each kind of defect."""
+    import subprocess
+    import sys
+
+    triangles = torus_triangles(160, 80)                             # 25,600 faces
+    if case == "holes":
+        triangles = triangles[np.arange(len(triangles)) % 100 != 0]
+    elif case == "flipped":
+        triangles[7] = triangles[7, ::-1]
+    elif case == "duplicate":
+        triangles = np.concatenate([triangles, triangles[:3]])
+    elif case == "two shells":
+        triangles = np.concatenate([triangles, triangles + np.float32(20)])
+    elif case == "degenerate":
+        triangles[11, 2] = triangles[11, 0]
+    records = np.zeros(len(triangles), RECORD)
+    records["corners"] = triangles
+    path = tmp_path / f"{case}.stl"
+    with open(path, "wb") as f:
+        f.write(b"\0" * 80 + np.uint32(len(records)).tobytes() + records.tobytes())
+    for command in ("check", "props"):
+        outputs = []
+        for pure in ("0", "1"):
+            env = dict(os.environ, P3D_PURE_NUMPY=pure)
+            done = subprocess.run([sys.executable, "-m", "p3d_cli", command, str(path), "--json"], env=env,
+                                  capture_output=True, check=False)
+            outputs.append((done.returncode, done.stdout, done.stderr))
+        assert outputs[0] == outputs[1], command
+        assert outputs[0][0] in (0, 1)
