@@ -72,7 +72,7 @@ def ply_binary_blocks(f):
             data = np.frombuffer(f.read(dtype.itemsize * count), dtype)
             vertices = np.stack([data["x"], data["y"], data["z"]], axis=1)
         elif name == "face":
-            (_, _, size, index, _), = props
+            (_, size, index, _), = props
             dtype = np.dtype([("n", types[size]), ("v", types[index], (3,))])
             faces = np.frombuffer(f.read(dtype.itemsize * count), dtype)["v"]
     for start in range(0, len(faces), BLOCK):
