@@ -22,6 +22,10 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __linux__
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 #define LEAF 128
 #define NSUMS 14 /* 10 term rows, the magnitude, the 3 weighted magnitudes */
@@ -409,7 +413,7 @@ static int cmp_u64(const void *x, const void *y) {
  * bucket stay in the 1 MB L2 cache); bigger ones are split by their next digit, in place. */
 #define SMALL (1 << 18)
 #define LSD_BITS 11
-#define LSD_PASSES 3
+#define LSD_PASSES 2
 /* The widest MSD digit: 256 buckets, whose heads stay in L1 while keys are dealt to them. */
 #define MSD_BITS 8
 
@@ -594,6 +598,9 @@ static PyObject *py_finish(PyObject *self, PyObject *args) {
         return PyErr_NoMemory();
     }
     Py_ssize_t total = 0;
+#ifdef __linux__
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
+#endif
     Py_BEGIN_ALLOW_THREADS
     for (Py_ssize_t b = 0; b < buckets; b++) {
         uint64_t *bucket = a + b * cap;
@@ -601,6 +608,16 @@ static PyObject *py_finish(PyObject *self, PyObject *args) {
         if (total != b * cap)
             memmove(a + total, bucket, fill[b] * sizeof(uint64_t));
         total += fill[b];
+#ifdef __linux__
+        /* The bucket's old place above the keys moved so far is dead: give its whole pages
+         * back, so that moving the buckets together (over the slack pages of the buckets
+         * before, never touched until now) does not grow the resident memory. */
+        uintptr_t lo = (uintptr_t)(a + (total > b * cap ? total : b * cap)), hi = (uintptr_t)(bucket + fill[b]);
+        lo = (lo + page - 1) / page * page;
+        hi = hi / page * page;
+        if (page > 1 && hi > lo)
+            madvise((void *)lo, hi - lo, MADV_DONTNEED);
+#endif
     }
     Py_END_ALLOW_THREADS
     free(tmp);

@@ -53,18 +53,24 @@ def sort(keys: np.ndarray) -> None:
 
 
 def key_buffer(count: int) -> np.ndarray:
-    """An uninitialised ``(count,)`` uint64 array for edge keys, in memory of its own.
+    """An uninitialised ``(count,)`` uint64 array for edge keys, in ordinary pages.
 
-    Anonymous ``mmap`` memory in ordinary pages, returned to the system when the array goes:
-    numpy asks for transparent huge pages for large arrays, and where the kernel compacts memory
-    to find them (``defrag`` = ``madvise``, common in VMs), a 24 MB array took 0.05-0.2 s of
-    system time to appear, more than filling it (measured for issue 32).
+    numpy asks the kernel for transparent huge pages for large arrays, and where the kernel
+    compacts memory to find them (``defrag`` = ``madvise``, common in VMs) a 24 MB array took
+    0.05-0.2 s of system time to appear, more than filling it (measured for issue 32). So the
+    keys are allocated with that request off: from the C heap, where they reuse memory a
+    reader has freed (a binary PLY's), or, past glibc's mmap threshold, in fresh pages whose
+    untouched parts (the buckets' slack) take no memory.
     """
-    import mmap
-
-    if count * 8 < 1 << 22:
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:                     # numpy < 2, or a build without the switch
         return np.empty(count, dtype=np.uint64)
-    return np.frombuffer(mmap.mmap(-1, count * 8), dtype=np.uint64)
+    before = _set_madvise_hugepage(False)
+    try:
+        return np.empty(count, dtype=np.uint64)
+    finally:
+        _set_madvise_hugepage(before)
 
 
 class Buckets:
@@ -74,8 +80,8 @@ class Buckets:
 
     A bucket holds ``cap`` keys: the mean plus eight standard deviations of the count a bucket
     gets when the keys are hashes (the two sides of an edge share a bucket, so the count is
-    twice a Poisson count of edges). The buffer is anonymous ``mmap`` memory, and pages never
-    written take no memory: the slack costs address space, not resident memory. A mesh whose keys crowd
+    twice a Poisson count of edges). Pages never written take no memory (``key_buffer``): the
+    slack costs address space, not resident memory. A mesh whose keys crowd
     one bucket (the same edge thousands of times) overflows it: ``overflow`` is then set and
     the caller makes the keys again, one after the other.
     """
