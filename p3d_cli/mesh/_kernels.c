@@ -48,14 +48,93 @@ static inline uint64_t bits_of(double x) {
     return b;
 }
 
-/* A block of triangles: base pointer, byte strides (triangle, corner, axis), float32 or not. */
+/* A block of triangles: base pointer, byte strides (triangle, corner, axis), float32 or not;
+ * or, indexed, the corners vertices[faces[t][v]]: base the vertices, st the row stride, sa
+ * the axis stride, and the (k, 3) faces at ibase with strides (ist, isv), int32 or int64. */
 typedef struct {
     const char *base;
     Py_ssize_t n, st, sv, sa;
     int f32;
+    int indexed, i64;
+    const char *ibase;
+    Py_ssize_t ist, isv;
+    Py_buffer iview;
 } Block;
 
+static int float_format(const Py_buffer *view) {
+    const char *f = view->format ? view->format : "B";
+    if (*f == '<' || *f == '=' || *f == '@')
+        f++;
+    return ((f[0] == 'f' && view->itemsize == 4) || (f[0] == 'd' && view->itemsize == 8)) && f[1] == 0;
+}
+
+static int int_format(const Py_buffer *view) {
+    const char *f = view->format ? view->format : "B";
+    if (*f == '<' || *f == '=' || *f == '@')
+        f++;
+    return ((f[0] == 'i' && view->itemsize == 4) || ((f[0] == 'l' || f[0] == 'q') && view->itemsize == 8)) &&
+           f[1] == 0;
+}
+
+/* (vertices, faces): vertices (m, 3) float32 or float64, faces (k, 3) int32 or int64 with
+ * every index in [0, m). */
+static int get_indexed(PyObject *obj, Py_buffer *view, Block *b) {
+    PyObject *vobj = PyTuple_GET_ITEM(obj, 0), *fobj = PyTuple_GET_ITEM(obj, 1);
+    if (PyObject_GetBuffer(vobj, view, PyBUF_STRIDES | PyBUF_FORMAT) < 0)
+        return -1;
+    if (PyObject_GetBuffer(fobj, &b->iview, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
+        PyBuffer_Release(view);
+        return -1;
+    }
+    Py_buffer *f = &b->iview;
+    int ok = view->ndim == 2 && view->shape[1] == 3 && float_format(view) && f->ndim == 2 && f->shape[1] == 3 &&
+             int_format(f);
+    Py_ssize_t m = ok ? view->shape[0] : 0;
+    b->i64 = f->itemsize == 8;
+    for (Py_ssize_t t = 0; ok && t < f->shape[0]; t++)
+        for (int v = 0; v < 3; v++) {
+            const char *q = (const char *)f->buf + t * f->strides[0] + v * f->strides[1];
+            int64_t i;
+            if (b->i64)
+                memcpy(&i, q, 8);
+            else {
+                int32_t j;
+                memcpy(&j, q, 4);
+                i = j;
+            }
+            if (i < 0 || i >= m)
+                ok = 0;
+        }
+    if (!ok) {
+        PyBuffer_Release(view);
+        PyBuffer_Release(&b->iview);
+        PyErr_SetString(PyExc_TypeError, "expected (vertices (m, 3) float32 or float64, faces (k, 3) int32 or int64 "
+                                         "in [0, m))");
+        return -1;
+    }
+    b->indexed = 1;
+    b->base = view->buf;
+    b->st = view->strides[0];
+    b->sv = 0;
+    b->sa = view->strides[1];
+    b->f32 = view->itemsize == 4;
+    b->ibase = f->buf;
+    b->n = f->shape[0];
+    b->ist = f->strides[0];
+    b->isv = f->strides[1];
+    return 0;
+}
+
+static void release_block(Py_buffer *view, Block *b) {
+    PyBuffer_Release(view);
+    if (b->indexed)
+        PyBuffer_Release(&b->iview);
+}
+
 static int get_block(PyObject *obj, Py_buffer *view, Block *b) {
+    b->indexed = 0;
+    if (PyTuple_Check(obj) && PyTuple_GET_SIZE(obj) == 2)
+        return get_indexed(obj, view, b);
     if (PyObject_GetBuffer(obj, view, PyBUF_STRIDES | PyBUF_FORMAT) < 0)
         return -1;
     const char *f = view->format ? view->format : "B";
@@ -122,9 +201,22 @@ typedef struct {
 static void load(const Block *b, Py_ssize_t t0, Py_ssize_t n, double p[][9]) {
     for (Py_ssize_t k = 0; k < n; k++) {
         const char *tri = b->base + (t0 + k) * b->st;
-        for (int v = 0; v < 3; v++)
+        for (int v = 0; v < 3; v++) {
+            const char *corner = tri + v * b->sv;
+            if (b->indexed) {
+                const char *q = b->ibase + (t0 + k) * b->ist + v * b->isv;
+                int64_t i;
+                if (b->i64)
+                    memcpy(&i, q, 8);
+                else {
+                    int32_t j;
+                    memcpy(&j, q, 4);
+                    i = j;
+                }
+                corner = b->base + i * b->st;
+            }
             for (int a = 0; a < 3; a++) {
-                const char *q = tri + v * b->sv + a * b->sa;
+                const char *q = corner + a * b->sa;
                 if (b->f32) {
                     float f;
                     memcpy(&f, q, 4);
@@ -132,6 +224,7 @@ static void load(const Block *b, Py_ssize_t t0, Py_ssize_t n, double p[][9]) {
                 } else
                     memcpy(&p[k][3 * v + a], q, 8);
             }
+        }
     }
 }
 
@@ -313,7 +406,7 @@ static PyObject *py_bounds(PyObject *self, PyObject *args) {
         bound(&c, raw, k);
     }
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&view);
+    release_block(&view, &b);
     return Py_BuildValue("(dddddd)O", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
                          c.finite ? Py_True : Py_False);
 }
@@ -341,26 +434,26 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
     int have_keys = keyobj != Py_None;
     if (have_keys) {
         if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-            PyBuffer_Release(&view);
+            release_block(&view, &b);
             return NULL;
         }
         if (fillobj != Py_None) {
             if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-                PyBuffer_Release(&view);
+                release_block(&view, &b);
                 PyBuffer_Release(&kview);
                 return NULL;
             }
             fill = (int64_t *)fview.buf;
             if (fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
                 (fview.len / 8) != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < (fview.len / 8) * cap) {
-                PyBuffer_Release(&view);
+                release_block(&view, &b);
                 PyBuffer_Release(&kview);
                 PyBuffer_Release(&fview);
                 PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
                 return NULL;
             }
         } else if (kview.itemsize != 8 || offset < 0 || kview.len / 8 - offset < 3 * b.n) {
-            PyBuffer_Release(&view);
+            release_block(&view, &b);
             PyBuffer_Release(&kview);
             PyErr_SetString(PyExc_ValueError, "the keys buffer is too small");
             return NULL;
@@ -378,7 +471,7 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
     for (int r = 0; r < NSUMS; r++)
         sums[r] = 0.0 + sums[r];
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&view);
+    release_block(&view, &b);
     if (have_keys)
         PyBuffer_Release(&kview);
     if (fill)
@@ -639,17 +732,17 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
     if (get_block(obj, &view, &b) < 0)
         return NULL;
     if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         return NULL;
     }
     if (PyObject_GetBuffer(keepobj, &mview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&kview);
         return NULL;
     }
     Py_ssize_t k = b.n, degenerate = 0;
     if (kview.itemsize != 8 || kview.len / 8 < 3 * k || mview.itemsize != 1 || mview.len < 3 * k) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&kview);
         PyBuffer_Release(&mview);
         PyErr_SetString(PyExc_ValueError, "the keys or keep buffer is too small");
@@ -684,7 +777,7 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
         }
     }
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&view);
+    release_block(&view, &b);
     PyBuffer_Release(&kview);
     PyBuffer_Release(&mview);
     return PyLong_FromSsize_t(degenerate);
@@ -841,16 +934,16 @@ static PyObject *py_confirm(PyObject *self, PyObject *args) {
     if (get_block(obj, &view, &b) < 0)
         return NULL;
     if (PyObject_GetBuffer(fanobj, &fview, PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         return NULL;
     }
     if (PyObject_GetBuffer(firstobj, &mview, PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&fview);
         return NULL;
     }
     if (PyObject_GetBuffer(axesobj, &aview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&fview);
         PyBuffer_Release(&mview);
         return NULL;
@@ -891,7 +984,7 @@ static PyObject *py_confirm(PyObject *self, PyObject *args) {
             }
         Py_END_ALLOW_THREADS
     }
-    PyBuffer_Release(&view);
+    release_block(&view, &b);
     PyBuffer_Release(&fview);
     PyBuffer_Release(&mview);
     PyBuffer_Release(&aview);
@@ -922,11 +1015,11 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
     if (get_block(obj, &view, &b) < 0)
         return NULL;
     if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         return NULL;
     }
     if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&kview);
         return NULL;
     }
@@ -934,7 +1027,7 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
     if (kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 || bits < 1 ||
         bits > 62 || first < 0 || buckets != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < buckets * cap ||
         (uint64_t)(3 * (first + b.n)) > ((uint64_t)1 << bits)) {
-        PyBuffer_Release(&view);
+        release_block(&view, &b);
         PyBuffer_Release(&kview);
         PyBuffer_Release(&fview);
         PyErr_SetString(PyExc_ValueError, "paired_keys: the buffers do not fit");
@@ -979,7 +1072,7 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
         }
     }
     Py_END_ALLOW_THREADS
-    PyBuffer_Release(&view);
+    release_block(&view, &b);
     PyBuffer_Release(&kview);
     PyBuffer_Release(&fview);
     return Py_BuildValue("OKKn", degenerate ? Py_True : Py_False, (unsigned long long)s1, (unsigned long long)s2,

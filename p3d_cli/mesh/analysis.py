@@ -105,11 +105,19 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     filled = seen = 0
     factor = 1.0
     exponent = 0
-    for block in source.read_blocks():
-        if fast is not None and exponent == 0 and kernel_takes(block) and len(block):
+    # An indexed mesh goes to the kernels as (vertices, faces) blocks, not gathered first.
+    pairs = source.index_blocks() if fast is not None and _indexed(source) else None
+    for block in (pairs if pairs is not None else source.read_blocks()):
+        if pairs is not None:
+            vertices, faces = block
+            target, size, single = (vertices, faces), len(faces), vertices.dtype == np.float32
+        else:
+            target, size = block, len(block)
+            single = isinstance(block, np.ndarray) and block.dtype == np.float32
+        if fast is not None and exponent == 0 and size and (pairs is not None or kernel_takes(block)):
             # The compiled pass: the same bounds, keys and sums, bit for bit, from the file's
             # own records (no float64 copy); None leaves the block to the numpy code below.
-            done = _compiled_block(fast, block, sums, keys, filled, rescale, buckets)
+            done = _compiled_block(fast, target, size, single, sums, keys, filled, rescale, buckets)
             if done is not None:
                 block_lo, block_hi, written, sums = done
                 if lo is None:
@@ -117,8 +125,10 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
                 else:
                     lo, hi = np.minimum(lo, block_lo), np.maximum(hi, block_hi)
                 filled += written
-                seen += len(block)
+                seen += size
                 continue
+        if pairs is not None:
+            block = vertices[faces]
         # One widening copy per block, in the layout the integrals want; everything else
         # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
         # file records.
@@ -204,8 +214,19 @@ def _keys_in_order(source: MeshSource) -> np.ndarray:
     return keys[:filled]
 
 
-def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.ndarray | None, filled: int,
-                    rescale: bool, buckets: Buckets | None = None):
+def _indexed(source: MeshSource) -> bool:
+    """Whether the kernels read the source's ``(vertices, faces)`` as they are."""
+    if source.indexed is None:
+        return False
+    vertices, pieces = source.indexed
+    return (isinstance(vertices, np.ndarray) and vertices.ndim == 2 and vertices.shape[1] == 3
+            and vertices.dtype in (np.float32, np.float64) and vertices.dtype.isnative
+            and all(isinstance(p, np.ndarray) and p.ndim == 2 and p.shape[1] == 3 and p.dtype.isnative
+                    and p.dtype in (np.int32, np.int64) for p in pieces))
+
+
+def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | None, keys: np.ndarray | None,
+                    filled: int, rescale: bool, buckets: Buckets | None = None):
     """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
     ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
     code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
@@ -217,7 +238,7 @@ def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.n
             return None
         if rescale and _exponent(float((box[3:] - box[:3]).max())):
             return None
-        sums = MomentSums(origin_from_bounds(box[:3], box[3:], block.dtype == np.float32))
+        sums = MomentSums(origin_from_bounds(box[:3], box[3:], single))
     if buckets is not None and not buckets.overflow:
         before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
         box, finite, totals, magnitude, weighted, written = fast.block(
@@ -232,7 +253,7 @@ def _compiled_block(fast, block: np.ndarray, sums: MomentSums | None, keys: np.n
     if written < 0:                                 # a bucket overflowed
         buckets.overflow = True
         written = 0
-    sums.add_sums(np.array(totals), magnitude, np.array(weighted), len(block))
+    sums.add_sums(np.array(totals), magnitude, np.array(weighted), size)
     return box[:3], box[3:], written, sums
 
 
