@@ -8,6 +8,7 @@ test and dropped. A streamed binary STL is therefore never held in memory whole.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -107,10 +108,12 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     exponent = 0
     # An indexed mesh goes to the kernels as (vertices, faces) blocks, not gathered first.
     pairs = source.index_blocks() if fast is not None and _indexed(source) else None
-    for block in (pairs if pairs is not None else source.read_blocks()):
+    item: Any
+    for item in (pairs if pairs is not None else source.read_blocks()):
+        block = item
         if pairs is not None:
-            vertices, faces = block
-            target, size, single = (vertices, faces), len(faces), vertices.dtype == np.float32
+            vertices, faces = item
+            target, size, single = item, len(faces), vertices.dtype == np.float32
         else:
             target, size = block, len(block)
             single = isinstance(block, np.ndarray) and block.dtype == np.float32

@@ -232,12 +232,11 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
                 at = slice(first, first + SIDE_BLOCK)
                 yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)
             continue
-        hit = slice(None)
         corners = np.moveaxis(cols, 1, 2) + 0.0            # (slot, face, axis), as keys
         start, end = corners, corners[[1, 2, 0]]
         if keep is not None:
             start, end = start[keep], end[keep]
-        start, end = start.reshape(-1, 3)[hit], end.reshape(-1, 3)[hit]
+        start, end = start.reshape(-1, 3), end.reshape(-1, 3)
         for first in range(0, start.shape[0], SIDE_BLOCK):
             at = slice(first, first + SIDE_BLOCK)
             yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)

@@ -19,7 +19,7 @@ def _load() -> ModuleType | None:
     if os.environ.get("P3D_PURE_NUMPY", "") not in ("", "0"):
         return None
     try:
-        from p3d_cli.mesh import _kernels
+        from p3d_cli.mesh import _kernels  # type: ignore[attr-defined]  # the built extension
     except ImportError:
         return None
     return _kernels
@@ -63,7 +63,7 @@ def key_buffer(count: int) -> np.ndarray:
     untouched parts (the buckets' slack) take no memory.
     """
     try:
-        from numpy._core.multiarray import _set_madvise_hugepage
+        from numpy._core.multiarray import _set_madvise_hugepage  # type: ignore[attr-defined]
     except ImportError:                     # numpy < 2, or a build without the switch
         return np.empty(count, dtype=np.uint64)
     before = _set_madvise_hugepage(False)
@@ -121,3 +121,34 @@ class Buckets:
         kernels = KERNELS
         assert kernels is not None and not self.overflow  # noqa: S101 - made only with the kernels
         return self.keys[:kernels.finish(self.keys, self.fill, self.cap, self.shift)]
+
+
+class NotTaken(Exception):
+    """A block the kernels do not read as it is (another dtype or byte order)."""
+
+
+def confirm_fans(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
+    """``p3d_cli.mesh.paired._confirm`` by the compiled kernels (the same comparisons, block by
+    block): the fans' coordinates ``(count, 3)`` as stored, or None when some corner differs
+    from its fan's first corner. Raises ``NotTaken`` for a block the kernels do not read."""
+    fast = KERNELS
+    assert fast is not None  # noqa: S101 - called only with the kernels
+    axes = np.zeros((3, count))
+    dtype = None
+    done = 0
+    for block in blocks():
+        block = np.asarray(block)
+        k = len(block)
+        if k == 0:
+            continue
+        if not takes(block):
+            raise NotTaken                          # the numpy code compares in the stored dtype
+        if dtype is None:
+            dtype = block.dtype
+        if not fast.confirm(block, fan[3 * done:3 * (done + k)], is_first[3 * done:3 * (done + k)].view(np.uint8),
+                            axes):
+            return None                             # colliding keys paired two edges
+        done += k
+    assert dtype is not None
+    # The coordinates as stored (float32 values are exact in float64 and back).
+    return np.ascontiguousarray(axes.T).astype(dtype, copy=False)

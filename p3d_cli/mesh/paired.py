@@ -44,7 +44,7 @@ from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
 from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
 from p3d_cli.mesh.volume import SignedVolume
-from p3d_cli.mesh.kernels import Buckets, compiled, key_buffer, sort
+from p3d_cli.mesh.kernels import Buckets, NotTaken, compiled, confirm_fans, key_buffer, sort
 from p3d_cli.mesh.kernels import takes as kernel_takes
 
 #: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
@@ -360,7 +360,10 @@ def _confirm(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
     coordinates ``(count, 3)`` (the input's dtype), or None when some corner differs."""
     fast = compiled()
     if fast is not None:
-        return _confirm_compiled(fast, blocks, fan, count, is_first)
+        try:
+            return confirm_fans(blocks, fan, count, is_first)
+        except NotTaken:
+            pass
     axes = None
     done = 0
     for block in blocks():
@@ -388,27 +391,6 @@ def _confirm(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
         done += k
     assert axes is not None
     return np.ascontiguousarray(axes.T)
-
-
-def _confirm_compiled(fast, blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
-    """``_confirm`` by the compiled kernels: the same comparisons, block by block."""
-    axes = np.zeros((3, count))
-    dtype = None
-    done = 0
-    for block in blocks():
-        block = np.asarray(block)
-        k = len(block)
-        if k == 0:
-            continue
-        if dtype is None:
-            dtype = block.dtype
-        if not fast.confirm(block, fan[3 * done:3 * (done + k)], is_first[3 * done:3 * (done + k)].view(np.uint8),
-                            axes):
-            return None                             # colliding keys paired two edges
-        done += k
-    assert dtype is not None
-    # The coordinates as stored (float32 values are exact in float64 and back).
-    return np.ascontiguousarray(axes.T).astype(dtype, copy=False)
 
 
 def _merge_fans(fan: np.ndarray, count: int, points: np.ndarray):

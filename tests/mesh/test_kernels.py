@@ -339,3 +339,38 @@ def test_commands_alike_on_large_meshes(tmp_path, case):
             outputs.append((done.returncode, done.stdout, done.stderr))
         assert outputs[0] == outputs[1], command
         assert outputs[0][0] in (0, 1)
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_indexed_ply_alike(tmp_path, order):
+    """A binary PLY of either byte order (the kernels read native arrays only: a big-endian
+    file's are converted by the reader, or left to numpy) gives the same check and props."""
+    import subprocess
+    import sys
+
+    u, v = 160, 80
+    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
+    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
+    ring = 3.0 + np.cos(phi)
+    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3)
+    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
+    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])[1:]     # one hole
+    name = "binary_little_endian" if order == "<" else "binary_big_endian"
+    header = (f"ply\nformat {name} 1.0\nelement vertex {len(points)}\nproperty float x\nproperty float y\n"
+              f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    record = np.dtype([("n", "u1"), ("v", order + "i4", (3,))])
+    rows = np.empty(len(faces), record)
+    rows["n"], rows["v"] = 3, faces
+    path = tmp_path / "torus.ply"
+    with open(path, "wb") as f:
+        f.write(header.encode() + points.astype(order + "f4").tobytes() + rows.tobytes())
+    for command in ("check", "props"):
+        outputs = []
+        for pure in ("0", "1"):
+            env = dict(os.environ, P3D_PURE_NUMPY=pure)
+            done = subprocess.run([sys.executable, "-m", "p3d_cli", command, str(path), "--json"], env=env,
+                                  capture_output=True, check=False)
+            outputs.append((done.returncode, done.stdout, done.stderr))
+        assert outputs[0] == outputs[1], command
+        assert outputs[0][0] in (0, 1) and b"Traceback" not in outputs[0][2]
