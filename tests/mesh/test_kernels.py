@@ -51,6 +51,15 @@ def bits(x) -> np.ndarray:
     return np.asarray(x, dtype=np.float64).view(np.uint64)
 
 
+def torus_mesh(u: int, v: int) -> tuple[np.ndarray, np.ndarray]:
+    """The closed grid torus of ``2 u v`` faces (``test_paired.torus``), indexed."""
+    from test_paired import torus
+
+    triangles = torus(u, v).reshape(-1, 3)
+    points, faces = np.unique(triangles, axis=0, return_inverse=True)
+    return points, faces.reshape(-1, 3)
+
+
 SIZES = [1, 2, 7, 8, 9, 16, 17, 127, 128, 129, 130, 255, 1000, 4097, 16383, 16384]
 
 
@@ -196,15 +205,8 @@ def test_real_meshes_are_here_under_ci():
 @pytest.mark.parametrize("scale", [1.0, 1e-40, 1e40])
 def test_tori_anywhere_analyse_alike(at, scale):
     """A closed torus and the same with a hole, far away, tiny and huge (the rescaled road)."""
-    u, v = 40, 24
-    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-    ring = 3.0 + np.cos(phi)
-    points = (np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3) * scale
-              + np.array(at))
-    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
-    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
-    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    points, faces = torus_mesh(40, 24)
+    points = points * scale + np.array(at)
     for chosen in (faces, faces[1:]):
         for dtype in (np.float64, np.float32):
             with np.errstate(over="ignore"):            # 1e40 in float32: infinities, refused alike
@@ -297,23 +299,31 @@ def test_groups_are_numpys(case):
 
 
 def torus_triangles(u: int, v: int) -> np.ndarray:
-    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-    ring = 3.0 + np.cos(phi)
-    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3) + [12.5, -7.25, 3]
-    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
-    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
-    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-    return points.astype(np.float32)[faces]
+    points, faces = torus_mesh(u, v)
+    return (points + [12.5, -7.25, 3]).astype(np.float32)[faces]
+
+
+def assert_commands_alike(path) -> None:
+    """``p3d check`` and ``p3d props`` (``--json``) give the same bytes, status and messages
+    with the kernels and without, and no traceback."""
+    import subprocess
+    import sys
+
+    for command in ("check", "props"):
+        outputs = []
+        for pure in ("0", "1"):
+            env = dict(os.environ, P3D_PURE_NUMPY=pure)
+            done = subprocess.run([sys.executable, "-m", "p3d_cli", command, str(path), "--json"], env=env,
+                                  capture_output=True, check=False)
+            outputs.append((done.returncode, done.stdout, done.stderr))
+        assert outputs[0] == outputs[1], command
+        assert outputs[0][0] in (0, 1) and b"Traceback" not in outputs[0][2]
 
 
 @pytest.mark.parametrize("case", ["closed", "holes", "flipped", "duplicate", "two shells", "degenerate"])
 def test_commands_alike_on_large_meshes(tmp_path, case):
     """``p3d check`` and ``p3d props`` (``--json``) with the kernels and without, on meshes large
     enough for the bucketed keys (over 65,536 sides) and each kind of defect."""
-    import subprocess
-    import sys
-
     triangles = torus_triangles(160, 80)                             # 25,600 faces
     if case == "holes":
         triangles = triangles[np.arange(len(triangles)) % 100 != 0]
@@ -330,32 +340,15 @@ def test_commands_alike_on_large_meshes(tmp_path, case):
     path = tmp_path / f"{case}.stl"
     with open(path, "wb") as f:
         f.write(b"\0" * 80 + np.uint32(len(records)).tobytes() + records.tobytes())
-    for command in ("check", "props"):
-        outputs = []
-        for pure in ("0", "1"):
-            env = dict(os.environ, P3D_PURE_NUMPY=pure)
-            done = subprocess.run([sys.executable, "-m", "p3d_cli", command, str(path), "--json"], env=env,
-                                  capture_output=True, check=False)
-            outputs.append((done.returncode, done.stdout, done.stderr))
-        assert outputs[0] == outputs[1], command
-        assert outputs[0][0] in (0, 1)
+    assert_commands_alike(path)
 
 
 @pytest.mark.parametrize("order", ["<", ">"])
 def test_indexed_ply_alike(tmp_path, order):
     """A binary PLY of either byte order (the kernels read native arrays only: a big-endian
     file's are converted by the reader, or left to numpy) gives the same check and props."""
-    import subprocess
-    import sys
-
-    u, v = 160, 80
-    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-    ring = 3.0 + np.cos(phi)
-    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], -1).reshape(-1, 3)
-    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
-    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
-    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])[1:]     # one hole
+    points, faces = torus_mesh(160, 80)
+    faces = faces[1:]                                                  # one hole
     name = "binary_little_endian" if order == "<" else "binary_big_endian"
     header = (f"ply\nformat {name} 1.0\nelement vertex {len(points)}\nproperty float x\nproperty float y\n"
               f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
@@ -365,12 +358,4 @@ def test_indexed_ply_alike(tmp_path, order):
     path = tmp_path / "torus.ply"
     with open(path, "wb") as f:
         f.write(header.encode() + points.astype(order + "f4").tobytes() + rows.tobytes())
-    for command in ("check", "props"):
-        outputs = []
-        for pure in ("0", "1"):
-            env = dict(os.environ, P3D_PURE_NUMPY=pure)
-            done = subprocess.run([sys.executable, "-m", "p3d_cli", command, str(path), "--json"], env=env,
-                                  capture_output=True, check=False)
-            outputs.append((done.returncode, done.stdout, done.stderr))
-        assert outputs[0] == outputs[1], command
-        assert outputs[0][0] in (0, 1) and b"Traceback" not in outputs[0][2]
+    assert_commands_alike(path)
