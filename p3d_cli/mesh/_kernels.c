@@ -1,7 +1,16 @@
 /*
- * p3d_cli.mesh._kernels: the per-triangle work of `p3d props` in one pass, and an in-place
- * radix sort of 64-bit keys. Optional: p3d_cli.mesh.kernels falls back to the numpy code when
- * this module is not built (no compiler), and the results are the same bits either way.
+ * p3d_cli.mesh._kernels: the per-triangle work of `p3d props` and of `p3d check`'s fast path in
+ * compiled loops (issue 32; docs/performance.md, "At the streaming floor"). Optional:
+ * p3d_cli.mesh.kernels falls back to the numpy code when this module is not built (no
+ * compiler), and the results are the same bits either way.
+ *
+ * - bounds, block: a block's bounds and finite test, edge keys (in order or dealt to buckets by
+ *   their top bits) and the ten divergence-theorem sums with their rounding magnitudes
+ *   (p3d_cli.mesh.analysis, integrals, closed);
+ * - sort, finish: an in-place radix sort of uint64 keys, and the sort of bucketed keys;
+ * - side_keys, groups: the open-mesh road's side keys and its scan of the key groups
+ *   (p3d_cli.mesh.closed, boundary);
+ * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -46,6 +55,22 @@ static inline uint64_t bits_of(double x) {
     x += 0.0; /* -0.0 and 0.0 hash alike */
     memcpy(&b, &x, 8);
     return b;
+}
+
+/* The corner hashes of one loaded triangle p[3 v + a] (p3d_cli.mesh.closed._column_hashes:
+ * mix(mix(mix(x ^ GOLDEN) ^ y) ^ z) of the float64 bits, -0.0 read as 0.0). */
+static inline void corner_hashes(const double p[9], uint64_t h[3]) {
+    for (int v = 0; v < 3; v++) {
+        uint64_t z = mix(bits_of(p[3 * v]) ^ GOLDEN);
+        z = mix(z ^ bits_of(p[3 * v + 1]));
+        h[v] = mix(z ^ bits_of(p[3 * v + 2]));
+    }
+}
+
+/* The edge hash of the side start -> end (distinct hashes): mix(min * GOLDEN + max). */
+static inline uint64_t edge_hash(uint64_t start, uint64_t end) {
+    uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
+    return mix(lo * GOLDEN + hi);
 }
 
 /* A block of triangles: base pointer, byte strides (triangle, corner, axis), float32 or not;
@@ -250,17 +275,12 @@ static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
     Py_ssize_t w = 0;
     for (Py_ssize_t k = 0; k < n; k++) {
         uint64_t h[3];
-        for (int v = 0; v < 3; v++) {
-            uint64_t z = mix(bits_of(p[k][3 * v]) ^ GOLDEN);
-            z = mix(z ^ bits_of(p[k][3 * v + 1]));
-            h[v] = mix(z ^ bits_of(p[k][3 * v + 2]));
-        }
+        corner_hashes(p[k], h);
         for (int v = 0; v < 3; v++) {
             uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
             if (start == end)
                 continue; /* a side whose ends hash alike bounds nothing */
-            uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
-            uint64_t key = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+            uint64_t key = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
             if (c->fill) {
                 uint64_t b = key >> c->shift;
                 if (c->fill[b] == c->cap) {
@@ -757,11 +777,7 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
         load(&b, t0, m, raw);
         for (Py_ssize_t j = 0; j < m; j++) {
             uint64_t h[3];
-            for (int v = 0; v < 3; v++) {
-                uint64_t z = mix(bits_of(raw[j][3 * v]) ^ GOLDEN);
-                z = mix(z ^ bits_of(raw[j][3 * v + 1]));
-                h[v] = mix(z ^ bits_of(raw[j][3 * v + 2]));
-            }
+            corner_hashes(raw[j], h);
             for (int v = 0; v < 3; v++) {
                 uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
                 Py_ssize_t at = v * k + t0 + j;
@@ -771,8 +787,7 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
                     keys[at] = 0;
                     continue;
                 }
-                uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
-                keys[at] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(start < end);
+                keys[at] = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
             }
         }
     }
@@ -1044,19 +1059,14 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
         load(&b, t0, m, raw);
         for (Py_ssize_t j = 0; j < m && !degenerate; j++) {
             uint64_t h[3];
-            for (int v = 0; v < 3; v++) {
-                uint64_t z = mix(bits_of(raw[j][3 * v]) ^ GOLDEN);
-                z = mix(z ^ bits_of(raw[j][3 * v + 1]));
-                h[v] = mix(z ^ bits_of(raw[j][3 * v + 2]));
-            }
+            corner_hashes(raw[j], h);
             for (int v = 0; v < 3; v++) {
                 uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
                 if (start == end) {
                     degenerate = 1;
                     break;
                 }
-                uint64_t lo = start < end ? start : end, hi = start < end ? end : start;
-                uint64_t key = mix(lo * GOLDEN + hi) & ~low, forward = start < end;
+                uint64_t key = edge_hash(start, end) & ~low, forward = start < end;
                 s1 += key * forward;
                 s2 += key;
                 key |= forward << bits;
