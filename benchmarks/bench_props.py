@@ -342,6 +342,7 @@ def main(argv=None) -> int:
                         "(default bench_props.md in the work directory)")
     parser.add_argument("--generate", nargs=3, metavar=("WORKDIR", "SIZES", "FORMATS"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    command_line = " ".join(sys.argv[1:] if argv is None else argv)
     if args.generate:
         workdir, sizes, formats = args.generate
         generate(workdir, [int(x) for x in sizes.split(",")], formats.split(","),
@@ -406,7 +407,7 @@ def main(argv=None) -> int:
     lines = []
     lines.append(f"Whole-process medians, {time.strftime('%Y-%m-%d %H:%M %Z')}; {machine()}; "
                  f"load average {load:.1f} at the start. Command: `python benchmarks/bench_props.py "
-                 f"{' '.join(argv if argv is not None else sys.argv[1:])}`.")
+                 f"{command_line}`.")
     lines.append(f"{versions()}.")
     lines.append("")
 
