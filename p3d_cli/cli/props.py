@@ -26,7 +26,7 @@ from p3d_cli.cli.options import (
 )
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.rounding import snapped
-from p3d_cli.cli.settings import WarningFilter
+from p3d_cli.cli.settings import WarningFilter, settings_for
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
 from p3d_cli.results import PropsResult
 
@@ -61,8 +61,15 @@ from p3d_cli.results import PropsResult
 @click.option("--emit", type=click.Choice(["urdf", "mjcf", "sdf"]), default=None,
               help="Print a ready <inertial> block for a robot description (SI with --units; "
                    "the frame convention in a comment; docs/robots.md).")
+@click.option("--intersections", is_flag=True,
+              help="Also test a mesh exactly for self-intersections and for closed shells nested wound "
+                   "alike, as p3d check does (warnings self-intersecting, nested-shells).")
+@click.option("--shells", is_flag=True,
+              help="Measure each closed shell of a mesh (with the cavities inside it) as a part of an "
+                   "assembly: the bodies of a multi-body export, and the whole (implies --intersections).")
 def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict, settings, method, samples, seed,
-          tolerance, batch, placement, tessellate, units, output_units, combine, emit=None):
+          tolerance, batch, placement, tessellate, units, output_units, combine, emit=None, intersections=False,
+          shells=False):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -84,6 +91,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
       p3d props part.stl --units mm --density 7.85g/cm^3
       p3d props assembly.yaml --json
       p3d props a.stl b.stl --combine --units mm --density 2.7g/cm^3
+      p3d props export.stl --shells --json
 
     Shape specs (box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder; see p3d bounds
     --help) give exact closed forms. --scale, --rotate/--quat and --translate place the solid
@@ -94,14 +102,25 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
     carry units (7.85g/cm^3, 7850kg/m^3, 0.284lb/in^3, 2.5kg, 2.5lb, 500g); results are then
     in SI (or --output-units) and every output says its units. An assembly file (YAML with
     parts:, docs/assemblies.md) is measured part by part and as a whole.
+
+    A surface that intersects itself, or closed shells nested wound alike, count some volume
+    twice: --intersections tests for that exactly (it also runs when the inertia is not a
+    solid's), --shells measures each body of a multi-body export on its own (docs/ci.md).
     """
     style = output_style(as_json, batch.csv, fields, "table")
     style = f"emit:{emit}" if emit else style
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
                    units=units, output_units=output_units)
+    if shells and combine:
+        raise UsageError("--shells/--combine", "both given", "--shells splits one mesh into its bodies; "
+                         "--combine joins several inputs: choose one")
+    if intersections or shells:     # only when asked: the props of every other caller stay as they were
+        options.update(intersections=intersections, shells=shells)
     measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
+    if style in ("table", "fields") or style.startswith("emit:"):
+        run.note_settings(settings.config, "props", options)
     work = functools.partial(props_report, style=style, fields=fields, strict=strict, settings=settings,
                              precision=precision, **options)
     if batch.csv:
@@ -123,12 +142,24 @@ def combined(run: Batch, work) -> int:
     bad = [item for item in run.items if not isinstance(item, str)]
     if bad:
         raise bad[0]
-    report = work(combine(run.items, "combined"))
-    for line in report.notes:
-        click.echo(line, err=True)
-    for code, text in report.warnings:
-        click.echo(f"p3d: warning: [{code}] {report.source}: {text}", err=True)
+    assembly = combine(run.items, "combined")
+    given = work.keywords.get("density") is not None or work.keywords.get("mass") is not None
+    config = work.keywords["settings"].config
+    if not given and config.paths:
+        # Each part's own [[paths]] density (the top level's stays the default of the rest).
+        import dataclasses
+
+        parts = []
+        for part in assembly.parts:
+            options = {"units": work.keywords.get("units"), "density": None, "mass": None}
+            settings_for(config, "props", part.thing, options)
+            own = options["density"] if options["density"] != config.settings.get("density") else None
+            parts.append(dataclasses.replace(part, density=own))
+        assembly = dataclasses.replace(assembly, parts=tuple(parts))
+    report = work(assembly)
+    run.record(report, "combined")      # its notes and warnings to stderr, its verdict for the reports
     click.echo(report.text)
+    run.write_reports()
     if not report.passed:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
@@ -153,8 +184,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
     FieldError
         A name in ``fields`` that the result does not have.
     """
-    if options.get("density") is None and options.get("mass") is None:
-        options["density"] = settings.config.get("density", src)
+    used = settings_for(settings.config, "props", src, options)
     result = measure.props(src, **options)
     kept = settings.keep(result.facts.source, result.warnings)
     if style == "table":
@@ -165,6 +195,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
         text = emit_result(style[5:], result)
     else:
         record = props_record(result)
+        record["settings"] = used
         if style == "csv":
             about = options.get("about") is not None
             rows = [{**part, "source": f"{record['source']}#{part['name']}"} for part in record.get("parts", ())]
@@ -173,7 +204,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record)
+            text = output.record_line("props", record)
     failed = strict and bool(kept)
     return Report(text, passed=not failed, source=result.facts.source, warnings=kept,
                   failures=kept if failed else ())
@@ -196,7 +227,7 @@ def error_line(outcome, *, style: str, about: bool = False) -> str | None:
         return output.csv_line(props_row(record, about))
     if style == "fields":
         return ""
-    return output.dumps(record) if style == "json" else None
+    return output.record_line("props", record) if style == "json" else None
 
 
 INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"
@@ -241,11 +272,6 @@ def props_record(result: PropsResult) -> dict:
     return record
 
 
-def plural(count: int, noun: str) -> str:
-    """``1 face``, ``12 faces``."""
-    return f"{count} {noun}{'' if count == 1 else 's'}"
-
-
 def units_line(units: dict | None) -> list[str]:
     """The table's statement of units, 80 columns wide."""
     if not units or units.get("system") == "mesh":
@@ -268,7 +294,7 @@ def props_table(result: PropsResult, precision: int = 10) -> str:
     objects = f"{result.details['objects']}, " if "objects" in result.details else ""
     lines = [
         whole + name + output.shown_name(f.source),
-        f"  {f.format}, " + ("" if f.format == "primitive" else f"{plural(f.faces, 'face')}, ")
+        f"  {f.format}, " + ("" if f.format == "primitive" else f"{output.plural(f.faces, 'face')}, ")
         + f"{objects}closed: {closed}, method: {result.method}",
         *units_line(result.units),
         f"  volume            {number(p['volume'])}",

@@ -50,6 +50,7 @@ from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
+from p3d_cli.mesh.layout import Layout
 from p3d_cli.mesh.paired import Paired, paired_topology
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
@@ -57,7 +58,7 @@ from p3d_cli.mesh.vertices import corner_coords, group_corners
 
 __all__ = ["Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
            "TopologyReport", "VertexSample", "components", "corner_vertex_ids",
-           "topology", "topology_of_blocks"]
+           "topology", "topology_and_layout", "topology_of_blocks"]
 
 
 def corner_vertex_ids(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -126,22 +127,30 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         The volume (or a shell's) is beyond float64: coordinates past about 1e100 (a
         volume of 1e300 and more), where an infinite or NaN volume would be a wrong number.
     """
+    return topology_and_layout(blocks, n, where)[0]
+
+
+def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
+    """``topology_of_blocks``, and the vertex ids and shells it found (None for no faces), for
+    the passes that follow (self-intersections, the shells' nesting)."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
-        report = _topology_of_blocks(blocks, n, where)
+        report, layout = _topology_of_blocks(blocks, n, where)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
         from p3d_cli.errors import RangeError
 
         raise RangeError(where or "mesh", "the signed volume overflows float64 (coordinates too large for "
                          "their cubes)", "scale the mesh into a larger unit (e.g. km instead of mm)")
-    return report
+    return report, layout
 
 
-def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
+def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyReport, Layout | None]:
     if n == 0:
-        return _empty_report()
+        return _empty_report(), None
     fast = paired_topology(blocks, n, where)
     if fast is not None:
-        return _paired_report(blocks, n, fast)
+        layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area,
+                        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
+        return _paired_report(blocks, n, fast), layout
     zero_area: list[np.ndarray] = []
 
     def per_block(first_face: int, cols: np.ndarray, block) -> None:
@@ -166,6 +175,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
+    layout = Layout(ids, m, found, zero, _crowded(edges, ids), _open_shells(edges, found))
     volume = _volume(blocks, corners, edges)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
@@ -175,7 +185,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
     boundary, nonmanifold_edges, misoriented = (
         tuple(EdgeSample(faces, (points[a], points[b])) for faces, a, b in samples)
         for samples in edge_samples)
-    return TopologyReport(
+    report = TopologyReport(
         faces=n, vertices=m, edges=edges.count,
         boundary_edges=int(edges.boundary.size), nonmanifold_edges=int(edges.nonmanifold.size),
         misoriented_edges=int(edges.misoriented.size), nonmanifold_vertices=int(nonmanifold.size),
@@ -189,6 +199,25 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
+    return report, layout
+
+
+def _crowded(edges: Edges, ids: np.ndarray) -> np.ndarray:
+    """Vertex ids ``(e, 2)`` of the edges used by more than two faces."""
+    side = edges.side[edges.starts[edges.nonmanifold]].astype(np.int64)
+    ends = np.stack([ids[side], ids[next_corner(side)]], axis=1).astype(np.int64)
+    return np.sort(ends, axis=1)
+
+
+def _open_shells(edges: Edges, found: Components) -> np.ndarray:
+    """The shells that hold a boundary, non-manifold or misoriented edge."""
+    groups = np.concatenate([edges.boundary, edges.nonmanifold, edges.misoriented])
+    if groups.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    counts = edges.counts[groups].astype(np.int64)
+    sides = np.repeat(edges.starts[groups].astype(np.int64), counts)
+    sides += np.arange(sides.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    return np.unique(found.labels[edges.side[sides] // 3]).astype(np.int64)
 
 
 def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
