@@ -48,7 +48,9 @@ class MeshSource:
         What the file calls those objects (``nodes``, ``build items``), for the record.
     indexed : tuple or None
         For an indexed mesh (``indexed_source``): its ``(vertices, face pieces)``, so that a
-        reader of the indices (the compiled kernels) need not gather ``vertices[faces]``.
+        reader of the indices (the compiled kernels) need not gather ``vertices[faces]``. A
+        copy whose ``read_blocks`` yields anything else (or must see every block, as placed
+        bounds do) sets it to None, or the kernels would read the stale indexed mesh instead.
     """
 
     format: str

@@ -359,3 +359,20 @@ def test_indexed_ply_alike(tmp_path, order):
     with open(path, "wb") as f:
         f.write(header.encode() + points.astype(order + "f4").tobytes() + rows.tobytes())
     assert_commands_alike(path)
+
+
+@pytest.mark.parametrize("scale", [(0.001, 0.001, 0.001), (-0.001, 0.001, 0.001)])
+def test_placed_indexed_mesh_has_its_bounds(scale):
+    """A placed OBJ (indexed: the kernels' own road) reports the placed bounds and moments of
+    the same mesh as a binary STL (blocks of triangles): the placement's projection of every
+    block must see the blocks, so the indexed road is not taken past it."""
+    from p3d_cli import props
+    from p3d_cli.placement import Placement
+
+    placement = Placement(np.array(scale), np.eye(3), np.array([-0.005, 0.0, 0.02]))
+    obj = props(str(REPO / "sample_meshes" / "bracket.obj"), placement)
+    stl = props(str(REPO / "sample_meshes" / "bracket.stl"), placement)
+    assert obj.facts.bounds is not None
+    assert np.array_equal(obj.facts.bounds.min, stl.facts.bounds.min)
+    assert np.array_equal(obj.facts.bounds.max, stl.facts.bounds.max)
+    assert bits(obj.properties.center_of_mass).tolist() == bits(stl.properties.center_of_mass).tolist()
