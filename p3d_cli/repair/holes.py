@@ -1,0 +1,173 @@
+"""The ``holes`` step: every boundary loop filled with triangles of its own corners, or left
+with the reason.
+
+The boundary sides come from ``p3d check``'s edge grouping (edges used by one face), turned
+against their faces and joined into simple loops (``p3d_cli.repair.loops``); each loop is
+triangulated on its own (``p3d_cli.repair.fill``), never repeating an edge the mesh or an
+earlier fill already has. The filled faces are then tested exactly against crossing the faces
+near them (``p3d_cli.repair.solidity``): a hole whose filling would cross another face is left.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.repair import solidity
+from p3d_cli.repair.draft import Draft, Grouping
+from p3d_cli.repair.fill import Hole, fill_hole
+from p3d_cli.repair.loops import boundary_loops
+from p3d_cli.repair.report import SHOWN, StepReport
+
+
+@dataclass(frozen=True)
+class Holes:
+    """What the step found and did.
+
+    Attributes
+    ----------
+    holes : tuple of (Hole, (k,) int64)
+        Every loop, with the faces (draft numbers) around it.
+    stray : (s,) int64
+        Draft faces of boundary sides on no closed loop.
+    """
+
+    holes: tuple[tuple[Hole, np.ndarray], ...]
+    stray: np.ndarray
+
+    @property
+    def open_faces(self) -> np.ndarray:
+        """Draft faces still on a boundary: around a hole left, or on a stray side."""
+        left = [around for hole, around in self.holes if not hole.filled]
+        return np.unique(np.concatenate(left + [self.stray])).astype(np.int64)
+
+
+def boundary_sides(grouping: Grouping, draft: Draft) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Faces, start and end vertices of every boundary side, in the faces' current winding."""
+    edges, faces = grouping.edges, grouping.faces
+    side = edges.side[edges.starts[edges.boundary]].astype(np.int64)
+    face = side // 3
+    slot = side % 3
+    u, v = faces[face, slot], faces[face, (slot + 1) % 3]
+    turned = draft.flipped[face] != grouping.flipped[face]     # flipped since the grouping
+    return face, np.where(turned, v, u), np.where(turned, u, v)
+
+
+def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float,
+               max_edges: int) -> tuple[Draft, StepReport, Holes]:
+    """Fill the holes of ``draft`` (see the module docstring)."""
+    if grouping.edges.boundary.size == 0:
+        return draft, StepReport("holes", counts={"holes_filled": 0, "holes_left": 0, "faces_added": 0}), \
+            Holes((), np.zeros(0, dtype=np.int64))
+    face, u, v = boundary_sides(grouping, draft)
+    loops, stray = boundary_loops(v, u)              # each side u -> v walked as v -> u
+    loops.sort(key=lambda loop: int(face[loop].min()))     # the report lists holes in file order
+    has_edge = _EdgeSet(grouping.faces, len(draft.points))
+    found: list[tuple[Hole, np.ndarray]] = []
+    for loop in loops:
+        if loop.size == 3 and np.unique(face[loop]).size == 1:
+            # All three sides are one face's: the "hole" is the back of a lone triangle, and
+            # filling it would give that face's reverse, enclosing nothing.
+            hole = lone_face(draft, v[loop], int(face[loop[0]]))
+        else:
+            hole = fill_hole(draft.points, v[loop], policy=policy, flatness=flatness, max_edges=max_edges,
+                             has_edge=has_edge)
+        if hole.filled:
+            has_edge.add(hole.triangles)
+        found.append((hole, face[loop]))
+    start = len(draft.faces)
+    new = [hole.triangles for hole, _ in found if hole.filled]
+    filled = draft.add(np.concatenate(new)) if new else draft
+    found, note = _refuse_crossings(filled, found, start)
+    new = [hole.triangles for hole, _ in found if hole.filled]
+    draft = draft.add(np.concatenate(new)) if new else draft
+    result = Holes(tuple(found), face[stray])
+    return draft, _report(draft, result, start, note), result
+
+
+def lone_face(draft: Draft, vertices: np.ndarray, face: int) -> Hole:
+    """The outline of a face no other face shares an edge with, left as it is."""
+    corners = draft.points[vertices].astype(np.float64)
+    centre = tuple(float(x) for x in corners.mean(axis=0))
+    size = float((corners.max(axis=0) - corners.min(axis=0)).max())
+    origin = int(draft.origin[face])
+    where = f"face {origin}" if origin >= 0 else f"new face {face}"
+    return Hole(vertices, 3, centre, size, 0.0, None,  # type: ignore[arg-type]
+                f"it is the outline of a lone triangle ({where}): filling it would add that face's reverse, "
+                "enclosing nothing")
+
+
+class _EdgeSet:
+    """``has_edge(a, b)``: whether the grouped faces, or a fill made so far, have edge ``a b``."""
+
+    def __init__(self, faces: np.ndarray, m: int):
+        a = np.asarray(faces, dtype=np.int64)
+        b = np.roll(a, -1, axis=1)
+        self.m = m + 1
+        self.keys = np.unique((np.minimum(a, b) * self.m + np.maximum(a, b)).ravel())
+        self.added: set[int] = set()
+
+    def __call__(self, a: int, b: int) -> bool:
+        key = min(a, b) * self.m + max(a, b)
+        if key in self.added:
+            return True
+        at = int(np.searchsorted(self.keys, key))
+        return at < self.keys.size and int(self.keys[at]) == key
+
+    def add(self, triangles: np.ndarray) -> None:
+        for a, b, c in triangles.tolist():
+            for x, y in ((a, b), (b, c), (c, a)):
+                self.added.add(min(x, y) * self.m + max(x, y))
+
+
+def _refuse_crossings(draft: Draft, found: list, start: int) -> tuple[list, str | None]:
+    """The holes, with those whose filling crosses another face left; and a note when the test
+    is not available."""
+    if len(draft.faces) == start:
+        return found, None
+    try:
+        crossing = solidity.new_face_crossings(draft.points, draft.faces, np.arange(start, len(draft.faces)))
+    except solidity.Unavailable:
+        return found, ("the filled holes were not tested for crossing other faces: this build of p3d lacks "
+                       "the self-intersection test")
+    out, position = [], start
+    for hole, around in found:
+        if hole.filled:
+            own = np.arange(position, position + len(hole.triangles))
+            position += own.size
+            if np.isin(own, crossing).any():
+                hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces")
+        out.append((hole, around))
+    return out, None
+
+
+def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepReport:
+    places, notes = [], []
+    position = start
+    for hole, around in result.holes:
+        place = {"edges": hole.edges, "centre": list(hole.centre), "size": hole.size, "flatness": hole.flatness,
+                 "filled": hole.filled, "faces_around": [int(f) for f in draft.origin[around]]}
+        if hole.filled:
+            count = len(hole.triangles)
+            place["new_faces"] = list(range(position, position + count))
+            position += count
+        else:
+            place["reason"] = hole.reason
+            notes.append(f"hole of {hole.edges} edges at {_point(hole.centre)} left: {hole.reason}")
+        places.append(place)
+    if result.stray.size:
+        notes.append(f"{result.stray.size} boundary edges do not close into a loop (faces "
+                     + ", ".join(str(int(f)) for f in draft.origin[result.stray][:SHOWN]) + "): left")
+    if note:
+        notes.append(note)
+    filled = sum(1 for hole, _ in result.holes if hole.filled)
+    return StepReport("holes", counts={"holes_filled": filled, "holes_left": len(result.holes) - filled,
+                                       "faces_added": position - start,
+                                       "boundary_edges_not_in_loops": int(result.stray.size)},
+                      new_faces=tuple(range(start, position)), places=tuple(places), notes=tuple(notes))
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(f"{x:.7g}" for x in p) + ")"

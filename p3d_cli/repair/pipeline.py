@@ -1,0 +1,166 @@
+"""The repair of one mesh: ``p3d check``'s topology, the steps in their order, the check again.
+
+1. The input's topology is ``p3d check``'s (``p3d_cli.mesh.topology``): a mesh it passes is
+   returned untouched, whatever steps were asked for.
+2. Otherwise the faces become a ``Draft`` on ``check``'s exact vertex ids, and the steps run in
+   the order of ``p3d_cli.repair.steps.STEPS``, each on the draft the one before left. The
+   edges are grouped by ``check``'s own edge code once the faces to remove are gone
+   (``p3d_cli.repair.draft.grouping``), and the orientation, the holes and the shells all read
+   that one grouping.
+3. The output's topology is ``check``'s again: the output is *fixed* exactly when ``p3d check``
+   would pass it. Whatever it still fails is listed with the reason each step left it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.mesh.report import TopologyReport
+from p3d_cli.mesh.topology import corner_vertex_ids, topology, topology_of_blocks
+from p3d_cli.repair.cleanup import degenerate_step, duplicate_step, weld_step
+from p3d_cli.repair.draft import Draft, Grouping, grouping
+from p3d_cli.repair.fill import FLATNESS, MAX_EDGES, POLICIES
+from p3d_cli.repair.holes import holes_step
+from p3d_cli.repair.orient import joined, orient_step, outward_step, patches
+from p3d_cli.repair.report import SHOWN, StepReport, failed_checks
+from p3d_cli.repair.steps import STEPS
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One mesh repaired (internal: what ``p3d_cli.repair.repair`` makes its report of).
+
+    Attributes
+    ----------
+    draft : Draft or None
+        The repaired faces; None when the input passed ``check`` (nothing changed).
+    before, after : TopologyReport
+    steps : tuple of StepReport
+        Every step, in order.
+    unfixed : tuple of str
+    """
+
+    draft: Draft | None
+    before: TopologyReport
+    after: TopologyReport
+    steps: tuple[StepReport, ...]
+    unfixed: tuple[str, ...]
+
+
+def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: str = "<array>",
+                     weld: float | None = None, fill_holes: str = "flat", flatness: float = FLATNESS,
+                     max_hole_edges: int = MAX_EDGES) -> Outcome:
+    """Repair a triangle soup.
+
+    Parameters
+    ----------
+    triangles : (n, 3, 3) float32 or float64
+        The input's triangles, as stored.
+    steps : tuple of str
+        The steps to run (``resolve_steps``' answer).
+    where : str
+        The input's name in messages (a NaN or infinite coordinate is an ``InputError`` there).
+    weld, fill_holes, flatness, max_hole_edges
+        As for ``p3d_cli.repair.repair``.
+    """
+    if fill_holes not in POLICIES:
+        from p3d_cli.errors import UsageError
+
+        raise UsageError("fill_holes", f"unknown policy {fill_holes!r}", "use " + " or ".join(POLICIES))
+    n = len(triangles)
+    before = topology_of_blocks(lambda: iter([triangles]), n, where)
+    if not failed_checks(before):
+        clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
+                                   if name in steps else ()) for name in STEPS)
+        return Outcome(None, before, before, clean, ())
+    ids, _ = corner_vertex_ids(triangles)
+    points = np.empty((int(ids.max()) + 1, 3), dtype=triangles.dtype)
+    points[ids.ravel()] = triangles.reshape(-1, 3)
+    draft = Draft.of(triangles, ids, points)
+    reports = {name: StepReport(name, ran=False) for name in STEPS}
+    if "weld" in steps:
+        draft, reports["weld"] = weld_step(draft, float(weld or 0))
+    changed = draft.moved.any()
+    if "degenerate" in steps:
+        if before.degenerate_faces or changed:
+            draft, reports["degenerate"] = degenerate_step(draft)
+        else:
+            reports["degenerate"] = StepReport("degenerate", counts={"faces_removed": 0})
+    grouped = grouping(draft)
+    if "duplicate" in steps:
+        if before.duplicate_faces or changed:
+            draft, reports["duplicate"] = duplicate_step(draft, grouped.edges)
+            if reports["duplicate"].counts["faces_removed"]:
+                grouped = grouping(draft)
+        else:
+            reports["duplicate"] = StepReport("duplicate", counts={"faces_removed": 0})
+    found = patches(len(draft.faces), grouped.edges)
+    if "orient" in steps:
+        draft, reports["orient"] = orient_step(draft, found)
+    holes_left: tuple[str, ...] = ()
+    open_faces = _open_faces(grouped, "orient" in steps)
+    if "holes" in steps:
+        draft, reports["holes"], holes = holes_step(draft, grouped, policy=fill_holes, flatness=flatness,
+                                                    max_edges=max_hole_edges)
+        holes_left = reports["holes"].notes
+        found = joined(found, holes.holes)
+        open_faces = np.union1d(_open_faces(grouped, "orient" in steps, boundary=False), holes.open_faces)
+    shells_left: tuple[str, ...] = ()
+    if "outward" in steps:
+        open_patches = np.unique(found.labels[open_faces])
+        draft, reports["outward"] = outward_step(draft, found, open_patches)
+        shells_left = reports["outward"].notes
+    after = topology(draft.output_triangles())
+    ordered = tuple(reports[name] for name in STEPS)
+    return Outcome(draft, before, after, ordered, unfixed(after, steps, holes_left, shells_left))
+
+
+def _open_faces(grouped: Grouping, oriented: bool, boundary: bool = True) -> np.ndarray:
+    """Faces on an edge that keeps their patch from being closed: a non-manifold edge, a
+    boundary edge (unless the holes step answers for those), a misoriented edge (unless the
+    orient step mended them)."""
+    edges = grouped.edges
+    groups = [edges.nonmanifold]
+    if boundary:
+        groups.append(edges.boundary)
+    if not oriented:
+        groups.append(edges.misoriented)
+    chosen = np.concatenate(groups).astype(np.int64)
+    if chosen.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    sizes = edges.counts[chosen].astype(np.int64)
+    positions = np.repeat(edges.starts[chosen].astype(np.int64), sizes)
+    positions += np.arange(positions.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    return np.unique(edges.side[positions].astype(np.int64) // 3)
+
+
+def unfixed(after: TopologyReport, steps: tuple[str, ...], holes_left: tuple[str, ...],
+            shells_left: tuple[str, ...]) -> tuple[str, ...]:
+    """Why each check the output still fails was left."""
+    out = []
+
+    def because(reasons, step: str) -> str:
+        reasons = list(reasons) or ([f"the {step} step was not asked for"] if step not in steps else [])
+        return f" ({'; '.join(reasons[:SHOWN])})" if reasons else ""
+
+    for name in failed_checks(after):
+        if name == "closed":
+            out.append(f"closed: {after.boundary_edges} boundary edges remain" + because(holes_left, "holes"))
+        elif name == "manifold":
+            out.append(f"manifold: {after.nonmanifold_edges} non-manifold edges and {after.nonmanifold_vertices} "
+                       "non-manifold vertices remain; repair does not cut or join surfaces (that would change "
+                       "the part's shape)")
+        elif name == "oriented":
+            out.append(f"oriented: {after.misoriented_edges} misoriented edges remain" + because((), "orient"))
+        elif name == "outward":
+            out.append(f"outward: the signed volume is {after.volume:.10g}" + because(shells_left, "outward"))
+        elif name == "no-degenerate":
+            out.append(f"no-degenerate: {after.degenerate_faces} degenerate faces remain"
+                       + because((), "degenerate"))
+        elif name == "no-duplicate":
+            out.append(f"no-duplicate: {after.duplicate_faces} duplicate faces remain" + because((), "duplicate"))
+        else:
+            out.append(f"{name}: fails")
+    return tuple(out)

@@ -1,0 +1,216 @@
+"""What ``p3d repair`` did: each step with its counts and locations, the check before and after,
+and the mass properties before and after with their difference.
+
+Face numbers are 0-based. A step that removes, flips or moves faces names them by their place
+in the *input* (file order, polygons split into fans, as ``p3d check`` numbers them); faces a
+step adds are named by their place in the *output* (they follow the input's faces that were
+kept, in the order they were made).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from p3d_cli.mesh.report import TopologyReport
+from p3d_cli.mesh.verdicts import CHECKS, passes
+from p3d_cli.results import MassProperties
+
+#: Locations listed per step in the text report (the record lists every one).
+SHOWN = 5
+
+
+@dataclass(frozen=True)
+class StepReport:
+    """One step of a repair.
+
+    Attributes
+    ----------
+    name : str
+        A key of ``p3d_cli.repair.steps.STEPS``.
+    ran : bool
+        False when the step was not asked for, or had nothing to work on (the mesh passed
+        ``check`` already).
+    counts : dict
+        What it changed, by kind (``faces_removed``, ``faces_flipped``, ``holes_filled``, ...).
+    faces : tuple of int
+        Input faces it removed, flipped or moved.
+    new_faces : tuple of int
+        Output faces it added.
+    places : tuple of dict
+        Where it acted or what it left, one record each (a hole: its edge count, centre, size,
+        flatness, whether filled and why not; a shell: its first face, faces, volume).
+    notes : tuple of str
+        What it left as it was, and why.
+    """
+
+    name: str
+    ran: bool = True
+    counts: dict = field(default_factory=dict)
+    faces: tuple[int, ...] = ()
+    new_faces: tuple[int, ...] = ()
+    places: tuple[dict, ...] = ()
+    notes: tuple[str, ...] = ()
+
+    @property
+    def changes(self) -> int:
+        """Faces this step removed, flipped, moved or added."""
+        return len(self.faces) + len(self.new_faces)
+
+    def to_dict(self) -> dict:
+        return {"step": self.name, "ran": self.ran, "counts": dict(self.counts), "faces": list(self.faces),
+                "new_faces": list(self.new_faces), "places": [dict(p) for p in self.places],
+                "notes": list(self.notes)}
+
+
+@dataclass(frozen=True)
+class MassChange:
+    """Mass properties (density 1, in the mesh's own units) before and after, and their change.
+
+    ``before`` and ``after`` are what ``p3d props`` reports for the input and for the output:
+    the enclosed solid's volume (positive for an inward-wound mesh too, as ``props`` reports
+    it), centre of mass, inertia about it. An open input's numbers follow ``props``' convention
+    for open surfaces (docs/method.md, "Open and non-manifold meshes").
+    """
+
+    before: MassProperties
+    after: MassProperties
+
+    @property
+    def volume_change(self) -> float:
+        """``after.volume - before.volume``."""
+        return float(self.after.volume - self.before.volume)
+
+    @property
+    def relative_volume_change(self) -> float:
+        """``|after - before| / |before|`` of the volume (inf when the input enclosed nothing
+        and the output does; 0 when neither does)."""
+        change = abs(self.volume_change)
+        if change == 0:
+            return 0.0
+        return change / abs(self.before.volume) if self.before.volume != 0 else float("inf")
+
+    @property
+    def center_shift(self) -> float | None:
+        """Distance the centre of mass moved (None when either has none)."""
+        if self.before.center_of_mass is None or self.after.center_of_mass is None:
+            return None
+        return float(np.linalg.norm(self.after.center_of_mass - self.before.center_of_mass))
+
+    @property
+    def relative_inertia_change(self) -> float | None:
+        """Largest change of an inertia component over the largest component before."""
+        if self.before.inertia is None or self.after.inertia is None:
+            return None
+        scale = float(np.abs(self.before.inertia).max())
+        change = float(np.abs(self.after.inertia - self.before.inertia).max())
+        if change == 0:
+            return 0.0
+        return change / scale if scale else float("inf")
+
+    def to_dict(self) -> dict:
+        def props(p: MassProperties) -> dict:
+            return {"volume": p.volume, "center_of_mass": p.center_of_mass, "inertia": p.inertia}
+
+        return {"before": props(self.before), "after": props(self.after),
+                "volume_change": self.volume_change, "relative_volume_change": self.relative_volume_change,
+                "center_shift": self.center_shift, "relative_inertia_change": self.relative_inertia_change}
+
+
+def check_summary(report: TopologyReport) -> dict:
+    """The counts of ``p3d check`` for one mesh, and the checks it fails."""
+    return {"failed": list(failed_checks(report)), "faces": report.faces, "vertices": report.vertices,
+            "boundary_edges": report.boundary_edges, "nonmanifold_edges": report.nonmanifold_edges,
+            "misoriented_edges": report.misoriented_edges, "nonmanifold_vertices": report.nonmanifold_vertices,
+            "degenerate_faces": report.degenerate_faces, "duplicate_faces": report.duplicate_faces,
+            "shells": report.shells, "signed_volume": report.volume}
+
+
+def failed_checks(report: TopologyReport) -> tuple[str, ...]:
+    """The checks of ``p3d check`` (all of them) that ``report`` fails."""
+    return tuple(name for name in CHECKS if not passes(report, name))
+
+
+@dataclass(frozen=True)
+class RepairReport:
+    """Everything a repair changed, and what it could not.
+
+    Attributes
+    ----------
+    source : str
+        The input as given.
+    format : str
+        The input's format (``MeshSource.format``).
+    steps : tuple of StepReport
+        Every step in its order, run or not.
+    before, after : TopologyReport
+        ``p3d check``'s topology of the input and of the output (the output's decides whether
+        it is fixed).
+    mass : MassChange
+    changed : bool
+        Whether any face was removed, flipped, moved or added.
+    unfixed : tuple of str
+        What the output still fails, each with the reason repair left it.
+    notes : tuple of str
+        Anything else the user should know (a multi-object file repaired as one mesh).
+    output : str or None
+        Where the output was written (``repair_file``), or None.
+    written : str
+        What ``repair_file`` did with the output: ``written``, ``copied`` (the input, byte for
+        byte: nothing to repair), ``not written`` (with ``only_if_needed``), ``refused`` (a
+        limit was broken), ``dry run``; empty for ``repair``.
+    max_volume_change : float or None
+        The limit ``repair_file`` held the relative volume change to.
+    """
+
+    source: str
+    format: str
+    steps: tuple[StepReport, ...]
+    before: TopologyReport
+    after: TopologyReport
+    mass: MassChange
+    changed: bool
+    unfixed: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    output: str | None = None
+    written: str = ""
+    max_volume_change: float | None = None
+
+    @property
+    def failed_before(self) -> tuple[str, ...]:
+        return failed_checks(self.before)
+
+    @property
+    def failed_after(self) -> tuple[str, ...]:
+        return failed_checks(self.after)
+
+    @property
+    def fixed(self) -> bool:
+        """The output passes every check of ``p3d check`` (the input did, or repair made it)."""
+        return not self.failed_after
+
+    @property
+    def within_limit(self) -> bool:
+        """The relative volume change is within ``max_volume_change`` (True without one)."""
+        return self.max_volume_change is None or self.mass.relative_volume_change <= self.max_volume_change
+
+    @property
+    def ok(self) -> bool:
+        """Fixed, and within the volume limit: the exit status 0 of ``p3d repair``."""
+        return self.fixed and self.within_limit
+
+    def step(self, name: str) -> StepReport:
+        """The report of the step called ``name``."""
+        return next(s for s in self.steps if s.name == name)
+
+    def to_dict(self) -> dict:
+        """The JSON record of ``p3d repair --json`` (stable keys)."""
+        return {"source": self.source, "format": self.format, "ok": self.ok, "fixed": self.fixed,
+                "changed": self.changed, "output": self.output, "written": self.written,
+                "max_volume_change": self.max_volume_change, "within_limit": self.within_limit,
+                "before": check_summary(self.before), "after": check_summary(self.after),
+                "steps": [s.to_dict() for s in self.steps], "mass": self.mass.to_dict(),
+                "unfixed": list(self.unfixed), "notes": list(self.notes),
+                "units": {"length": "mesh unit", "volume": "mesh unit^3"},
+                "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0) unless weld is given"}
