@@ -74,6 +74,8 @@ FLAGS = {
     "root": "--root",
     "size": "--size", "show": "--show", "view": "--view", "up": "--up", "azimuth": "--azimuth",
     "elevation": "--elevation", "output": "--output", "plot": "--plot", "animate": "--animate",
+    "weld": "--weld", "fill_holes": "--fill-holes", "flatness": "--flatness", "max_hole_edges": "--max-hole-edges",
+    "max_volume_change": "--max-volume-change", "output_format": "--output-format", "in_place": "--in-place",
 }
 
 
@@ -224,6 +226,7 @@ cli.commands = _Commands({
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "render": "p3d_cli.cli.render",
+    "repair": "p3d_cli.cli.repair",
     "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })
