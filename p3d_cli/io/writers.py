@@ -72,7 +72,7 @@ def output_format(path: str | os.PathLike, override: str | None = None) -> str:
     return name
 
 
-def write_mesh(path: str | os.PathLike, vertices: np.ndarray, faces: np.ndarray, *,
+def write_mesh(path: str | os.PathLike, vertices: np.ndarray | None, faces: np.ndarray | None, *,
                triangles: np.ndarray | None = None, format: str | None = None,
                inputs: Iterable[str | os.PathLike] = (), in_place: bool = False,
                what: str = "the mesh") -> Path:
@@ -80,9 +80,9 @@ def write_mesh(path: str | os.PathLike, vertices: np.ndarray, faces: np.ndarray,
 
     Parameters
     ----------
-    vertices : (m, 3) float32 or float64
-    faces : (n, 3) int
-        0-based indices into ``vertices``.
+    vertices : (m, 3) float32 or float64, or None
+    faces : (n, 3) int, or None
+        0-based indices into ``vertices`` (both may be None for STL when ``triangles`` is given).
     triangles : (n, 3, 3), optional
         ``vertices[faces]`` with each corner as stored (the sign of a zero kept); used by STL.
     format : str, optional
@@ -104,13 +104,17 @@ def write_mesh(path: str | os.PathLike, vertices: np.ndarray, faces: np.ndarray,
 
     name = output_format(path, format)
     writer: Callable = globals()[FORMATS[name].writer or ""]
-    vertices = np.asarray(vertices)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    if vertices.dtype not in (np.float32, np.float64):
-        vertices = vertices.astype(np.float64)
-    if triangles is None and name == "stl":
-        triangles = vertices[faces]
-    _refuse_rounding(path, name, vertices if triangles is None else triangles)
+    if vertices is None or faces is None:
+        if name != "stl" or triangles is None:
+            raise UsageError("vertices, faces", "not given", "give the mesh's vertices and faces")
+    else:
+        vertices = np.asarray(vertices)
+        faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        if vertices.dtype not in (np.float32, np.float64):
+            vertices = vertices.astype(np.float64)
+        if triangles is None and name == "stl":
+            triangles = vertices[faces]
+    _refuse_rounding(path, name, triangles if name == "stl" else vertices)
     with replacing(path, inputs=inputs, in_place=in_place, what=what) as f:
         writer(f, vertices, faces, triangles)
     return Path(os.path.realpath(path))

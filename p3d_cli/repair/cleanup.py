@@ -1,8 +1,8 @@
 """The steps that mend faces one by one: ``weld``, ``degenerate`` and ``duplicate``.
 
-- ``weld`` merges vertices closer than a tolerance (``p3d check``'s weld: transitive, each group
-  taking the coordinates of one of its vertices, so no new coordinate is made); the faces whose
-  corners moved are the ones it changed.
+- ``weld`` merges vertices closer than a tolerance (``p3d check``'s weld: transitive), each
+  group taking the coordinates of the vertex most corners use (so no new coordinate is made,
+  and the fewest faces move); the faces whose corners moved are the ones it changed.
 - ``degenerate`` removes faces of exactly zero area, decided as ``p3d check`` decides them
   (``p3d_cli.mesh.faces.zero_area_faces``: collinear or repeated corners, exactly).
 - ``duplicate`` removes each face with the same three vertices as an earlier face (in any order
@@ -28,21 +28,37 @@ _BLOCK = 1 << 14
 def weld_step(draft: Draft, tolerance: float) -> tuple[Draft, StepReport]:
     """Merge vertices closer than ``tolerance`` (see the module docstring)."""
     try:
-        target, weld = solidity.weld_points(draft.points.astype(np.float64), tolerance)
+        groups, _ = solidity.weld_points(draft.points.astype(np.float64), tolerance)
     except solidity.Unavailable:
         return draft, StepReport("weld", ran=False, notes=(
             "not done: this build of p3d lacks the weld of p3d check (p3d_cli.mesh.weld)",))
-    target = np.asarray(target, dtype=np.int64)
+    target = _most_used(np.asarray(groups, dtype=np.int64), draft.faces)
     welded = draft.renamed(target)
     moved = np.flatnonzero(welded.moved & ~draft.moved)
     merged = np.flatnonzero(target != np.arange(target.size))
+    wide = draft.points.astype(np.float64)
+    largest = float(np.sqrt(((wide[merged] - wide[target[merged]]) ** 2).sum(axis=1)).max()) if merged.size else 0.0
     places = tuple({"point": [float(x) for x in draft.points[v]],
                     "merged_into": [float(x) for x in draft.points[int(target[v])]]}
                    for v in merged.tolist())
     return welded, StepReport(
         "weld", counts={"vertices_merged": int(merged.size), "faces_moved": int(moved.size),
-                        "tolerance": float(tolerance), "largest_distance": float(weld.largest_distance)},
+                        "tolerance": float(tolerance), "largest_distance": largest},
         faces=tuple(int(f) for f in draft.origin[moved]), places=places)
+
+
+def _most_used(group: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Each vertex's new id: of the vertices welded into one group, the one the most corners
+    use (the first used in the file on a tie), so that the fewest faces move."""
+    m = group.size
+    uses = np.bincount(faces.ravel(), minlength=m)
+    first = np.full(m, faces.size, dtype=np.int64)
+    np.minimum.at(first, faces.ravel(), np.arange(faces.size))
+    order = np.lexsort((first, -uses, group))
+    leader = np.empty(m, dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, group[order][1:] != group[order][:-1]])
+    leader[group[order][starts]] = order[starts]
+    return leader[group]
 
 
 def degenerate_step(draft: Draft) -> tuple[Draft, StepReport]:

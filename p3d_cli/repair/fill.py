@@ -14,6 +14,9 @@ A loop is filled when it is flat enough and simple seen along its normal:
    (``p3d_cli.repair.solidity.orient2d``). The projected polygon must be simple (no two edges
    meet except neighbours at their shared corner); then its triangles, lifted back, are a graph
    over that plane and cannot cross each other.
+   A loop too bent for any coordinate plane (``fill_holes="any"`` only) is seen in its own
+   plane instead, with rounded coordinates: the triangulation is then only a choice, and its
+   faces are tested exactly after (non-zero area here, no crossing in ``p3d_cli.repair.holes``).
 3. **Ear clipping** on the projected polygon (an ear: a strictly convex corner whose triangle,
    closed, holds no other corner; G. H. Meisters, "Polygons have ears", *Amer. Math.
    Monthly* 82, 1975): every triangle has non-zero area, so none is degenerate, and an ear whose
@@ -30,6 +33,8 @@ from typing import Callable
 
 import numpy as np
 
+from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.faces import zero_area_faces
 from p3d_cli.repair.solidity import in_safe_range, orient2d
 
 
@@ -125,12 +130,32 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
     plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
     safe = in_safe_range(plane)
     if not _simple(plane, safe):
-        return left("seen along its normal the loop crosses itself", flat)
+        if policy != "any":
+            return left("seen along its normal the loop crosses itself", flat)
+        # A loop bent far from any coordinate plane (a hole across a fold) can still be simple
+        # seen along its own normal: take coordinates in that plane (rounded, so the
+        # triangulation is only a choice, and its faces are tested exactly in 3-D after).
+        plane = _in_own_plane(relative, normal / length)
+        safe = in_safe_range(plane)
+        if not _simple(plane, safe):
+            return left("seen along its normal the loop crosses itself", flat)
     triangles = _ear_clipping(plane, vertices, safe, has_edge)
+    if triangles is not None and zero_area_faces(columns(np.asarray(points, dtype=np.float64)[triangles])).size:
+        triangles = None
     if triangles is None:
         return left("every triangulation of it would repeat an edge the mesh already has "
                     "(making it non-manifold) or make a face of zero area", flat)
     return Hole(vertices, k, where, size, flat, triangles, None)
+
+
+def _in_own_plane(relative: np.ndarray, unit_normal: np.ndarray) -> np.ndarray:
+    """``(k, 2)`` coordinates of points (relative to their centroid) in the plane normal to
+    ``unit_normal``, in a right-handed frame (so the loop keeps its winding)."""
+    helper = np.eye(3)[int(np.argmin(np.abs(unit_normal)))]
+    u = np.cross(unit_normal, helper)
+    u /= np.sqrt(u @ u)
+    w = np.cross(unit_normal, u)
+    return np.ascontiguousarray(np.stack([relative @ u, relative @ w], axis=1))
 
 
 def _simple(plane: np.ndarray, safe: bool) -> bool:

@@ -64,7 +64,7 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
     face, u, v = boundary_sides(grouping, draft)
     loops, stray = boundary_loops(v, u)              # each side u -> v walked as v -> u
     loops.sort(key=lambda loop: int(face[loop].min()))     # the report lists holes in file order
-    has_edge = _EdgeSet(grouping.faces, len(draft.points))
+    has_edge = _EdgeSet(grouping.faces, v, len(draft.points))
     found: list[tuple[Hole, np.ndarray]] = []
     for loop in loops:
         if loop.size == 3 and np.unique(face[loop]).size == 1:
@@ -100,26 +100,29 @@ def lone_face(draft: Draft, vertices: np.ndarray, face: int) -> Hole:
 
 
 class _EdgeSet:
-    """``has_edge(a, b)``: whether the grouped faces, or a fill made so far, have edge ``a b``."""
+    """``has_edge(a, b)``: whether the grouped faces, or a fill made so far, have edge ``a b``.
 
-    def __init__(self, faces: np.ndarray, m: int):
+    Only edges between two corners of holes can be asked about (a fill joins a hole's own
+    corners), so only those are gathered: one pass over the sides, no sort of them all.
+    """
+
+    def __init__(self, faces: np.ndarray, corners: np.ndarray, m: int):
+        on_hole = np.zeros(m, dtype=bool)
+        on_hole[corners] = True
         a = np.asarray(faces, dtype=np.int64)
         b = np.roll(a, -1, axis=1)
-        self.m = m + 1
-        self.keys = np.unique((np.minimum(a, b) * self.m + np.maximum(a, b)).ravel())
-        self.added: set[int] = set()
+        both = on_hole[a] & on_hole[b]
+        lo, hi = np.minimum(a[both], b[both]), np.maximum(a[both], b[both])
+        self.m = m
+        self.keys: set[int] = set((lo * m + hi).tolist())
 
     def __call__(self, a: int, b: int) -> bool:
-        key = min(a, b) * self.m + max(a, b)
-        if key in self.added:
-            return True
-        at = int(np.searchsorted(self.keys, key))
-        return at < self.keys.size and int(self.keys[at]) == key
+        return min(a, b) * self.m + max(a, b) in self.keys
 
     def add(self, triangles: np.ndarray) -> None:
         for a, b, c in triangles.tolist():
             for x, y in ((a, b), (b, c), (c, a)):
-                self.added.add(min(x, y) * self.m + max(x, y))
+                self.keys.add(min(x, y) * self.m + max(x, y))
 
 
 def _refuse_crossings(draft: Draft, found: list, start: int) -> tuple[list, str | None]:

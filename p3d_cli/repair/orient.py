@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.mesh.edges import Edges
-from p3d_cli.mesh.shells import _numbered, chunked_roots
+from p3d_cli.mesh.shells import _numbered, chunked_roots, shells
 from p3d_cli.repair import solidity
 from p3d_cli.repair.draft import Draft
 from p3d_cli.repair.report import StepReport
@@ -69,8 +69,19 @@ def pair_groups(edges: Edges) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return first, second, same
 
 
-def patches(face_count: int, edges: Edges) -> Patches:
-    """Patches and their consistent windings (see the module docstring)."""
+def patches(face_count: int, edges: Edges, one_shell: bool = False) -> Patches:
+    """Patches and their consistent windings (see the module docstring); ``one_shell``: the
+    faces are known to form one shell of ``p3d check`` (no union-find needed without a
+    misoriented or non-manifold edge)."""
+    if edges.misoriented.size == 0 and edges.nonmanifold.size == 0 and one_shell:
+        none = np.zeros(face_count, dtype=bool)
+        return Patches(np.zeros(face_count, dtype=np.int64), 1, none, np.zeros(0, dtype=np.int64))
+    if edges.misoriented.size == 0:
+        # Every patch is consistent already: its components, on the faces alone (without a
+        # non-manifold edge they are ``p3d check``'s shells, found by its own code).
+        found = shells(face_count, edges) if edges.nonmanifold.size == 0 else _pair_components(face_count, edges)
+        none = np.zeros(face_count, dtype=bool)
+        return Patches(found.labels, found.count, none, np.zeros(0, dtype=np.int64))
     first, second, same = pair_groups(edges)
     a, b = first // 3, second // 3
     flipped = same.astype(np.int64)
@@ -98,6 +109,18 @@ def patches(face_count: int, edges: Edges) -> Patches:
     return Patches(labels, count, flip, np.flatnonzero(bad).astype(np.int64))
 
 
+def _pair_components(face_count: int, edges: Edges):
+    """Faces joined across the edges exactly two faces use."""
+    first, second, _ = pair_groups(edges)
+    a, b = first // 3, second // 3
+
+    def arcs():
+        for lo in range(0, a.size, _STEP):
+            yield a[lo:lo + _STEP], b[lo:lo + _STEP]
+
+    return _numbered(chunked_roots(face_count, arcs))
+
+
 def patch_volumes(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, count: int) -> np.ndarray:
     """Signed volume of every patch: tetrahedra from the patch's own first vertex (so a patch
     far from the origin keeps its digits), in float64."""
@@ -106,9 +129,13 @@ def patch_volumes(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, cou
     total = np.zeros(count)
     for lo in range(0, len(faces), _STEP):
         f, lab = faces[lo:lo + _STEP], labels[lo:lo + _STEP]
-        o = origin[lab]
+        o = origin[0] if count == 1 else origin[lab]
         a, b, c = (points[f[:, k]].astype(np.float64) - o for k in range(3))
-        total += np.bincount(lab, weights=np.einsum("ij,ij->i", a, np.cross(b - a, c - a)), minlength=count)
+        b -= a
+        c -= a
+        det = a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1]) + a[:, 1] * (b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2]) \
+            + a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])
+        total += det.sum() if count == 1 else np.bincount(lab, weights=det, minlength=count)
     return total / 6.0
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from p3d_cli.io.source import array_source
 from p3d_cli.mesh.report import TopologyReport
 from p3d_cli.mesh.topology import corner_vertex_ids, topology, topology_of_blocks
 from p3d_cli.repair.cleanup import degenerate_step, duplicate_step, weld_step
@@ -36,6 +37,8 @@ class Outcome:
     ----------
     draft : Draft or None
         The repaired faces; None when the input passed ``check`` (nothing changed).
+    triangles : (k, 3, 3)
+        The output's triangles (``Draft.output_triangles``; the input's when nothing changed).
     before, after : TopologyReport
     steps : tuple of StepReport
         Every step, in order.
@@ -43,6 +46,7 @@ class Outcome:
     """
 
     draft: Draft | None
+    triangles: np.ndarray
     before: TopologyReport
     after: TopologyReport
     steps: tuple[StepReport, ...]
@@ -70,11 +74,12 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
 
         raise UsageError("fill_holes", f"unknown policy {fill_holes!r}", "use " + " or ".join(POLICIES))
     n = len(triangles)
-    before = topology_of_blocks(lambda: iter([triangles]), n, where)
+    # In blocks, as a file is read (the topology's passes are tuned to cache-sized blocks).
+    before = topology_of_blocks(array_source("array", triangles, str(triangles.dtype)).read_blocks, n, where)
     if not failed_checks(before):
         clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
                                    if name in steps else ()) for name in STEPS)
-        return Outcome(None, before, before, clean, ())
+        return Outcome(None, triangles, before, before, clean, ())
     ids, _ = corner_vertex_ids(triangles)
     points = np.empty((int(ids.max()) + 1, 3), dtype=triangles.dtype)
     points[ids.ravel()] = triangles.reshape(-1, 3)
@@ -96,7 +101,9 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
                 grouped = grouping(draft)
         else:
             reports["duplicate"] = StepReport("duplicate", counts={"faces_removed": 0})
-    found = patches(len(draft.faces), grouped.edges)
+    # The input's shells are the draft's while no face was removed or moved.
+    same_faces = len(draft.faces) == n and not draft.moved.any()
+    found = patches(len(draft.faces), grouped.edges, one_shell=same_faces and before.shells == 1)
     if "orient" in steps:
         draft, reports["orient"] = orient_step(draft, found)
     holes_left: tuple[str, ...] = ()
@@ -112,9 +119,10 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         open_patches = np.unique(found.labels[open_faces])
         draft, reports["outward"] = outward_step(draft, found, open_patches)
         shells_left = reports["outward"].notes
-    after = topology(draft.output_triangles())
+    out = draft.output_triangles()
+    after = topology(out)
     ordered = tuple(reports[name] for name in STEPS)
-    return Outcome(draft, before, after, ordered, unfixed(after, steps, holes_left, shells_left))
+    return Outcome(draft, out, before, after, ordered, unfixed(after, steps, holes_left, shells_left))
 
 
 def _open_faces(grouped: Grouping, oriented: bool, boundary: bool = True) -> np.ndarray:

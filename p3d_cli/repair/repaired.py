@@ -142,12 +142,9 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     triangles = np.ascontiguousarray(mesh.triangles())
     outcome = repair_triangles(triangles, chosen, where=where, weld=weld, fill_holes=fill_holes,
                                flatness=float(flatness), max_hole_edges=int(max_hole_edges))
-    if outcome.draft is None:
-        out = triangles
-        before = after = measure.props(triangles).properties
-    else:
-        out = outcome.draft.output_triangles()
-        before, after = measure.props(triangles).properties, measure.props(out).properties
+    out = outcome.triangles
+    before = measure.props(triangles).properties
+    after = before if outcome.draft is None else measure.props(out).properties
     notes = []
     if mesh.objects:
         notes.append(f"the file's {len(mesh.objects)} {mesh.object_kind or 'objects'} were repaired and are "
@@ -249,6 +246,10 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
             with replacing(output, inputs=inputs, what="the repaired mesh") as f, open(name, "rb") as original:
                 shutil.copyfileobj(original, f, 1 << 20)
             return dataclasses.replace(report, written="copied")
-    write_mesh(output, mesh.vertices, mesh.faces, triangles=mesh.triangles, format=target_format,
-               inputs=inputs, in_place=in_place, what="the repaired mesh")
+    if target_format == "stl":      # triangles only: no vertex list to build
+        write_mesh(output, None, None, triangles=mesh.triangles, format=target_format, inputs=inputs,
+                   in_place=in_place, what="the repaired mesh")
+    else:
+        write_mesh(output, mesh.vertices, mesh.faces, triangles=mesh.triangles, format=target_format,
+                   inputs=inputs, in_place=in_place, what="the repaired mesh")
     return dataclasses.replace(report, written="written")

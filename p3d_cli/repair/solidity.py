@@ -184,6 +184,7 @@ def new_face_crossings(points: np.ndarray, faces: np.ndarray, new: np.ndarray) -
     new = np.asarray(new, dtype=np.int64)
     if new.size == 0:
         return new
+    _module("p3d_cli.mesh.intersections")
     corners = np.asarray(points, dtype=np.float64)[faces]
     lo, hi = corners[new].min(axis=(0, 1)), corners[new].max(axis=(0, 1))
     near = np.flatnonzero(((corners.min(axis=1) <= hi) & (corners.max(axis=1) >= lo)).all(axis=1))
