@@ -162,7 +162,7 @@ def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepRe
         places.append(place)
     if result.stray.size:
         notes.append(f"{result.stray.size} boundary edges do not close into a loop (faces "
-                     + ", ".join(str(int(f)) for f in draft.origin[result.stray][:SHOWN]) + "): left")
+                     + ", ".join(str(int(f)) for f in np.unique(draft.origin[result.stray])[:SHOWN]) + "): left")
     if note:
         notes.append(note)
     filled = sum(1 for hole, _ in result.holes if hole.filled)

@@ -205,8 +205,9 @@ def outward_step(draft: Draft, found: Patches, open_patches: np.ndarray) -> tupl
              "undefined; left as it was" for p in flat.tolist()]
     open_count = int(np.count_nonzero(present)) - closed.size - flat.size
     if open_count:
-        notes.append(f"{open_count} open shell{'s' if open_count != 1 else ''} (a hole left, a non-manifold edge "
-                     "or no consistent winding): outward is undefined for an open surface; left as "
+        pieces = "piece" if open_count == 1 else "pieces"
+        notes.append(f"{open_count} open {pieces} of surface (bounded by a hole left or a non-manifold edge, or "
+                     "without a consistent winding): outward is undefined for an open surface; left as "
                      f"{'they were' if open_count != 1 else 'it was'}")
     try:
         depth = solidity.nesting_depths(draft.points, draft.faces, labels, count, closed)

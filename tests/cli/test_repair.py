@@ -1,0 +1,134 @@
+"""``p3d repair`` on the command line: exit statuses, records, batches and where outputs go."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import p3d_cli as p3d
+from conftest import CUBE_FACES, CUBE_VERTICES, write_binary_stl
+from p3d_cli.cli.main import cli
+
+CUBE = CUBE_VERTICES[CUBE_FACES]
+BENT = np.delete(CUBE, [0, 4], axis=0)        # a hole across the cube's edge: not flat, left
+
+
+def run(*args, input=None):
+    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
+
+
+def test_fixed_not_fixed_and_usage_exit_statuses(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "bent.stl", BENT)
+    result = run("repair", tmp_path / "open.stl", "-o", tmp_path / "fixed.stl")
+    assert result.exit_code == 0, result.output
+    assert "fixed (written)" in result.output and "holes: 1 hole filled with 2 new faces" in result.output
+    assert p3d.check(str(tmp_path / "fixed.stl")).ok
+    result = run("repair", tmp_path / "bent.stl", "-o", tmp_path / "bent-out.stl")
+    assert result.exit_code == 1
+    assert "NOT FIXED" in result.output and "not flat" in result.output
+    assert "not fixed: closed: 4 boundary edges remain" in result.output
+    result = run("repair", tmp_path / "open.stl")
+    assert result.exit_code == 2
+    assert "no output given; give one of -o PATH, --in-place or --dry-run" in result.output
+    result = run("repair", tmp_path / "open.stl", "-o", tmp_path / "x.stl", "--in-place")
+    assert result.exit_code == 2 and "both -o/--output and --in-place" in result.output
+
+
+def test_json_record_says_every_change(tmp_path):
+    broken = CUBE[:, [0, 2, 1]].copy()
+    broken[0] = CUBE[0]
+    write_binary_stl(tmp_path / "in.stl", np.concatenate([broken, broken[[5]]]))
+    result = run("repair", tmp_path / "in.stl", "-o", tmp_path / "out.ply", "--json")
+    assert result.exit_code == 0, result.output
+    record = json.loads(result.output)
+    assert record["ok"] and record["fixed"] and record["changed"] and record["written"] == "written"
+    assert record["before"]["failed"] == ["closed", "oriented", "outward", "manifold", "no-duplicate"]
+    assert record["after"]["failed"] == []
+    steps = {s["step"]: s for s in record["steps"]}
+    assert list(steps) == ["weld", "degenerate", "duplicate", "orient", "holes", "outward"]
+    assert not steps["weld"]["ran"]
+    assert steps["duplicate"]["faces"] == [12] and steps["duplicate"]["places"] == [{"face": 12, "repeats": 5}]
+    assert steps["orient"]["faces"] == [0]
+    assert steps["outward"]["counts"]["faces_flipped"] == 12
+    assert record["mass"]["after"]["volume"] == 1.0 and record["mass"]["relative_volume_change"] >= 0
+    assert set(record["mass"]["before"]) == {"volume", "center_of_mass", "inertia"}
+
+
+def test_max_volume_change_gates_ci(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", np.delete(CUBE, [2, 3], axis=0))
+    result = run("repair", tmp_path / "open.stl", "-o", tmp_path / "out.stl", "--max-volume-change", "1e-6")
+    assert result.exit_code == 1 and not (tmp_path / "out.stl").exists()
+    assert "over the volume limit (nothing written)" in result.output
+    write_binary_stl(tmp_path / "inward.stl", CUBE[:, [0, 2, 1]])
+    result = run("repair", tmp_path / "inward.stl", "-o", tmp_path / "out.stl", "--max-volume-change", "1e-6")
+    assert result.exit_code == 0 and (tmp_path / "out.stl").exists()
+
+
+def test_a_folder_is_mirrored_and_one_bad_file_loses_no_other(tmp_path):
+    tree = tmp_path / "parts"
+    (tree / "sub").mkdir(parents=True)
+    write_binary_stl(tree / "open.stl", CUBE[2:])
+    write_binary_stl(tree / "sub" / "inward.stl", CUBE[:, [0, 2, 1]])
+    write_binary_stl(tree / "sub" / "good.stl", CUBE)
+    (tree / "sub" / "broken.stl").write_bytes(b"solid x\n facet normal 0 0 1\n")
+    out = tmp_path / "fixed"
+    result = run("repair", tree, "-o", out, "--jobs", "2", "--csv")
+    assert result.exit_code == 2, result.output
+    rows = {row["source"]: row for row in csv.DictReader(io.StringIO(result.stdout))}
+    assert rows[str(tree / "sub" / "broken.stl")]["error"]
+    assert rows[str(tree / "open.stl")]["holes_filled"] == "1"
+    assert rows[str(tree / "sub" / "good.stl")]["written"] == "copied"
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*.stl")) == [
+        "open.stl", "sub/good.stl", "sub/inward.stl"]
+    assert (out / "sub" / "good.stl").read_bytes() == (tree / "sub" / "good.stl").read_bytes()
+    for path in out.rglob("*.stl"):
+        assert p3d.check(str(path)).ok
+    assert "4 files: 3 ok, 1 error" in result.stderr
+
+
+def test_files_from_and_output_format(tmp_path):
+    write_binary_stl(tmp_path / "a.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "b.stl", CUBE[:, [0, 2, 1]])
+    listing = tmp_path / "list.txt"
+    listing.write_text(f"{tmp_path / 'a.stl'}\n{tmp_path / 'b.stl'}\n")
+    out = tmp_path / "out"
+    result = run("repair", "--files-from", listing, "-o", out, "--output-format", "obj", "--only-if-needed")
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.iterdir()) == ["a.obj", "b.obj"]     # absolute paths: by name
+
+
+def test_in_place_batch_replaces_only_what_needs_it(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "good.stl", CUBE)
+    good = (tmp_path / "good.stl").read_bytes()
+    result = run("repair", tmp_path, "--in-place")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "good.stl").read_bytes() == good
+    assert p3d.check(str(tmp_path / "open.stl")).ok
+    assert "left unchanged" in result.output
+
+
+def test_steps_and_weld_options(tmp_path):
+    split = CUBE.copy()
+    split[0, 0] += [1e-9, 0, 0]
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    result = run("repair", tmp_path / "open.stl", "--dry-run", "--steps", "-holes")
+    assert result.exit_code == 1 and "the holes step was not asked for" in result.output
+    result = run("repair", tmp_path / "open.stl", "--dry-run", "--steps", "orient,bogus")
+    assert result.exit_code == 2 and "--steps: no repair step named 'bogus'" in result.output
+    result = run("repair", tmp_path / "open.stl", "--dry-run", "--steps", "weld")
+    assert result.exit_code == 2 and "--steps: the weld step needs a tolerance; give --weld TOL" in result.output
+
+
+def test_help_has_examples_and_every_step():
+    result = run("repair", "--help")
+    assert result.exit_code == 0
+    assert "p3d repair part.stl -o fixed.stl" in result.output
+    for step in ("weld", "degenerate", "duplicate", "orient", "holes", "outward"):
+        assert step in result.output
