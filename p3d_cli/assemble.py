@@ -9,16 +9,18 @@ translation changes: ``t -> f t``), and each leaf's mesh coordinates are scaled 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
+from fractions import Fraction
 from typing import Iterator
 
 import numpy as np
 
 from p3d_cli.assembly import Assembly, Part
 from p3d_cli.errors import InputError, P3DError, UsageError
-from p3d_cli.placement import Placement, then
+from p3d_cli.placement import Placement, converted, scaling, then
 from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
-from p3d_cli.units import LENGTHS, UnitSystem, parse_output_units
+from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, exact_length, length_factor, parse_output_units
 
 
 def _system(assembly: Assembly, units: str | None, output_units: str | None) -> UnitSystem | None:
@@ -34,11 +36,11 @@ def _system(assembly: Assembly, units: str | None, output_units: str | None) -> 
     return UnitSystem(top, length, mass)
 
 
-def _in_output(placement: Placement, factor: float) -> Placement:
-    """A placement written in a file's unit, carried into the output unit (``t -> f t``)."""
-    if placement.translation is None or factor == 1.0:
-        return placement
-    return Placement(placement.scale, placement.rotation, placement.translation * factor)
+def _factor(units: str | None, system: UnitSystem | None) -> Fraction:
+    """The exact length factor from ``units`` to the output unit (1 when either is unknown)."""
+    if system is None or units is None:
+        return Fraction(1)
+    return exact_length(units) / exact_length(system.length)
 
 
 @dataclass(frozen=True)
@@ -79,13 +81,13 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
     or a ``mass`` (its parts' total, which then may not give their own).
     """
     units = assembly.units or units
-    factor = 1.0 if system is None or units is None else LENGTHS[units] / LENGTHS[system.length]
+    factor = _factor(units, system)
     if system is None and assembly.units is not None:
         raise InputError(f"{assembly.source}: units", "a nested assembly has units, its parent none",
                          "give the top assembly its units: too")
     for part in assembly.parts:
         name = f"{path}{part.name}"
-        own = _in_output(part.placement, factor)
+        own = converted(part.placement, factor)
         if group is not None and (part.density is not None or part.mass is not None):
             raise InputError(part.where, f"gives its own {'mass' if part.mass is not None else 'density'}, "
                              f"and {group[0]} gives the mass of the parts it holds",
@@ -97,8 +99,7 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
                 yield from leaves(part.thing, then(own, outer), system, units, name + "/",
                                   density if d is None else d, inner)
                 continue
-            scale = np.full(3, factor) if own.scale is None else own.scale * factor
-            total = then(Placement(None if np.all(scale == 1) else scale, own.rotation, own.translation), outer)
+            total = then(converted(part.placement, factor, coordinates=True), outer)
         except InputError:
             raise
         except P3DError as exc:
@@ -137,7 +138,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
 
     system = _system(assembly, units, output_units)
     factor = 1.0 if system is None else system.factor
-    outer = _in_output(placement, factor)
+    outer = converted(placement, _factor(system.mesh_length if system else None, system))
     about_out = None if about is None else np.asarray(about, dtype=np.float64) * factor
     whole_mass = mass
     if whole_mass is not None and density is not None:
@@ -159,8 +160,10 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
         solid = as_solid(part.thing)
         total = declared_scale(solid, part, leaf.units, system, leaf.placement)
         shape_only = tessellate if solid.shape is not None else None
+        from_unit = system is not None and (d is not None or m is not None)
         result = measure_solid(solid, total, method=method, density=d, mass=m, about=about_out,
-                               tessellate=shape_only, samples=samples, seed=seed, tolerance=tolerance)
+                               tessellate=shape_only, samples=samples, seed=seed, tolerance=tolerance,
+                               density_error=DENSITY_ROUNDING if from_unit else 0.0)
         result = finish(result, system, total, density_given=d is not None)
         if leaf.group is not None:
             groups.setdefault(leaf.group[0], (leaf.group[1], []))[1].append(len(results))
@@ -170,10 +173,13 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
                                 whole_mass)
         groups[assembly.source] = (target, list(range(len(results))))
     for target, members in groups.values():
-        k = target / sum(results[i].properties.mass for i in members)
+        masses = [results[i].properties.mass for i in members]
+        k = target / sum(masses)
+        k_error = _factor_error(target, masses, [results[i].uncertainty for i in members], system is not None)
         for i in members:
-            results[i] = replace(results[i], properties=_rescaled(results[i].properties, k),
-                                 uncertainty=_rescaled_uncertainty(results[i].uncertainty, k))
+            p = results[i].properties
+            results[i] = replace(results[i], properties=_rescaled(p, k),
+                                 uncertainty=_rescaled_uncertainty(results[i].uncertainty, p, k, k_error))
     props = combine_mass_properties([r.properties for r in results], about_out)
     uncertainty = whole_uncertainty(results, props) if method == "exact" else None
     facts = MeshFacts(assembly.source, "assembly", sum(r.facts.faces for r in results), _closed(results),
@@ -202,8 +208,7 @@ def declared_scale(solid, part: Part, units: str | None, system: UnitSystem | No
     if system is None or units is None:
         raise InputError(part.where, f"{solid.where} declares its unit ({declared}), and the assembly has none",
                          "give the assembly its units (units: in the file, units= for inputs combined)")
-    k = LENGTHS[declared] / LENGTHS[units]
-    return then(Placement(scale=np.full(3, k)), total)
+    return then(scaling(*length_factor(declared, units)), total)
 
 
 def _rescaled(p: MassProperties, k: float) -> MassProperties:
@@ -214,13 +219,26 @@ def _rescaled(p: MassProperties, k: float) -> MassProperties:
                    second_moments=times(p.second_moments), inertia_about=times(p.inertia_about))
 
 
-def _rescaled_uncertainty(u: dict | None, k: float) -> dict | None:
-    """Bounds of a part whose density was multiplied by ``k``: mass and inertia scale (and
-    round once more), volume and centre do not."""
+def _factor_error(target: float, masses: list, bounds: list, converted: bool) -> float:
+    """Relative error of ``k = target / Σ m``: the masses' bounds and the sum's rounding, the
+    division's, and the target's own when it was converted from a unit."""
+    if any(u is None or u.get("mass") is None for u in bounds):
+        return math.inf
+    unit = 2.0 ** -53
+    total = abs(sum(masses))
+    spread = sum(u["mass"] for u in bounds) + len(masses) * unit * sum(abs(m) for m in masses)
+    return spread / total + unit + (DENSITY_ROUNDING if converted else 0.0) if total else math.inf
+
+
+def _rescaled_uncertainty(u: dict | None, p: MassProperties, k: float, k_error: float = 0.0) -> dict | None:
+    """Bounds of part ``p`` (before the change) whose density was multiplied by ``k`` (``k_error``
+    off, relative): mass and inertia scale (and round once more), volume and centre do not."""
     if u is None or u.get("inertia") is None:
         return u
     eps = np.finfo(np.float64).eps
-    return {**u, "mass": u["mass"] * k * (1 + 4 * eps), "inertia": u["inertia"] * k * (1 + 4 * eps)}
+    grow = k * (1 + 4 * eps)
+    return {**u, "mass": (u["mass"] + k_error * abs(p.mass)) * grow,
+            "inertia": (u["inertia"] + k_error * np.abs(p.inertia)) * grow}
 
 
 def whole_uncertainty(results, whole: MassProperties) -> dict | None:
@@ -256,9 +274,16 @@ def whole_uncertainty(results, whole: MassProperties) -> dict | None:
         dd = u["center_of_mass"]
         m, dm = abs(p.mass), u["mass"]
         size = d @ d * np.eye(3) + np.outer(d, d)
+        # The part's centre error to first order and (dd ddᵀ) to second, so that a bound that
+        # knows a composed placement's rounding exactly is never undercut.
         d_inertia += (u["inertia"] + dm * size + m * (2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
+                      + (m + dm) * ((dd @ dd) * np.eye(3) + np.outer(dd, dd)) + dm * (
+                          2 * (d @ dd) * np.eye(3) + np.outer(dd, d) + np.outer(d, dd))
                       + rounding * (np.abs(p.inertia) + m * size))
-    return {"volume": d_volume, "mass": d_mass, "center_of_mass": d_center, "inertia": d_inertia}
+    # Rounded up: the parts' bounds can be all but reached (a composed placement's rounding is
+    # known exactly), so the float sums above must not round the whole's below its error.
+    up = 1.0 + 2.0 ** -40
+    return {"volume": d_volume * up, "mass": d_mass * up, "center_of_mass": d_center * up, "inertia": d_inertia * up}
 
 
 def _closed(results) -> bool | None:
@@ -285,7 +310,7 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
     from p3d_cli.solid import as_solid
 
     system = _system(assembly, units, output_units)
-    outer = _in_output(placement, 1.0 if system is None else system.factor)
+    outer = converted(placement, _factor(system.mesh_length if system else None, system))
     found = []
     for leaf in leaves(assembly, outer, system, None if system is None else system.mesh_length):
         solid = as_solid(leaf.part.thing)
@@ -293,6 +318,10 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
         found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}
+    from p3d_cli.bounding import checked_bounds
+
+    with np.errstate(over="ignore"):
+        union = _union([r.bounds for r in found])
     return BoundsResult(assembly.source, "assembly", methods.pop() if len(methods) == 1 else "mixed",
-                        _union([r.bounds for r in found]), sum(r.faces for r in found),
+                        checked_bounds(assembly.source, union), sum(r.faces for r in found),
                         tuple(w for r in found for w in r.warnings))

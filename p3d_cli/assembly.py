@@ -39,6 +39,12 @@ PART_KEYS = ("name", "mesh", "shape", "assembly", "density", "mass", "translate"
              "scale")
 #: What a part is made of: exactly one of these.
 KINDS = ("mesh", "shape", "assembly")
+#: Documented limits (docs/assemblies.md, "Limits"): how deep assembly files may nest, and how
+#: many mesh or shape parts an assembly may expand to, counting a file included n times n
+#: times. A file naming the previous one twice, 40 levels deep, would otherwise expand to 2⁴⁰
+#: parts from a few kilobytes (a "billion laughs").
+MAX_NESTING = 64
+MAX_PARTS = 100_000
 
 
 @dataclass(frozen=True)
@@ -81,8 +87,15 @@ def combine(inputs, source: str = "<combined>") -> Assembly:
 
 
 def find_assembly(thing) -> Assembly | None:
-    """``thing`` as an assembly: an ``Assembly``, or a path to a file that is one; else None."""
+    """``thing`` as an assembly: an ``Assembly``, or a path to a file that is one; else None.
+
+    Raises
+    ------
+    InputError
+        A bad file, or an assembly beyond the limits (``expanded_parts``).
+    """
     if isinstance(thing, Assembly):
+        expanded_parts(thing)
         return thing
     if isinstance(thing, os.PathLike):
         thing = os.fspath(thing)
@@ -91,19 +104,78 @@ def find_assembly(thing) -> Assembly | None:
     return load_assembly(thing)
 
 
-def load_assembly(path: str, _seen: tuple[str, ...] = ()) -> Assembly:
-    """Read and check an assembly file (nested files too).
+def expanded_parts(assembly: Assembly) -> int:
+    """How many mesh and shape parts ``assembly`` expands to (a nested assembly included n
+    times counts n times), checked against ``MAX_PARTS`` and ``MAX_NESTING``.
+
+    Each distinct nested ``Assembly`` is counted once (memoised), so a file naming the
+    previous one twice costs one step per file, not 2ⁿ; the walk's depth is capped by
+    ``MAX_NESTING``, so no valid input can exhaust Python's recursion.
 
     Raises
     ------
     InputError
-        Not valid YAML, not an assembly, a bad part (``path: parts[i].key: ...``), a cycle.
+        Nested more than ``MAX_NESTING`` deep, or more than ``MAX_PARTS`` parts.
     """
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    known: dict[int, tuple[int, int]] = {}           # id -> (parts, levels below)
 
+    def walk(a: Assembly, depth: int) -> tuple[int, int]:
+        if id(a) not in known:
+            if depth >= MAX_NESTING:
+                _too_deep(a.source)
+            inner = [walk(p.thing, depth + 1) for p in a.parts if isinstance(p.thing, Assembly)]
+            leaves = sum(1 for p in a.parts if not isinstance(p.thing, Assembly))
+            known[id(a)] = (leaves + sum(n for n, _ in inner), 1 + max((h for _, h in inner), default=0))
+        n, height = known[id(a)]
+        if depth + height > MAX_NESTING:
+            _too_deep(a.source)
+        return n, height
+
+    n = walk(assembly, 0)[0]
+    if n > MAX_PARTS:
+        raise InputError(assembly.source, f"expands to {n:,} parts (nested assemblies included several times "
+                         f"count each time), more than p3d's limit of {MAX_PARTS:,}",
+                         "include fewer copies, or measure the repeated sub-assembly once and scale its mass")
+    return n
+
+
+def _too_deep(source: str):
+    raise InputError(source, f"nests assemblies more than {MAX_NESTING} levels deep",
+                     "flatten the nesting (p3d measures at most that depth)")
+
+
+def load_assembly(path: str, _seen: tuple[str, ...] = (), _loaded: dict | None = None) -> Assembly:
+    """Read and check an assembly file (nested files too, each read once however often it is
+    included), within ``MAX_NESTING`` and ``MAX_PARTS``.
+
+    Raises
+    ------
+    InputError
+        Not valid YAML, not an assembly, a bad part (``path: parts[i].key: ...``), a cycle, or
+        beyond the limits.
+    """
     real = os.path.realpath(path)
     if real in _seen:
         raise InputError(path, "includes itself (through nested assemblies)", "remove the cycle")
+    top = _loaded is None
+    loaded: dict = {} if _loaded is None else _loaded
+    if real in loaded:
+        # Read before, completely, with no cycle (it could not reach an ancestor of this
+        # inclusion without reaching itself): share it.
+        return loaded[real]
+    if len(_seen) >= MAX_NESTING:
+        raise InputError(path, f"is nested more than {MAX_NESTING} assembly files deep",
+                         "flatten the nesting (p3d reads at most that depth)")
+    assembly = _read_assembly(path, _seen + (real,), loaded)
+    loaded[real] = assembly
+    if top:
+        expanded_parts(assembly)
+    return assembly
+
+
+def _read_assembly(path: str, seen: tuple[str, ...], loaded: dict) -> Assembly:
+    from p3d_cli.constraints.yaml_loader import read_yaml
+
     data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict) or not isinstance(data.get("parts"), list) or not data["parts"]:
         raise InputError(path, "is not an assembly (no list of parts)", "write parts: with one entry per part")
@@ -119,11 +191,11 @@ def load_assembly(path: str, _seen: tuple[str, ...] = ()) -> Assembly:
         except UsageError as exc:
             raise InputError(f"{path}: units", exc.what, exc.hint) from None
         units = str(units)
-    return parts_assembly(data["parts"], path, f"{path}: parts", os.path.dirname(path), units, _seen + (real,))
+    return parts_assembly(data["parts"], path, f"{path}: parts", os.path.dirname(path), units, seen, loaded)
 
 
 def parts_assembly(entries: list, source: str, where: str, folder: str, units: str | None = None,
-                   _seen: tuple[str, ...] = ()) -> Assembly:
+                   _seen: tuple[str, ...] = (), _loaded: dict | None = None) -> Assembly:
     """The assembly of a YAML list of parts (an assembly file's ``parts:``, a scene body's).
 
     Parameters
@@ -145,11 +217,15 @@ def parts_assembly(entries: list, source: str, where: str, folder: str, units: s
     """
     if not isinstance(entries, list) or not entries:
         raise InputError(where, "is not a list of parts", "write one entry per part: - shape: box:1,1,1")
-    parts = tuple(_part(entry, f"{where}[{i}]", folder, _seen) for i, entry in enumerate(entries))
-    return Assembly(source, parts, units)
+    loaded: dict = {} if _loaded is None else _loaded
+    parts = tuple(_part(entry, f"{where}[{i}]", folder, _seen, loaded) for i, entry in enumerate(entries))
+    assembly = Assembly(source, parts, units)
+    if _loaded is None:
+        expanded_parts(assembly)
+    return assembly
 
 
-def _part(entry, where: str, folder: str, seen: tuple[str, ...]) -> Part:
+def _part(entry, where: str, folder: str, seen: tuple[str, ...], loaded: dict) -> Part:
     if not isinstance(entry, dict):
         raise InputError(where, "is not a mapping", "write each part as keys: name, mesh or shape, placement")
     for key in entry:
@@ -176,7 +252,7 @@ def _part(entry, where: str, folder: str, seen: tuple[str, ...]) -> Part:
         path = value if os.path.isabs(value) else os.path.join(folder, value)
         if not os.path.isfile(path):
             raise InputError(f"{where}.{kind}", f"no such file {path}", "paths are relative to the assembly file")
-        thing = load_assembly(path, seen) if kind == "assembly" else path
+        thing = load_assembly(path, seen, loaded) if kind == "assembly" else path
     name = entry.get("name", os.path.basename(value) if kind != "shape" else value)
     if not isinstance(name, (str, int)) or isinstance(name, bool):
         raise InputError(f"{where}.name", "is not text", "write a name such as base")

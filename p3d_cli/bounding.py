@@ -54,5 +54,24 @@ def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rota
         raise ValueError("no triangles to bound")
     if translation is not None:
         t = np.asarray(translation, dtype=np.float64).reshape(3)
-        lo, hi = lo + t, hi + t
+        with np.errstate(over="ignore"):        # an overflow is refused by checked_bounds
+            lo, hi = lo + t, hi + t
     return Bounds(lo, hi)
+
+
+def checked_bounds(where: str, bounds: Bounds) -> Bounds:
+    """``bounds``, or ``RangeError`` when a corner or the size is beyond float64 (a part placed
+    or scaled past 1.8e308): an infinite bound would be a silently wrong number.
+
+    Raises
+    ------
+    RangeError
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        finite = np.isfinite(bounds.min).all() and np.isfinite(bounds.max).all() and np.isfinite(bounds.size).all()
+    if not finite:
+        from p3d_cli.errors import RangeError
+
+        raise RangeError(where, "the placed bounds overflow float64 (a corner or the size is beyond 1.8e308)",
+                         "measure in a larger unit (e.g. km instead of mm), or nearer the origin")
+    return bounds

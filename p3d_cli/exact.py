@@ -16,7 +16,7 @@ from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_mome
 from p3d_cli.mesh.analysis import MeshAnalysis, analyze
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.moments import check_range, shape_moments
-from p3d_cli.placement import IDENTITY, Placement, watch_bounds
+from p3d_cli.placement import IDENTITY, Placement, prescaled, watch_bounds
 from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
 from p3d_cli.solid import Solid
@@ -29,7 +29,8 @@ COARSE_FLOAT32 = 1e-6
 
 
 def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: int | None = None,
-                density: float | None = None, mass: float | None = None, about=None) -> PropsResult:
+                density: float | None = None, mass: float | None = None, about=None,
+                density_error: float = 0.0) -> PropsResult:
     """Mass properties of a shape (closed forms, or its tessellated stand-in) or of a mesh.
 
     Parameters
@@ -45,6 +46,9 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
         Exclusive; default density 1.
     about : (3,) array_like, optional
         Extra reference point for the inertia.
+    density_error : float, optional
+        Relative error of ``density`` or ``mass`` (a unit conversion's rounding,
+        ``p3d_cli.units.DENSITY_ROUNDING``), carried into the bounds.
 
     Raises
     ------
@@ -52,7 +56,34 @@ def exact_props(solid: Solid, placement: Placement = IDENTITY, *, tessellate: in
         ``RangeError`` (an ``InputError``) when a result would overflow or underflow float64.
     """
     with np.errstate(all="ignore"):  # out-of-range results are caught by check_range instead
-        return _exact_props(solid, placement, tessellate, density, mass, about)
+        result = _exact_props(solid, placement, tessellate, density, mass, about)
+    if result.uncertainty is None or (density_error == 0 and mass is None):
+        return result
+    moments_error = result.uncertainty["volume"]
+    return dataclasses.replace(result, uncertainty=material_errors(
+        result.uncertainty, result.properties, density_error, moments_error if mass is not None else None))
+
+
+def material_errors(uncertainty: dict, props: MassProperties, density_error: float,
+                    volume_error: float | None = None) -> dict:
+    """Bounds grown by the density's relative error: ``density_error`` (a converted density or
+    mass), plus, when the density follows from a given mass (``volume_error`` is then the
+    volume's bound), the volume's relative error and the division's rounding. Mass and every
+    moment of mass are linear in the density, so each grows by that fraction of itself."""
+    rel = density_error
+    if volume_error is not None and props.volume != 0:
+        rel += volume_error / abs(props.volume) + _UNIT
+    if rel == 0 or uncertainty.get("mass") is None:
+        return uncertainty
+    out = {**uncertainty, "mass": uncertainty["mass"] + rel * abs(props.mass) * _UP}
+    if uncertainty.get("inertia") is not None and props.inertia is not None:
+        out["inertia"] = uncertainty["inertia"] + rel * np.abs(props.inertia) * _UP
+    return out
+
+
+#: Unit roundoff, and a factor that rounds a bound's own arithmetic upward.
+_UNIT = 2.0 ** -53
+_UP = 1.0 + 2.0 ** -40
 
 
 def _exact_props(solid: Solid, placement: Placement, tessellate, density, mass, about) -> PropsResult:
@@ -84,7 +115,7 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
     placed_bounds = None
     if not placement.is_identity:
         mesh, placed_bounds = watch_bounds(mesh, placement)
-    found = analyze(mesh, mesh.where)
+    found = analyze(mesh, mesh.where, rescale=True)
     check_range(solid.source, found.moments, found.moments)
     facts = mesh_facts(solid, found)
     warnings = list(solid.warnings) + list(mesh.warnings) + mesh_warnings(found.moments, facts)
@@ -99,10 +130,15 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
         warnings.append(CodedWarning(f"{found.inverted_tetrahedra} of {found.face_count} tetrahedra are listed "
                                      "inside out (negative orientation); each was counted with its positive "
                                      "volume", "inverted-tetrahedra"))
-    if placed_bounds is not None:
-        unplaced, moments = moments, placement.moments(moments)
+    if placed_bounds is not None or found.scale_exponent:
+        # A part integrated scaled by 2ᵏ (too small or too large for float64's comfortable
+        # range) is scaled back together with the placement, so that a tiny part scaled up
+        # (or a huge one down) never passes through an under- or overflowing value.
+        total = prescaled(placement, -found.scale_exponent, solid.source)
+        unplaced, moments = moments, total.moments(moments)
         check_range(solid.source, unplaced, moments)
-        facts = dataclasses.replace(facts, bounds=placed_bounds())
+        if placed_bounds is not None:
+            facts = dataclasses.replace(facts, bounds=placed_bounds())
     props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
 

@@ -179,6 +179,7 @@ def mass_properties(moments: Moments, *, density: float | None = None, mass: flo
         second = density * moments.central
         inertia = inertia_from_second_moments(second)
         _check_finite(where, "the inertia", moments.center, second, inertia)
+        _check_normal(where, moments, total, second)
         inertia_origin = shifted_inertia(inertia, total, moments.center, np.zeros(3))
         _check_finite(where, "the inertia about the origin", inertia_origin)
         inertia_about = None
@@ -188,6 +189,17 @@ def mass_properties(moments: Moments, *, density: float | None = None, mass: flo
     principal, axes = principal_frame(inertia)
     return MassProperties(moments.volume, density, total, moments.center.copy(), inertia,
                           inertia_origin, principal, axes, second, about_point, inertia_about)
+
+
+def _check_normal(where: str, moments: Moments, mass: float, second: np.ndarray) -> None:
+    """Refuse a mass or second moment that a tiny density pushed below float64's normal range
+    (2**-1022), where it keeps only a few bits: a silently wrong number."""
+    tiny = np.finfo(np.float64).tiny
+    lost = moments.volume != 0 and abs(mass) < tiny
+    lost = lost or bool(np.any((np.diag(moments.central) != 0) & (np.abs(np.diag(second)) < tiny)))
+    if lost:
+        raise RangeError(where or "result", "the mass or inertia underflows float64",
+                         "measure in a smaller unit, or with a larger density")
 
 
 def _check_finite(where: str, what: str, *values) -> None:

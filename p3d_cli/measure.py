@@ -14,7 +14,7 @@ from typing import Any, BinaryIO, Iterable
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import IDENTITY, Placement, then
+from p3d_cli.placement import IDENTITY, Placement, scaling, then
 from p3d_cli.results import BoundsResult, PropsResult
 from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
 from p3d_cli.solid import as_solid, names_assembly_file
@@ -104,12 +104,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     system, density, mass = unit_rules.resolve(units, output_units, density, mass)
     user_placement = placement
     if system is not None:
-        placement = then(placement, Placement(scale=np.full(3, system.factor)))
+        placement = then(placement, scaling(system.factor, system.factor_error))
         if about is not None:
             about = np.asarray(about, dtype=np.float64) * system.factor
+    from_unit = system is not None and (density is not None or mass is not None)
     result = measure_solid(solid, placement, method=method, density=density,
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
-                           tolerance=tolerance)
+                           tolerance=tolerance, density_error=unit_rules.DENSITY_ROUNDING if from_unit else 0.0)
     return finish(result, system, user_placement, density_given)
 
 
@@ -184,7 +185,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
 
         system, _, _ = resolve(units, output_units)
         if system is not None:
-            placement = then(placement, Placement(scale=np.full(3, system.factor)))
+            placement = then(placement, scaling(system.factor, system.factor_error))
     return solid_bounds(solid, placement, tessellate)
 
 

@@ -101,13 +101,17 @@ class Estimate:
         """The estimated ``Moments`` (volume is unsigned: the inside test ignores winding)."""
         m = self.mean
         half, centre = 0.5 * self.bounds.size, self.bounds.center
-        volume = self.box_volume * m[0]
+        # In units of a power of two near the box (exact), so that a tiny part's box volume
+        # (size³) and second moments (size⁵) are formed without passing through an underflow.
+        scaled, length = self._scaled_half()
+        box = float(np.prod(2.0 * scaled))
+        volume = float(np.ldexp(box * m[0], 3 * length))   # inf past float64: refused by the caller
         if not m[0] > 0:
             return Moments(0.0, None, None)
         center = centre + half * m[1:4] / m[0]      # in the sampled frame, then moved once
         if self.origin is not None:
             center = self.origin + center
-        central = _central(m, self.box_volume) * np.outer(half, half)
+        central = np.ldexp(_central(m, box) * np.outer(scaled, scaled), 5 * length)
         return Moments(float(volume), center, central)
 
     def uncertainty(self, density: float | None = None, mass: float | None = None) -> dict:
@@ -128,14 +132,50 @@ class Estimate:
         # does not overflow the finite differences (whose steps are 1e-6 of m0).
         factor = mass if mass is not None else (1.0 if density is None else density)
         unit_density, unit_mass = (None, 1.0) if mass is not None else (1.0, None)
-        f = lambda x: _reported(x, self.box_volume, 0.5 * self.bounds.size, unit_density, unit_mass)  # noqa: E731
+        # Lengths in units of a power of two near the box (exact): the covariance holds squares
+        # of the errors, which for a part of 1e-33 (inertia ~1e-165) would underflow to 0 and
+        # state "± 0"; the errors are scaled back after the square root.
+        half, length = self._scaled_half()
+        box = float(np.prod(2.0 * half))
+        f = lambda x: _reported(x, box, half, unit_density, unit_mass)  # noqa: E731
         jac = _jacobian(f, m, step=1e-6 * m[0])
         cov = jac @ self.covariance @ jac.T / self.samples
         se = np.sqrt(np.maximum(np.diag(cov), 0.0))
         se[1] *= factor
         se[5:] *= factor
-        return {"volume": float(se[0]), "mass": float(se[1]), "center_of_mass": se[2:5],
-                "inertia": se[5:14].reshape(3, 3)}
+        volume_power = 3 if mass is None else 0
+        se[0:2] = np.ldexp(se[0:2], [3 * length, volume_power * length])
+        se[2:5] = np.ldexp(se[2:5], length)
+        se[5:] = np.ldexp(se[5:], (5 if mass is None else 2) * length)
+        out = {"volume": float(se[0]), "mass": float(se[1]), "center_of_mass": se[2:5],
+               "inertia": se[5:14].reshape(3, 3)}
+        if self.samples - self.inside < MIN_INSIDE:
+            # Few points fell outside (a solid filling most of its box): the inside fraction's
+            # standard error is as unreliable as with few inside, and with none outside it is 0.
+            # Never state "± 0" for an estimate that can be wrong: at least Clopper-Pearson's.
+            bounds = conservative_errors(self, density, mass)
+            out["volume"] = max(out["volume"], bounds["volume"])
+            out["mass"] = max(out["mass"], bounds["mass"])
+        return out
+
+    def underflows(self) -> bool:
+        """True when the estimated volume or a second moment, non-zero in box units, falls
+        below float64's normal range in world units (a part too small: a few bits left)."""
+        m = self.mean
+        if not m[0] > 0:
+            return False
+        scaled, length = self._scaled_half()
+        box = float(np.prod(2.0 * scaled))
+        tiny = np.finfo(np.float64).tiny
+        moments = self.moments()
+        central = np.diag(_central(m, box) * np.outer(scaled, scaled))
+        return abs(moments.volume) < tiny or bool(np.any((central != 0) & (np.abs(np.diag(moments.central)) < tiny)))
+
+    def _scaled_half(self) -> tuple[np.ndarray, int]:
+        """The box's half-size in units of ``2**length`` (a power of two near it), and ``length``."""
+        half = 0.5 * self.bounds.size
+        length = int(np.frexp(float(half.max()))[1])
+        return np.ldexp(half, -length), length
 
 
 def _reported(m, box_volume, half, density, mass) -> np.ndarray:
@@ -314,6 +354,9 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
         estimate = montecarlo_moments(inside, bounds, samples=samples, seed=seed, tolerance=tolerance,
                                       origin=origin)
         moments = estimate.moments()
+        if estimate.underflows():
+            raise RangeError(solid.source, "the volume or its second moments underflow float64 (the part is too "
+                             "small)", "measure in a smaller unit (e.g. mm instead of m)")
     if moments.is_empty and mass is not None:
         raise UsageError("mass", "the Monte Carlo estimate found no volume, so no density "
                          "follows from a mass", "give density=, or more samples=")
@@ -381,7 +424,7 @@ def _mesh_setup(solid: Solid, placement: Placement):
     else:
         triangles = mesh.triangles()    # read once; the analysis below reuses the array
         mesh = dataclasses.replace(mesh, read_blocks=lambda: iter([triangles]))
-    found = analyze(mesh, mesh.where)
+    found = analyze(mesh, mesh.where, rescale=True)     # scaled moments: the warnings are scale-free
     facts = mesh_facts(solid, found)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
     if not found.moments.is_empty and found.moments.volume < 0:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -25,6 +26,7 @@ import numpy as np
 from p3d_cli.bounding import triangles_bounds
 from p3d_cli.errors import UsageError
 from p3d_cli.io.source import MeshSource
+from p3d_cli.mesh.expansions import rounded_sums
 from p3d_cli.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
 
@@ -123,6 +125,32 @@ class Mirrored:
 
 
 @dataclass(frozen=True)
+class PlacementErrors:
+    """Bounds on the absolute error of a placement's stored floats against the exact placement
+    they stand for: the rounding of composing placements (``then``) and of unit factors
+    (docs/accuracy.md, "Placed parts and assemblies"). Entries are 0 where a value is exact.
+
+    Attributes
+    ----------
+    scale : (3,) float64
+    rotation : (3, 3) float64
+        Per entry, against the exact product of the (float) rotations composed.
+    translation : (3,) float64
+    """
+
+    scale: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+
+    @staticmethod
+    def of(placement: "Placement") -> "PlacementErrors":
+        """``placement``'s errors, zeros where it has none."""
+        if placement.errors is not None:
+            return placement.errors
+        return PlacementErrors(np.zeros(3), np.zeros((3, 3)), np.zeros(3))
+
+
+@dataclass(frozen=True)
 class Placement:
     """Scale, then rotation about the origin, then translation.
 
@@ -134,11 +162,15 @@ class Placement:
     rotation : (3, 3) float64 or None
         A proper rotation matrix (``p3d_cli.rotation``).
     translation : (3,) float64 or None
+    errors : PlacementErrors or None
+        How far these floats may be from the exact placement they stand for, when they were
+        computed (composed placements, unit factors); None: they are exact as given.
     """
 
     scale: np.ndarray | None = None
     rotation: np.ndarray | None = None
     translation: np.ndarray | None = None
+    errors: "PlacementErrors | None" = None
 
     def __post_init__(self) -> None:
         if self.scale is not None:
@@ -158,8 +190,9 @@ class Placement:
         return self.scale is None and self.rotation is None and self.translation is None
 
     def moments(self, moments: Moments) -> Moments:
-        """The placed solid's moments (eq. 9, then ``R C Rᵀ``, then the centre moved)."""
-        return place_moments(moments, self.scale, self.rotation, self.translation)
+        """The placed solid's moments (eq. 9, then ``R C Rᵀ``, then the centre moved), their
+        error bounds grown by the placement's own (``errors``)."""
+        return place_moments(moments, self.scale, self.rotation, self.translation, self.errors)
 
     def shape(self, shape):
         """The shape after the scale (a sphere or cylinder becomes its exact generalisation; a
@@ -205,7 +238,8 @@ class Placement:
 IDENTITY = Placement()
 
 
-def place_moments(moments: Moments, scale=None, rotation=None, translation=None) -> Moments:
+def place_moments(moments: Moments, scale=None, rotation=None, translation=None,
+                  errors: PlacementErrors | None = None) -> Moments:
     """Moments after a diagonal scale, a rotation about the origin and a translation.
 
     Parameters
@@ -217,16 +251,20 @@ def place_moments(moments: Moments, scale=None, rotation=None, translation=None)
         keeps a positive volume.
     rotation : (3, 3) array_like, optional
     translation : (3,) array_like, optional
+    errors : PlacementErrors, optional
+        Bounds on how far ``scale``, ``rotation`` and ``translation`` are from the exact
+        placement (a composed one's rounding): they enter the moments' error bounds.
     """
+    e = errors
     if scale is not None:
         s = check_scale(scale)
-        moments = scale_moments(moments, s)
+        moments = scale_moments(moments, s, None if e is None else e.scale)
         if s[0] * s[1] * s[2] < 0:
             moments = flip_winding(moments)
     if rotation is not None:
-        moments = rotate_moments(moments, rotation)
+        moments = rotate_moments(moments, rotation, None if e is None else e.rotation)
     if translation is not None:
-        moments = translate_moments(moments, translation)
+        moments = translate_moments(moments, translation, None if e is None else e.translation)
     return moments
 
 
@@ -288,6 +326,11 @@ def then(first: Placement, second: Placement) -> Placement:
     and ``M R1 M`` is a rotation, so this is ``R S p + t`` with ``R = R2 M R1 M``,
     ``S = s M S1`` and ``t = R2 S2 t1 + t2``.
 
+    Every entry of ``R``, ``S`` and ``t`` is its exact value rounded once (``rounded_sum``), so
+    a part placed far out and brought back by an outer placement keeps its accuracy; the
+    result's ``errors`` hold those roundings plus the inputs' own errors carried through
+    (docs/accuracy.md, "Placed parts and assemblies").
+
     Raises
     ------
     UsageError
@@ -298,14 +341,106 @@ def then(first: Placement, second: Placement) -> Placement:
         raise UsageError("scale", f"{tuple(s2.tolist())} is not uniform, and it would apply after "
                          "a rotation inside (a shear)", "give one factor (a negative one mirrors)")
     signs = np.sign(s2)
+    e1, e2 = PlacementErrors.of(first), PlacementErrors.of(second)
     r1 = np.eye(3) if first.rotation is None else first.rotation
     r2 = np.eye(3) if second.rotation is None else second.rotation
     s1 = np.ones(3) if first.scale is None else first.scale
     t1 = np.zeros(3) if first.translation is None else first.translation
     t2 = np.zeros(3) if second.translation is None else second.translation
-    rotation = r2 @ (signs[:, None] * r1 * signs)
-    scale = s2 * s1
-    translation = r2 @ (s2 * t1) + t2
-    return Placement(None if np.all(scale == 1) else scale,
-                     None if np.array_equal(rotation, np.eye(3)) else rotation,
-                     None if not np.any(translation) else translation)
+    m1 = signs[:, None] * r1 * signs                    # M R1 M: sign flips, exact
+    # With either rotation the identity the product is the other, exactly.
+    rotation, rotation_error = (m1, np.zeros((3, 3))) if second.rotation is None else (r2, np.zeros((3, 3)))
+    if first.rotation is not None and second.rotation is not None:
+        r2l, m1l = r2.tolist(), m1.tolist()
+        rotation, rotation_error = rounded_sums([[[(r2l[i][k], m1l[k][j]) for k in range(3)] for j in range(3)]
+                                                   for i in range(3)])
+    scale, scale_error = rounded_sums([[(a, b)] for a, b in zip(s2.tolist(), s1.tolist())])
+    r2l, s2l, t1l, t2l = r2.tolist(), s2.tolist(), t1.tolist(), t2.tolist()
+    if second.rotation is None:
+        translation, translation_error = rounded_sums([[(s2l[i], t1l[i]), (t2l[i],)] for i in range(3)])
+    else:
+        translation, translation_error = rounded_sums([[(r2l[i][k], s2l[k], t1l[k]) for k in range(3)]
+                                                         + [(t2l[i],)] for i in range(3)])
+    # The inputs' own errors, carried through the products (first order and the product of
+    # errors, so nothing is dropped), rounded up by _UP.
+    a1, a2 = np.abs(m1), np.abs(r2)
+    rotation_error = rotation_error + _UP * (a2 @ e1.rotation + e2.rotation @ (a1 + e1.rotation))
+    scale_error = scale_error + _UP * (np.abs(s2) * e1.scale + e2.scale * (np.abs(s1) + e1.scale))
+    x = np.abs(s2) * np.abs(t1)
+    ex = np.abs(s2) * e1.translation + e2.scale * (np.abs(t1) + e1.translation)
+    translation_error = translation_error + _UP * (a2 @ ex + e2.rotation @ (x + ex) + e2.translation)
+    return _placement(scale, rotation, translation,
+                      PlacementErrors(scale_error, rotation_error, translation_error))
+
+
+def scaling(factor: float, error: float = 0.0) -> Placement:
+    """The uniform scale by ``factor`` (a unit factor), ``error`` off its exact value."""
+    errors = None if error == 0 else PlacementErrors(np.full(3, error), np.zeros((3, 3)), np.zeros(3))
+    return Placement(scale=np.full(3, factor), errors=errors)
+
+
+def converted(placement: Placement, factor: Fraction, *, coordinates: bool = False) -> Placement:
+    """``placement`` written in a length unit ``factor`` times the output unit (the exact ratio
+    of the units, ``p3d_cli.units.exact_length``), carried into the output unit: the translation
+    becomes ``f t``; with ``coordinates``, the solid's own coordinates are in that unit too, so
+    the scale becomes ``f S`` (a uniform scale commutes with rotations, so nothing else changes).
+    Each product is the exact one rounded once (``0.3 mm`` is the float nearest 0.0003 m), and
+    its rounding, known exactly, enters ``errors`` with the inputs' own errors times ``f``.
+    """
+    from p3d_cli.units import exact_products
+
+    factor = Fraction(factor)
+    if factor == 1:
+        return placement
+    e = PlacementErrors.of(placement)
+    f = abs(float(factor)) * _UP
+    translation, translation_error = placement.translation, e.translation
+    if translation is not None:
+        translation, rounding = exact_products(translation, factor)
+        translation_error = rounding + e.translation * f
+    scale, scale_error = placement.scale, e.scale
+    if coordinates:
+        scale, rounding = exact_products(np.ones(3) if scale is None else scale, factor)
+        scale_error = rounding + e.scale * f
+    return _placement(scale, placement.rotation, translation,
+                      PlacementErrors(scale_error, e.rotation, translation_error))
+
+
+def prescaled(placement: Placement, exponent: int, where: str = "placement") -> Placement:
+    """``placement`` applied after a uniform scale by ``2**exponent``: its scale factors (and
+    their errors) times that power of two, which is exact unless the product leaves float64's
+    normal range (then ``RangeError``: the placed part is too small or too large).
+
+    Raises
+    ------
+    RangeError
+    """
+    if exponent == 0:
+        return placement
+    e = PlacementErrors.of(placement)
+    scale = np.ldexp(np.ones(3) if placement.scale is None else placement.scale, exponent)
+    if not np.all(np.isfinite(scale)) or np.any(np.abs(scale) < np.finfo(np.float64).tiny):
+        from p3d_cli.errors import RangeError
+
+        raise RangeError(where, "the part is too " + ("large" if exponent < 0 else "small") + " for float64 "
+                         "even after the scale given", "measure it in a unit nearer its size")
+    errors = None if placement.errors is None else PlacementErrors(np.ldexp(e.scale, exponent), e.rotation,
+                                                                   e.translation)
+    return Placement(scale, placement.rotation, placement.translation, errors)
+
+
+#: Rounds a bound's own float arithmetic (a few operations on non-negative terms) upward.
+_UP = 1.0 + 2.0 ** -40
+
+
+def _placement(scale, rotation, translation, errors: PlacementErrors) -> Placement:
+    """A placement, dropping the parts that are the identity and exactly so."""
+    exact = lambda e: not np.any(e)  # noqa: E731
+    if scale is not None and np.all(scale == 1) and exact(errors.scale):
+        scale = None
+    if rotation is not None and np.array_equal(rotation, np.eye(3)) and exact(errors.rotation):
+        rotation = None
+    if translation is not None and not np.any(translation) and exact(errors.translation):
+        translation = None
+    none = exact(errors.scale) and exact(errors.rotation) and exact(errors.translation)
+    return Placement(scale, rotation, translation, None if none else errors)

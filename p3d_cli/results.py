@@ -12,6 +12,7 @@ Conventions, stated once for every output:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,11 +38,18 @@ class Bounds:
 
     @property
     def center(self) -> np.ndarray:
-        return 0.5 * (self.min + self.max)
+        # Halves first: min + max overflows for a box near float64's largest (at 1e308).
+        return 0.5 * self.min + 0.5 * self.max
 
     @property
     def diagonal(self) -> float:
-        return float(np.linalg.norm(self.max - self.min))
+        with np.errstate(over="ignore", under="ignore"):
+            d = float(np.linalg.norm(self.max - self.min))
+        if math.isfinite(d) and d > 2.0 ** -400:
+            return d
+        # The squares of a size past 1.34e154 overflow (and of a tiny one underflow), the
+        # diagonal need not: hypot scales.
+        return math.hypot(*(float(x) for x in self.max - self.min))
 
     def union(self, other: "Bounds") -> "Bounds":
         return Bounds(np.minimum(self.min, other.min), np.maximum(self.max, other.max))

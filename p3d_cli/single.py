@@ -18,8 +18,9 @@ from p3d_cli.solid import Solid
 
 
 def measure_solid(solid: Solid, placement: Placement, *, method: str, density, mass, about, tessellate,
-                  samples, seed, tolerance) -> PropsResult:
-    """``solid``'s result by ``method``, everything already in the units of the result."""
+                  samples, seed, tolerance, density_error: float = 0.0) -> PropsResult:
+    """``solid``'s result by ``method``, everything already in the units of the result
+    (``density_error``: the relative error of a converted density or mass, for the bounds)."""
     if method == "montecarlo":
         from p3d_cli.montecarlo import montecarlo_props
 
@@ -27,7 +28,8 @@ def measure_solid(solid: Solid, placement: Placement, *, method: str, density, m
                                 density=density, mass=mass, about=about)
     from p3d_cli.exact import exact_props
 
-    return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about)
+    return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about,
+                       density_error=density_error)
 
 
 def finish(result: PropsResult, system, user_placement: Placement, density_given: bool = False) -> PropsResult:
@@ -52,7 +54,22 @@ def finish(result: PropsResult, system, user_placement: Placement, density_given
 
 
 def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = None) -> BoundsResult:
-    """Exact bounds of ``solid`` after ``placement`` (closed forms or vertex projection)."""
+    """Exact bounds of ``solid`` after ``placement`` (closed forms or vertex projection).
+
+    Raises
+    ------
+    RangeError
+        The bounds overflow float64 (``p3d_cli.bounding.checked_bounds``).
+    """
+    from p3d_cli.bounding import checked_bounds
+
+    with np.errstate(over="ignore", invalid="ignore"):     # refused below, in one error
+        result = _solid_bounds(solid, placement, tessellate)
+    checked_bounds(solid.where, result.bounds)
+    return result
+
+
+def _solid_bounds(solid: Solid, placement: Placement, tessellate: int | None) -> BoundsResult:
     if solid.shape is not None:
         if tessellate is not None:
             from p3d_cli.exact import shape_triangles

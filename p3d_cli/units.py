@@ -17,7 +17,9 @@ is imported only when a unit is written: a bare number costs nothing.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 from p3d_cli.errors import UsageError
@@ -61,8 +63,14 @@ class UnitSystem:
 
     @property
     def factor(self) -> float:
-        """Mesh length unit -> output length unit."""
-        return LENGTHS[self.mesh_length] / LENGTHS[self.length]
+        """Mesh length unit -> output length unit (the exact ratio rounded once)."""
+        return length_factor(self.mesh_length, self.length)[0]
+
+    @property
+    def factor_error(self) -> float:
+        """How far ``factor`` is from the exact ratio (at most half an ulp): it enters the
+        stated bounds (docs/accuracy.md, "Placed parts and assemblies")."""
+        return length_factor(self.mesh_length, self.length)[1]
 
     def describe(self) -> dict:
         """The ``units`` record of a result: the unit of every quantity."""
@@ -70,6 +78,58 @@ class UnitSystem:
         return {"system": "SI" if (L, M) == ("m", "kg") else "converted", "length": L,
                 "volume": f"{L}^3", "density": f"{M}/{L}^3", "mass": M, "inertia": f"{M}*{L}^2",
                 "mesh_length": self.mesh_length}
+
+
+def exact_length(unit: str) -> Fraction:
+    """A length unit of ``LENGTHS`` in metres, exactly (``1 in`` is ``127/5000 m``): the
+    decimal the table is written in, not its float."""
+    return Fraction(repr(LENGTHS[unit]))
+
+
+@functools.lru_cache(maxsize=None)
+def length_factor(unit: str, to: str) -> tuple[float, float]:
+    """The factor from length unit ``unit`` to ``to``, rounded once from the exact ratio, and
+    a bound on its rounding error (0 when the ratio is a float, as for ``m`` to ``in``'s
+    reciprocal never is).
+
+    Returns
+    -------
+    factor, error : float
+    """
+    exact = exact_length(unit) / exact_length(to)
+    return float(exact), rounding_error(exact)
+
+
+def rounding_error(exact: Fraction) -> float:
+    """``|float(exact) - exact|``, rounded up: the error of rounding ``exact`` once."""
+    try:
+        error = abs(Fraction(float(exact)) - exact)
+    except OverflowError:
+        return math.inf
+    if error == 0:
+        return 0.0
+    bound = float(error)
+    return bound if Fraction(bound) >= error else math.nextafter(bound, math.inf)
+
+
+def exact_products(values, factor: Fraction):
+    """``values · factor`` each rounded once from the exact product, and the roundings.
+
+    Parameters
+    ----------
+    values : (k,) float64
+    factor : Fraction
+        An exact unit ratio (``exact_length``).
+
+    Returns
+    -------
+    products, roundings : (k,) float64
+        ``|products - exact|`` rounded up (``rounding_error``).
+    """
+    import numpy as np
+
+    exact = [Fraction(x) * factor for x in values.tolist()]
+    return np.array([float(v) for v in exact]), np.array([rounding_error(v) for v in exact])
 
 
 def parse_output_units(text: str | None) -> tuple[str, str]:
@@ -102,12 +162,15 @@ def check_length(unit: str, name: str = "units") -> str:
 def _registry():
     import pint
 
+    # Rational magnitudes: "7.85 g/cm^3" converts to exactly 7850 kg/m³ (with floats pint
+    # gives 7849.999999999999), so a converted density or mass is its exact value rounded
+    # once, an error of at most half an ulp that the stated bounds carry.
     try:
         # Pint's own cache of its parsed definition files (in the user's cache directory)
         # makes the registry three times quicker to build; without it pint still works.
-        return pint.UnitRegistry(cache_folder=":auto:")
+        return pint.UnitRegistry(cache_folder=":auto:", non_int_type=Fraction)
     except Exception:  # noqa: BLE001 - an unwritable cache must not stop a measurement
-        return pint.UnitRegistry()
+        return pint.UnitRegistry(non_int_type=Fraction)
 
 
 def has_unit(value: Any) -> bool:
@@ -138,21 +201,49 @@ def quantity_si(text: str, kind: str, name: str) -> float:
     UsageError
         Not a quantity, the wrong dimension, or not positive and finite.
     """
-    import math
+    value = exact_quantity(text, kind, name)
+    try:
+        return float(value)
+    except OverflowError:
+        raise UsageError(name, f"{text!r} is not positive and finite", _hint(kind)) from None
 
+
+def _hint(kind: str) -> str:
+    return "write a number and a unit, e.g. " + ("7.85g/cm^3 or 7850kg/m^3" if kind == "density"
+                                                 else "2.5kg or 5.5lb")
+
+
+def exact_quantity(text: str, kind: str, name: str) -> Fraction:
+    """``quantity_si``'s value exactly, as a ``Fraction`` (the decimal written, converted by
+    exact unit definitions); ``UsageError`` as there."""
     ureg = _registry()
     target = {"density": "kg/m^3", "mass": "kg"}[kind]
-    hint = ("write a number and a unit, e.g. " + ("7.85g/cm^3 or 7850kg/m^3" if kind == "density"
-                                                    else "2.5kg or 5.5lb"))
     try:
         q = ureg.Quantity(str(text).replace("³", "^3"))
-        value = float(q.to(target).magnitude)
+        value = Fraction(q.to(target).magnitude)
     except Exception as exc:  # noqa: BLE001 - pint raises many kinds for bad text
         what = "is not a " + kind if "ensionality" in type(exc).__name__ else "is not a quantity"
-        raise UsageError(name, f"{text!r} {what} ({type(exc).__name__})", hint) from None
-    if not math.isfinite(value) or value <= 0:
-        raise UsageError(name, f"{text!r} is not positive and finite", hint)
+        raise UsageError(name, f"{text!r} {what} ({type(exc).__name__})", _hint(kind)) from None
+    if value <= 0:
+        raise UsageError(name, f"{text!r} is not positive and finite", _hint(kind))
     return value
+
+
+#: Relative error of a density or mass converted from text with a unit (``resolve``): one
+#: rounding of the exact value, at most half an ulp (2⁻⁵³ relative, plus the subnormal case,
+#: which ``density_for`` refuses).
+DENSITY_ROUNDING = 2.0 ** -53
+
+
+def _finite(value: Fraction, name: str, kind: str) -> float:
+    try:
+        out = float(value)
+    except OverflowError:
+        out = math.inf
+    if not math.isfinite(out) or out <= 0:
+        raise UsageError(name, f"the {kind} in the output units is beyond float64's range",
+                         "check the value and its unit")
+    return out
 
 
 def _positive(value, name: str) -> float:
@@ -211,10 +302,14 @@ def resolve(units: str | None, output_units: str | None, density=None, mass=None
             raise UsageError(name, f"{value} has no unit, and units={units} is given",
                              f"write the unit, e.g. {example} (a bare number would be ambiguous)")
     out_density = out_mass = None
+    # Converted exactly and rounded once: at most half an ulp off, which the stated bounds
+    # carry (``DENSITY_ROUNDING``).
+    unit_mass = Fraction(repr(MASSES[mass_unit]))
     if density is not None:
-        out_density = quantity_si(density, "density", names[0]) * LENGTHS[length] ** 3 / MASSES[mass_unit]
+        exact = exact_quantity(density, "density", names[0]) * exact_length(length) ** 3 / unit_mass
+        out_density = _finite(exact, names[0], "density")
     if mass is not None:
-        out_mass = quantity_si(mass, "mass", names[1]) / MASSES[mass_unit]
+        out_mass = _finite(exact_quantity(mass, "mass", names[1]) / unit_mass, names[1], "mass")
     return (UnitSystem(system.mesh_length, length, mass_unit, out_density, out_mass), out_density, out_mass)
 
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.errors import FormatError, InputError
+from p3d_cli.errors import FormatError, InputError, RangeError
 from p3d_cli.io.source import MeshSource
 from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
@@ -39,6 +39,10 @@ class MeshAnalysis:
         non-manifold ones that still bound a region. None where the closed test was not run.
     boundary_edges : int
         Directed edges of the net boundary, counted with multiplicity.
+    scale_exponent : int
+        ``moments`` are those of the mesh scaled by ``2**scale_exponent`` about the world
+        origin (``analyze(rescale=True)``; 0 unless the part is far outside float64's
+        comfortable range).
     """
 
     moments: Moments
@@ -48,9 +52,17 @@ class MeshAnalysis:
     inverted_tetrahedra: int = 0
     bounding: bool | None = None
     boundary_edges: int = 0
+    scale_exponent: int = 0
 
 
-def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis:
+#: Parts whose size lies outside [2**-RESCALE_BEYOND, 2**RESCALE_BEYOND] are integrated scaled
+#: by a power of two (``analyze(rescale=True)``): their second moments (size⁵) would reach
+#: float64's subnormal range (below 2**-1022, a size near 1e-61) or overflow (near 1e61 on a
+#: million faces), and a power of two scales every term exactly.
+RESCALE_BEYOND = 100
+
+
+def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool = False) -> MeshAnalysis:
     """Integrate and inspect a loaded mesh.
 
     Parameters
@@ -62,6 +74,11 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
         Whether to run the closed test (it costs one sort of the edges). An open mesh's
         moments are summed about the world origin (see below), a closed one's about a local
         origin in the part, which keeps full accuracy wherever the part sits.
+    rescale : bool
+        Integrate a part whose first block is smaller than ``2**-RESCALE_BEYOND`` or larger
+        than ``2**RESCALE_BEYOND`` scaled by the power of two that brings it near 1, so that no
+        term under- or overflows; ``scale_exponent`` says by which. Off, such a part's moments
+        may underflow (the callers' range checks then refuse them).
 
     Raises
     ------
@@ -76,6 +93,8 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
     lo = hi = None
     keys = np.empty(3 * source.face_count, dtype=np.uint64) if closed else None
     filled = seen = 0
+    factor = 1.0
+    exponent = 0
     for block in source.read_blocks():
         # One widening copy per block, in the layout the integrals want; everything else
         # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
@@ -91,7 +110,12 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
                              "repair or re-export the mesh")
         if sums is None:
             float32 = np.asarray(block).dtype == np.float32
-            sums = MomentSums(origin_from_bounds(block_lo, block_hi, float32))
+            origin = origin_from_bounds(block_lo, block_hi, float32)
+            if rescale:
+                exponent = _exponent(float((block_hi - block_lo).max()))
+                factor = 2.0 ** exponent
+            # (p·2ᵏ - o·2ᵏ) is (p - o)·2ᵏ exactly: the sums are the unscaled ones' bits, scaled.
+            sums = MomentSums(origin * factor)
             lo, hi = block_lo, block_hi
         else:
             lo, hi = np.minimum(lo, block_lo), np.maximum(hi, block_hi)
@@ -99,6 +123,8 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
             block_keys = column_edge_keys(cols)     # before the sums shift cols in place
             keys[filled:filled + block_keys.size] = block_keys
             filled += block_keys.size
+        if exponent:
+            cols *= factor
         sums.add_columns(cols)
         seen += cols.shape[2]
     if seen != source.face_count:
@@ -120,12 +146,25 @@ def analyze(source: MeshSource, where: str, closed: bool = True) -> MeshAnalysis
             is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
             bounding = is_closed or unbalanced.ids.size == 0
             if not bounding:
+                if exponent:
+                    raise RangeError(where, f"the open mesh is {'too small' if exponent > 0 else 'too large'} to "
+                                     "integrate without under- or overflow (its size is "
+                                     f"{float((hi - lo).max()):.3g})", "scale it into a unit nearer its size")
                 moments = _open_moments(source, sums, unbalanced, lo, hi)
                 boundary = unbalanced.edges
     bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
     if moments is None:
         moments = sums.moments()
-    return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary)
+    return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary,
+                        scale_exponent=exponent)
+
+
+def _exponent(extent: float) -> int:
+    """The ``k`` that brings ``extent·2**k`` into [0.5, 1) when ``extent`` lies outside
+    ``2**±RESCALE_BEYOND`` (else 0; and 0 for a flat or infinite extent)."""
+    if not (0 < extent < np.inf) or 2.0 ** -RESCALE_BEYOND <= extent <= 2.0 ** RESCALE_BEYOND:
+        return 0
+    return -int(np.frexp(extent)[1])
 
 
 def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: Unbalanced,

@@ -8,6 +8,8 @@ bits; these are the building blocks (docs/method.md, "Open and non-manifold mesh
   ``p + e == a · b`` exactly, ``p = fl(a · b)``, as long as no product under- or overflows:
   the callers scale their inputs by a power of two to ``|x| <= 1`` first (overflow then cannot
   happen) and bound what underflow can lose (at most ``2**-1074`` per operation).
+- ``rounded_sum``: a short sum of products of floats (a composed placement's entries), exact
+  in Python integers and rounded once, with its rounding error.
 - ``ExactSum``: the exact sum of many float arrays as a ``Fraction``. Each float is
   ``f · 2**e`` with ``|f| < 1`` an integer multiple of ``2**-53`` (``numpy.frexp``); its
   scaled mantissa ``f · 2**27`` is split into its floor (an integer below ``2**27`` in
@@ -177,3 +179,49 @@ class ExactSum:
             total = sum(((high[b] << _LOW_BITS) + low[b]) << (b - lowest) for b in hit)
             out.append(Fraction(total) * Fraction(2) ** (lowest + _E_MIN - 53))
         return out
+
+
+def rounded_sums(sums) -> tuple[np.ndarray, np.ndarray]:
+    """``rounded_sum`` of each entry of a list (or a list of lists) of product lists: the
+    values and their roundings as arrays."""
+    pairs = np.array([[rounded_sum(terms) for terms in row] for row in sums]
+                     if isinstance(sums[0][0], list) else [rounded_sum(terms) for terms in sums])
+    return pairs[..., 0].copy(), pairs[..., 1].copy()
+
+
+def rounded_sum(terms) -> tuple[float, float]:
+    """``Σ Π term`` for ``terms``, a list of tuples of floats (products of a few factors),
+    computed exactly and rounded once, and ``|rounded - exact|`` rounded up (0 when exact).
+
+    Every finite float is an integer times a power of two, so the sum is a Python integer over
+    a power of two; Python's integer division rounds it correctly (subnormals too). A non-finite
+    factor gives the float sum with an infinite error.
+    """
+    num, shift = 0, 0
+    try:
+        for term in terms:
+            n, e = 1, 0
+            for x in term:
+                a, b = float(x).as_integer_ratio()
+                n *= a
+                e += b.bit_length() - 1
+            if n == 0:
+                continue
+            if e > shift:
+                num <<= e - shift
+                shift = e
+            num += n << (shift - e)
+    except (OverflowError, ValueError):   # inf or nan
+        return float(sum(math.prod(t) for t in terms)), math.inf
+    if num == 0:
+        return 0.0, 0.0
+    den = 1 << shift
+    try:
+        value = num / den
+    except OverflowError:
+        return (math.inf if num > 0 else -math.inf), math.inf
+    a, b = value.as_integer_ratio()
+    diff = abs(num * b - a * den)
+    if diff == 0:
+        return value, 0.0
+    return value, math.nextafter(diff / (den * b), math.inf)

@@ -290,8 +290,12 @@ class MomentSums:
 def volume_from(total: float | Fraction, bound: float) -> float:
     """The volume from the summed ``6V`` and its rounding bound: 0.0 within the bound.
 
-    The one rule ``p3d props`` and ``p3d check`` share (``total / 6`` rounded once).
+    The one rule ``p3d props`` and ``p3d check`` share (``total / 6`` rounded once). A sum or
+    bound beyond float64 (coordinates past about 1e100) gives NaN, never a rounded-away 0,
+    so that both refuse it as out of range.
     """
+    if not math.isfinite(bound) or (not isinstance(total, Fraction) and not math.isfinite(total)):
+        return math.nan
     if isinstance(total, Fraction):
         return 0.0 if abs(total) <= Fraction(bound) else float(total / 6)
     return 0.0 if abs(total) <= bound else float(total) / 6.0

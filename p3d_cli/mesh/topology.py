@@ -41,6 +41,8 @@ sorted keys, or a union-find of a few rounds. Both give the same report (the tes
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from p3d_cli.mesh.boundary import boundary_volume, unbalanced_of
@@ -117,7 +119,24 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
     n : int
     where : str, optional
         The input's name: when given, a NaN or infinite coordinate raises ``InputError``.
+
+    Raises
+    ------
+    RangeError
+        The volume (or a shell's) is beyond float64: coordinates past about 1e100 (a
+        volume of 1e300 and more), where an infinite or NaN volume would be a wrong number.
     """
+    with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
+        report = _topology_of_blocks(blocks, n, where)
+    if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
+        from p3d_cli.errors import RangeError
+
+        raise RangeError(where or "mesh", "the signed volume overflows float64 (coordinates too large for "
+                         "their cubes)", "scale the mesh into a larger unit (e.g. km instead of mm)")
+    return report
+
+
+def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
     if n == 0:
         return _empty_report()
     fast = paired_topology(blocks, n, where)

@@ -32,34 +32,38 @@ def detect_format(path: str, root_tag: str) -> str:
                      "<sdf> (SDF)", "give a URDF, MJCF or SDF file")
 
 
-def load_robot(path, package_paths=None) -> Robot:
+def load_robot(path, package_paths=None, xacro_args=None) -> Robot:
     """Read a robot description: its links, geometry (mesh files resolved) and inertials.
 
     Parameters
     ----------
     path : str or os.PathLike
-        A URDF, MJCF or SDF file (xacro files must be expanded first).
+        A URDF, MJCF or SDF file, or a xacro file (expanded with the ``xacro`` package: the
+        ``robots`` extra).
     package_paths : dict or list of "NAME=DIR", optional
-        Folders of the packages ``package://NAME/...`` (``model://NAME/...``) URIs name; then
-        the folders of ``ROS_PACKAGE_PATH`` (``GZ_SIM_RESOURCE_PATH``) are searched.
+        Folders of the packages ``package://NAME/...`` (``model://NAME/...``) URIs name, and
+        xacro's ``$(find NAME)``; then the folders of ``ROS_PACKAGE_PATH``
+        (``GZ_SIM_RESOURCE_PATH``) are searched.
+    xacro_args : dict or list of "NAME:=VALUE", optional
+        Arguments of a xacro file (``xacro:arg``).
 
     Raises
     ------
     InputError, FormatError
-        Unreadable, not XML, not a robot description, a xacro file, a bad element, a missing
-        mesh (named by file, link and element).
+        Unreadable, not XML, not a robot description, a bad element, a missing mesh (named by
+        file, link and element).
+    MissingExtraError
+        A xacro file without the ``xacro`` package installed.
     """
     from p3d_cli.robots.xmltree import read_xml
 
     path = os.fspath(path)
     packages = parse_package_paths(package_paths)
-    if path.endswith(".xacro"):
-        raise InputError(path, "is a xacro file, which p3d does not expand",
-                         "expand it first: xacro robot.urdf.xacro > robot.urdf")
-    data, root = read_xml(path)
-    if b"xmlns:xacro" in data[:4096] or any(node.tag.startswith("xacro:") for node in root.iter()):
-        raise InputError(path, "uses xacro macros, which p3d does not expand",
-                         "expand it first: xacro robot.urdf.xacro > robot.urdf")
+    root = read_xml(path)
+    if path.endswith(".xacro") or _uses_xacro(root):
+        from p3d_cli.robots.xacro import expand_xacro
+
+        root = expand_xacro(path, root, packages, xacro_args)
     kind = detect_format(path, root.tag)
     if kind == "urdf":
         from p3d_cli.robots.urdf import read_urdf as read
@@ -67,4 +71,10 @@ def load_robot(path, package_paths=None) -> Robot:
         from p3d_cli.robots.mjcf import read_mjcf as read
     else:
         from p3d_cli.robots.sdf import read_sdf as read
-    return read(path, data, root, packages)
+    return read(path, root, packages)
+
+
+def _uses_xacro(root) -> bool:
+    """Whether a document holds xacro elements. A declaration of the namespace alone does not
+    count: xacro's own output keeps ``xmlns:xacro`` on ``<robot>``."""
+    return any(node.tag.startswith("xacro:") for node in root.iter())

@@ -20,7 +20,7 @@ import numpy as np
 
 from p3d_cli.errors import InputError
 from p3d_cli.placement import Placement
-from p3d_cli.robots.xmltree import Node
+from p3d_cli.robots.xmltree import Document, Node
 
 
 @dataclass(frozen=True)
@@ -35,12 +35,17 @@ class Geom:
     where : str
         ``robot.urdf: link 'forearm': collision[0]``, for messages.
     role : {"collision", "visual"}
+    density, mass : float or None
+        What the description says the geom is made of (MJCF's per-geom ``density`` and
+        ``mass``, kg/m³ and kg); None: it says nothing, and the caller's density applies.
     """
 
     thing: str
     placement: Placement
     where: str
     role: str = "collision"
+    density: float | None = None
+    mass: float | None = None
 
 
 @dataclass(frozen=True)
@@ -99,8 +104,8 @@ class Robot:
     ----------
     path : str
     format : {"urdf", "mjcf", "sdf"}
-    data : bytes
-        The file's bytes (``fill`` edits them).
+    doc : Document
+        The file as read (``fill`` edits its bytes; included files are their nodes' ``doc``).
     links : list of Link
     notes : list of str
         What the whole file says that changes how its inertials are used (MJCF's
@@ -109,9 +114,14 @@ class Robot:
 
     path: str
     format: str
-    data: bytes
+    doc: Document
     links: list[Link]
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def data(self) -> bytes:
+        """The description's bytes, as read."""
+        return self.doc.data
 
 
 def spec(name: str, *values: float) -> str:
@@ -135,7 +145,7 @@ PACKAGE_VARIABLES = ("ROS_PACKAGE_PATH",)
 MODEL_VARIABLES = ("GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "GAZEBO_MODEL_PATH", "SDF_PATH")
 
 
-def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str) -> str:
+def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str, folder: bool = False) -> str:
     """The file a mesh URI names: ``package://NAME/rest``, ``model://NAME/rest``, ``file://``,
     or a path relative to the description's folder ``base``.
 
@@ -143,36 +153,55 @@ def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str) -> st
     ``ROS_PACKAGE_PATH`` (``model://``: ``GZ_SIM_RESOURCE_PATH`` and its older names), where a
     package is a sub-folder named NAME.
 
+    Parameters
+    ----------
+    folder : bool
+        A folder may be named too (an SDF ``<include>``'s model folder).
+
     Raises
     ------
     InputError
-        The file does not exist, naming the URI and how to point p3d at the package.
+        The file does not exist, or is not a regular file (a FIFO or device beside the model
+        would block the read), naming the URI and how to point p3d at the package.
     """
     for scheme, variables in (("package://", PACKAGE_VARIABLES), ("model://", MODEL_VARIABLES)):
         if uri.startswith(scheme):
             name, _, rest = uri[len(scheme):].partition("/")
-            path = _in_package(name, rest, packages, variables)
+            path = _in_package(name, rest, packages, variables, folder)
             if path is None:
-                raise InputError(where, f"mesh {uri}: no such file",
+                raise InputError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
                                  f"give package_paths={name}=DIR (the folder of package {name})")
-            return path
+            return _regular(path, uri, where, folder)
     path = uri[len("file://"):] if uri.startswith("file://") else uri
     if not os.path.isabs(path):
         path = os.path.join(base, path)
-    if not os.path.isfile(path):
-        raise InputError(where, f"mesh {uri}: no such file", "paths are relative to the description's folder")
+    if not os.path.exists(path):
+        raise InputError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
+                         "paths are relative to the description's folder")
+    return _regular(path, uri, where, folder)
+
+
+def _regular(path: str, uri: str, where: str, folder: bool) -> str:
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        raise InputError(where, f"mesh {uri}: {exc.strerror or exc}", "check the path") from None
+    if not (stat.S_ISREG(mode) or (folder and stat.S_ISDIR(mode))):
+        raise InputError(where, f"mesh {uri} is not a regular file (a folder, FIFO or device)", "name a mesh file")
     return path
 
 
-def _in_package(name: str, rest: str, packages: dict[str, str], variables) -> str | None:
+def _in_package(name: str, rest: str, packages: dict[str, str], variables, folder: bool = False) -> str | None:
     folders = [packages[name]] if name in packages else []
     for variable in variables:
         for root in os.environ.get(variable, "").split(os.pathsep):
             if root:
                 folders.append(os.path.join(root, name))
-    for folder in folders:
-        path = os.path.join(folder, rest)
-        if os.path.isfile(path):
+    for place in folders:
+        path = os.path.join(place, rest)
+        if os.path.exists(path) and (folder or not os.path.isdir(path)):
             return path
     return None
 

@@ -6,7 +6,7 @@ link's frame, rpy being turns about the fixed x, y, z axes (``R = Rz Ry Rx``,
 in the frame of the inertial's origin (so rotated by its rpy); ``box size`` is the full size,
 ``cylinder`` has its axis along z with ``length`` the full length; a mesh's ``scale`` applies
 in the mesh's own frame, before the origin. The file is read with the standard library's expat
-(``p3d_cli.robots.xmltree``); xacro files must be expanded first (``xacro robot.urdf.xacro``).
+(``p3d_cli.robots.xmltree``); xacro files are expanded first (``p3d_cli.robots.xacro``).
 """
 
 from __future__ import annotations
@@ -34,8 +34,9 @@ def origin_placement(node: Node | None, where: str, scale=None) -> Placement:
     return Placement(scale, rotation, translation)
 
 
-def read_urdf(path: str, data: bytes, root: Node, packages: dict[str, str]) -> Robot:
-    """The links of a URDF document.
+def read_urdf(path: str, root: Node, packages: dict[str, str]) -> Robot:
+    """The links of a URDF document: the ``<link>`` children of ``<robot>`` (a ``<link>`` inside
+    a ``<gazebo>``, ``<transmission>`` or other extension block is not a robot link).
 
     Raises
     ------
@@ -46,11 +47,11 @@ def read_urdf(path: str, data: bytes, root: Node, packages: dict[str, str]) -> R
         raise InputError(path, f"the root element is <{root.tag}>, not <robot>", "give a URDF file")
     base = os.path.dirname(path)
     links = []
-    for node in root.iter("link"):
+    for node in root.findall("link"):
         name = node.attrib.get("name")
         if not name:
             raise InputError(f"{path}: line {node.line}", "a <link> has no name", "name every link")
-        where = f"{path}: link {name!r}"
+        where = f"{path}:{node.line}: link {name!r}"
         link = Link(name, node)
         for role in ("collision", "visual"):
             for i, element in enumerate(node.findall(role)):
@@ -62,7 +63,7 @@ def read_urdf(path: str, data: bytes, root: Node, packages: dict[str, str]) -> R
             link.inertial_node = inertial
             link.inertial = _inertial(inertial, f"{where}: inertial")
         links.append(link)
-    return Robot(path, "urdf", data, links)
+    return Robot(path, "urdf", root.doc, links)
 
 
 def _inertial(node: Node, where: str):

@@ -5,7 +5,8 @@ Usage::
     python tests/fuzz/run_atheris.py TARGET [libFuzzer options]
     python tests/fuzz/run_atheris.py ply -max_total_time=3600 -rss_limit_mb=2048 corpus-ply/
 
-TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, dae, amf, vtp, scene, scene_steps). The run starts from the
+TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, dae, amf, vtp, scene, scene_steps, urdf, mjcf,
+sdf, robot_fill). The run starts from the
 target's seeds (written to the corpus folder if it is empty); any exception other than a
 P3DError, a crash, a timeout or a memory blow-up stops it with the input that caused it, which
 then belongs in ``tests/fuzz/corpus/TARGET/`` (docs/fuzzing.md).
@@ -28,6 +29,13 @@ with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.io.vtp  # noqa: F401
     import p3d_cli.constraints.scene  # noqa: F401 - the scene targets' code, instrumented too
     import p3d_cli.constraints.simulation  # noqa: F401
+    import p3d_cli.robots  # noqa: F401 - the robot targets' readers, checks and fill
+    import p3d_cli.robots.check  # noqa: F401
+    import p3d_cli.robots.fill  # noqa: F401
+    import p3d_cli.robots.mjcf  # noqa: F401
+    import p3d_cli.robots.sdf  # noqa: F401
+    import p3d_cli.robots.urdf  # noqa: F401
+    import p3d_cli.robots.xmltree  # noqa: F401
     from targets import TARGETS, seeds
 
 

@@ -98,6 +98,10 @@ def seeds(name: str) -> list[bytes]:
         return [_amf(), _zipped(_amf())]
     if name == "vtp":
         return [_vtp(False), _vtp(True), _legacy_vtk()]
+    if name in ROBOT_SEEDS:
+        return list(ROBOT_SEEDS[name])
+    if name == "robot_fill":
+        return [seed for seeds_ in ROBOT_SEEDS.values() for seed in seeds_]
     raise KeyError(name)
 
 
@@ -191,6 +195,90 @@ def _legacy_vtk() -> bytes:
     return (f"# vtk DataFile Version 3.0\ntet\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n{points}\n"
             "METADATA\nINFORMATION 0\n\n"
             f"POLYGONS 4 16\n{cells}\nTRIANGLE_STRIPS 1 5\n4 1 2 3 0\nPOINT_DATA 4\n").encode()
+#: Robot descriptions the robot targets start from: primitives only (no mesh to read), with the
+#: constructs fill must keep (empty and end-tagged inertials, comments, CDATA, an entity, CRLF).
+ROBOT_SEEDS = {
+    "urdf": [b"""<?xml version="1.0"?>
+<!DOCTYPE robot [<!ENTITY m "2">]>
+<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <!-- <link name="commented"/> -->
+  <link name="base"><inertial><origin xyz="0 0 0.1" rpy="0 0 0"/><mass value="&m;"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+    <collision><origin xyz="0 0 0.1" rpy="0.1 0.2 0.3"/><geometry><box size="0.1 0.2 0.3"/></geometry></collision>
+    <visual><geometry><cylinder radius="0.05" length="0.2"/></geometry></visual></link>
+  <link name="arm"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <link name="empty"/>
+  <joint name="j" type="revolute"><parent link="base"/><child link="arm"/></joint>
+  <gazebo reference="base"><link name="not_a_link"/><![CDATA[ <inertial/> ]]></gazebo>
+</robot>
+""", b'<robot name="w">\r\n  <link name="a">\r\n    <collision><geometry><capsule radius="0.1" length="0.3"/>'
+        b'</geometry></collision>\r\n  </link>\r\n</robot>\r\n'],
+    "mjcf": [b"""<mujoco model="m">
+  <compiler angle="radian"/>
+  <default><geom density="500"/><default class="light"><geom density="100" contype="0" conaffinity="0"/></default></default>
+  <worldbody>
+    <body name="a" childclass="light">
+      <inertial pos="0 0 0" mass="1"
+                diaginertia="0.1 0.1 0.1"/>
+      <joint type="hinge"/>
+      <geom type="box" size="0.1 0.2 0.3" class="main"/>
+      <frame pos="0 0 1" euler="0 0 1"><geom type="capsule" fromto="0 0 0 0 0 0.2" size="0.02"/></frame>
+      <body name="tip"><inertial pos="0 0 0" mass="0.001" diaginertia="0 0 0"></inertial></body>
+      <replicate count="3" offset="0.1 0 0" sep="-"><body name="r"><geom size="0.01" mass="0.2"/></body></replicate>
+    </body>
+    <body name="b"><geom type="ellipsoid" size="0.1 0.2 0.3" quat="1 0 0 1"/><geom type="cylinder" size="0.1 0.2"/></body>
+  </worldbody>
+</mujoco>
+"""],
+    "sdf": [b"""<?xml version="1.0"?>
+<sdf version="1.9">
+  <model name="m">
+    <frame name="f" attached_to="base"><pose>0 0 1 0 0 0.5</pose></frame>
+    <link name="base"><pose>1 0 0 0 0 0</pose>
+      <inertial><pose relative_to="f">0 0 0 0 0 0</pose><mass>2</mass>
+        <inertia><ixx>1</ixx><iyy>1</iyy><izz>1</izz></inertia></inertial>
+      <collision name="c"><pose relative_to="__model__">1 0 0.5 0 0 0</pose><geometry><box><size>1 2 3</size></box>
+      </geometry></collision>
+      <visual name="v"><geometry><cylinder><radius>0.1</radius><length>0.3</length></cylinder></geometry></visual>
+    </link>
+    <link name="wheel"><collision name="s"><geometry><sphere><radius>0.2</radius></sphere></geometry></collision>
+    </link>
+    <joint name="j" type="revolute"><parent>base</parent><child>wheel</child><pose>0 0 0 0 0 0</pose></joint>
+    <model name="inner"><link name="l"><collision name="e"><geometry><ellipsoid><radii>1 2 3</radii></ellipsoid>
+    </geometry></collision></link></model>
+  </model>
+</sdf>
+"""],
+}
+_ROBOT_FOLDER: list[str] = []
+
+
+def robot_bytes(data: bytes, kind: str, fill: bool = False):
+    """Read ``data`` as a robot description (``kind``: urdf, mjcf, sdf), check it, and with
+    ``fill`` fill it from its collision geometry: the checks (or the ``FillResult``), or None
+    when p3d refused it with a ``P3DError``. A fill must give a well-formed description of
+    the same links, and filling that again must change nothing (fill is idempotent)."""
+    from p3d_cli.robots import check_robot, fill_robot, load_robot
+
+    if not _ROBOT_FOLDER:
+        _ROBOT_FOLDER.append(tempfile.mkdtemp(prefix="p3d-fuzz-robot-"))
+    path = os.path.join(_ROBOT_FOLDER[0], "model." + {"urdf": "urdf", "mjcf": "xml", "sdf": "sdf"}[kind])
+    with open(path, "wb") as f:
+        f.write(data)
+    try:
+        robot = load_robot(path)
+        checks = check_robot(robot)
+        if not fill:
+            return checks
+        result = fill_robot(robot, density=1000.0, force=True)
+    except P3DError:
+        return None
+    with open(path, "wb") as f:
+        f.write(result.data)
+    again = load_robot(path)
+    assert [link.name for link in again.links] == [link.name for link in robot.links]
+    assert fill_robot(again, density=1000.0, force=True).data == result.data
+    return result
 
 
 TARGETS = {
@@ -203,4 +291,14 @@ TARGETS = {
     "vtp": lambda data: measure_bytes(data, "vtp"),
     "scene": load_scene_bytes,
     "scene_steps": lambda data: load_scene_bytes(data, steps=3),
+    "urdf": lambda data: robot_bytes(data, "urdf"),
+    "mjcf": lambda data: robot_bytes(data, "mjcf"),
+    "sdf": lambda data: robot_bytes(data, "sdf"),
+    "robot_fill": lambda data: robot_bytes(data, _fill_kind(data), fill=True),
 }
+
+
+def _fill_kind(data: bytes) -> str:
+    """The format of a fill target's input, from its root element (any, once mangled: URDF)."""
+    head = data[:400]
+    return "mjcf" if b"<mujoco" in head else "sdf" if b"<sdf" in head else "urdf"

@@ -86,5 +86,9 @@ def test_every_seed_is_a_valid_input():
         for data in seeds(name):
             result = target(data)
             assert result is not None, name
-            if not name.startswith("scene"):
+            if name in ("urdf", "mjcf", "sdf"):
+                assert result and all(c.link for c in result), name
+            elif name == "robot_fill":
+                assert any(link.status == "filled" for link in result.links), name
+            elif not name.startswith("scene"):
                 assert result.properties.volume > 0, name

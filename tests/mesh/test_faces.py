@@ -69,3 +69,37 @@ def test_huge_and_tiny_coordinates_are_decided_exactly():
                   [[0, 0, 0], [1e300, 1e300, 0], [-1e300, -1e300, 0]],  # products overflow
                   [[0, 0, 0], [1e300, 1e300, 0], [-1e300, 1e300, 0]]])
     assert zero_area_faces(columns(t)).tolist() == [1]
+
+
+def _planted_faces(rng: np.random.Generator) -> np.ndarray:
+    """Faces the orientation filter cannot decide, of every kind: repeated corners (by value),
+    exactly collinear corners (dyadic and not), one-ulp slivers, signed zeros, subnormal and
+    huge coordinates (past the vectorised test's 2**±400, left to rationals)."""
+    out = []
+    for _ in range(200):
+        p, q = rng.normal(size=3), rng.normal(size=3)
+        out.append([p, p, q])                                         # a repeated corner
+        out.append([p, q, q.copy()])
+        t = rng.integers(-8, 8, size=3).astype(float)
+        out.append([t, 2 * t, 3 * t])                                 # collinear, exactly
+        out.append([p, p + (q - p) * 0.5, q])                         # collinear up to rounding
+        r = p + (q - p) * 0.25
+        out.append([p, np.nextafter(r, r + 1), q])                    # one ulp off the line
+        out.append([p * 1e-310, q * 1e-310, (p + q) * 1e-310])        # subnormal
+        out.append([p * 1e150, q * 1e150, (p + q) * 1e150])            # products past 2**996
+        out.append([[0.0, 1.0, 2.0], [-0.0, 2.0, 4.0], [0.0, 3.0, 6.0]])
+    return np.array(out, dtype=np.float64)
+
+
+def test_the_vectorised_exact_test_gives_the_rational_answers_on_planted_faces():
+    from p3d_cli.mesh.faces import _exact_zero_area, exactly_zero_area
+
+    triangles = _planted_faces(np.random.default_rng(3))
+    cols = columns(triangles)
+    want = np.array([_exact_zero_area(cols[:, :, f]) for f in range(len(triangles))])
+    zero, undecided = exactly_zero_area(cols)
+    decided = ~undecided
+    assert np.array_equal(zero[decided], want[decided])
+    assert undecided.sum() <= 400                                     # only the 2**±400 faces
+    assert np.array_equal(zero_area_faces(cols), np.flatnonzero(want))
+    assert want.sum() > 600 and (~want).sum() > 200                    # both kinds were planted

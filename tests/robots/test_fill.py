@@ -3,6 +3,7 @@ masses, centres and inertias; everything else in the file is left as it was."""
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -195,3 +196,74 @@ def test_inward_wound_mesh_is_kept(arm):
     write_stl(arm.root / "upper.stl", v, f[:, ::-1])
     result = fill_robot(load_robot(arm.urdf(), arm.packages), density=DENSITY)
     assert result.links[1].status == "kept" and "inward" in result.links[1].reason
+
+
+# Issue #25 item 4: open meshes still give an answer, said to be one.
+
+def _open_cube(arm):
+    """upper.stl with one face removed: open (the box is 40 x 60 x 200 mm)."""
+    from helpers.robot_arm import BOX_MM, box_mesh, write_stl
+
+    v, f = box_mesh(BOX_MM, (-20.0, -30.0, 0.0))
+    write_stl(arm.root / "upper.stl", v, f[:-1])
+    return v * 0.001, f
+
+
+def test_open_mesh_default_refuses_and_names_the_options(arm):
+    _open_cube(arm)
+    result = fill_robot(load_robot(arm.urdf(), arm.packages), density=DENSITY)
+    upper = result.links[1]
+    assert upper.status == "kept" and "open_mesh=shell" in upper.reason and "open_mesh=hull" in upper.reason
+    cli_run = run("robot", "fill", arm.urdf(), "--package-path", f"arm_description={arm.package}", "--density",
+                  "2700")
+    assert "--open-mesh shell (a thin shell) or --open-mesh hull" in cli_run.stderr
+
+
+def test_open_mesh_hull_is_the_closed_box_and_shell_is_exact(arm, tmp_path):
+    pytest.importorskip("scipy")
+    from helpers.robot_arm import BOX_MM
+
+    _open_cube(arm)
+    robot = load_robot(arm.urdf(), arm.packages)
+    only_box = [g for g in robot.links[1].collision if "upper.stl" in g.thing]
+    robot.links[1].collision[:] = only_box  # the box alone, to compare with closed forms
+    hull = fill_robot(robot, density=DENSITY, open_mesh="hull").links[1]
+    assert hull.status == "filled" and hull.stand_in == "convex hull of collision[0]"
+    a, b, c = (x * 0.001 for x in BOX_MM)
+    m = DENSITY * a * b * c  # the hull of an open box's corners is the box
+    assert hull.mass == pytest.approx(m, rel=1e-12)
+    # The shell: six rectangles (one missing), mass by area; closed form about the centre.
+    shell = fill_robot(robot, mass_from="declared", open_mesh="shell").links[1]
+    assert shell.status == "filled" and shell.stand_in == "thin shell" and shell.mass == 1.9
+    from p3d_cli.robots.open_mesh import shell_properties
+    from helpers.robot_arm import box_mesh
+
+    v, f = box_mesh((a, b, c), (0, 0, 0))
+    whole = shell_properties(v[f], 6.0, "box")
+    # A closed box shell of faces a*b (two), a*c, b*c: Izz = sum over faces of m_face * (...)
+    area = 2 * (a * b + a * c + b * c)
+    sigma = 6.0 / area
+    izz = sigma * (2 * a * b * (a * a + b * b) / 12  # the two z faces, lying in the plane through z = +-c/2
+                   + 2 * a * c * (a * a / 12 + b * b / 4) + 2 * b * c * (b * b / 12 + a * a / 4))
+    assert whole.inertia[2, 2] == pytest.approx(izz, rel=1e-12)
+    np.testing.assert_allclose(whole.center_of_mass, [a / 2, b / 2, c / 2], rtol=1e-15)
+    cli_run = run("robot", "fill", arm.urdf(), "--package-path", f"arm_description={arm.package}", "--density",
+                  "2700", "--open-mesh", "hull", "-o", tmp_path / "out.urdf")
+    assert cli_run.exit_code == 0 and "link 'upper': open mesh: filled from its convex hull of" in cli_run.stderr
+
+
+def test_a_shell_needs_a_mass(arm):
+    _open_cube(arm)
+    result = fill_robot(load_robot(arm.urdf(), arm.packages), density=DENSITY, open_mesh="shell")
+    assert result.links[1].status == "kept" and "a thin shell needs the link's mass" in result.links[1].reason
+
+
+def test_check_with_an_open_mesh_stand_in_says_so_in_json(arm):
+    pytest.importorskip("scipy")
+    _open_cube(arm)
+    result = run("robot", "check", arm.urdf(), "--package-path", f"arm_description={arm.package}", "--from",
+                 "collision", "--open-mesh", "hull", "--json")
+    records = {r["link"]: r for r in map(json.loads, result.stdout.splitlines())}
+    assert records["upper"]["open_mesh"] == "convex hull of collision[0]"
+    assert records["upper"]["geometry"] == "collision (convex hull of collision[0])"
+    assert records["upper"]["moment_ratios"] is not None
