@@ -13,9 +13,9 @@ from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, input
 from p3d_cli.cli.props import plural
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import OutputError, UsageError
-from p3d_cli.repair.fill import FLATNESS, MAX_EDGES, POLICIES
-from p3d_cli.repair.report import SHOWN, RepairReport, StepReport
-from p3d_cli.repair.steps import STEPS
+from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
+from p3d_cli.repairs.report import SHOWN, RepairReport, StepReport
+from p3d_cli.repairs.steps import STEPS
 
 #: Columns of ``--csv``, in order.
 CSV_COLUMNS = ("source", "output", "ok", "fixed", "changed", "written", "failed_before", "failed_after",
@@ -25,7 +25,7 @@ CSV_COLUMNS = ("source", "output", "ok", "fixed", "changed", "written", "failed_
 
 def repair_report(source: str, *, style: str, targets: dict, **options) -> Report:
     """One input repaired and its report formatted (module level: workers receive it)."""
-    from p3d_cli.repair import repair_file
+    from p3d_cli.repairs import repair_file
 
     target = targets.get(source)
     if isinstance(target, OutputError):
@@ -160,7 +160,7 @@ def _mass_text(report: RepairReport) -> str:
 def output_targets(inputs, items, out: str | None, output_format: str | None) -> tuple[dict, bool]:
     """The output of every input (None: in place or a dry run), and whether they mirror the
     inputs into a folder (one file when there is one input and ``out`` is no folder)."""
-    from p3d_cli.repair.destinations import mirrored
+    from p3d_cli.repairs.destinations import mirrored
 
     names = [item for item in items if isinstance(item, str)]
     if out is None:

@@ -1,4 +1,4 @@
-"""Slow, obviously right stand-ins for the exact tests ``p3d_cli.repair.solidity`` reaches,
+"""Slow, obviously right stand-ins for the exact tests ``p3d_cli.repairs.solidity`` reaches,
 for testing the repair steps on their own: a brute-force weld, and the nesting of axis-aligned
 boxes (for box-shaped shells, box containment is exactly shell containment)."""
 

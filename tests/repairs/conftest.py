@@ -8,7 +8,7 @@ import pytest
 
 from conftest import CUBE_FACES, CUBE_VERTICES
 from helpers.repair_oracles import box_nesting, brute_weld
-from p3d_cli.repair import solidity
+from p3d_cli.repairs import solidity
 
 
 @pytest.fixture

@@ -2,10 +2,10 @@
 with the reason.
 
 The boundary sides come from ``p3d check``'s edge grouping (edges used by one face), turned
-against their faces and joined into simple loops (``p3d_cli.repair.loops``); each loop is
-triangulated on its own (``p3d_cli.repair.fill``), never repeating an edge the mesh or an
+against their faces and joined into simple loops (``p3d_cli.repairs.loops``); each loop is
+triangulated on its own (``p3d_cli.repairs.fill``), never repeating an edge the mesh or an
 earlier fill already has. The filled faces are then tested exactly against crossing the faces
-near them (``p3d_cli.repair.solidity``): a hole whose filling would cross another face is left.
+near them (``p3d_cli.repairs.solidity``): a hole whose filling would cross another face is left.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.repair import solidity
-from p3d_cli.repair.draft import Draft, Grouping
-from p3d_cli.repair.fill import Hole, fill_hole
-from p3d_cli.repair.loops import boundary_loops
-from p3d_cli.repair.report import SHOWN, StepReport
+from p3d_cli.repairs import solidity
+from p3d_cli.repairs.draft import Draft, Grouping
+from p3d_cli.repairs.fill import Hole, fill_hole
+from p3d_cli.repairs.loops import boundary_loops
+from p3d_cli.repairs.report import SHOWN, StepReport
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,9 @@
 1. The input's topology is ``p3d check``'s (``p3d_cli.mesh.topology``): a mesh it passes is
    returned untouched, whatever steps were asked for.
 2. Otherwise the faces become a ``Draft`` on ``check``'s exact vertex ids, and the steps run in
-   the order of ``p3d_cli.repair.steps.STEPS``, each on the draft the one before left. The
+   the order of ``p3d_cli.repairs.steps.STEPS``, each on the draft the one before left. The
    edges are grouped by ``check``'s own edge code once the faces to remove are gone
-   (``p3d_cli.repair.draft.grouping``), and the orientation, the holes and the shells all read
+   (``p3d_cli.repairs.draft.grouping``), and the orientation, the holes and the shells all read
    that one grouping.
 3. The output's topology is ``check``'s again: the output is *fixed* exactly when ``p3d check``
    would pass it. Whatever it still fails is listed with the reason each step left it.
@@ -20,18 +20,18 @@ import numpy as np
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.report import TopologyReport
 from p3d_cli.mesh.topology import corner_vertex_ids, topology, topology_of_blocks
-from p3d_cli.repair.cleanup import degenerate_step, duplicate_step, weld_step
-from p3d_cli.repair.draft import Draft, Grouping, grouping
-from p3d_cli.repair.fill import FLATNESS, MAX_EDGES, POLICIES
-from p3d_cli.repair.holes import holes_step
-from p3d_cli.repair.orient import joined, orient_step, outward_step, patches
-from p3d_cli.repair.report import SHOWN, StepReport, failed_checks
-from p3d_cli.repair.steps import STEPS
+from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
+from p3d_cli.repairs.draft import Draft, Grouping, grouping
+from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
+from p3d_cli.repairs.holes import holes_step
+from p3d_cli.repairs.orient import joined, orient_step, outward_step, patches
+from p3d_cli.repairs.report import SHOWN, StepReport, failed_checks
+from p3d_cli.repairs.steps import STEPS
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """One mesh repaired (internal: what ``p3d_cli.repair.repair`` makes its report of).
+    """One mesh repaired (internal: what ``p3d_cli.repairs.repair`` makes its report of).
 
     Attributes
     ----------
@@ -67,7 +67,7 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
     where : str
         The input's name in messages (a NaN or infinite coordinate is an ``InputError`` there).
     weld, fill_holes, flatness, max_hole_edges
-        As for ``p3d_cli.repair.repair``.
+        As for ``p3d_cli.repairs.repair``.
     """
     if fill_holes not in POLICIES:
         from p3d_cli.errors import UsageError

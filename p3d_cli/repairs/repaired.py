@@ -14,12 +14,12 @@ import numpy as np
 
 from p3d_cli.errors import InputError, UsageError
 from p3d_cli.io.source import MeshSource, array_source
-from p3d_cli.repair.draft import Draft
-from p3d_cli.repair.fill import FLATNESS, MAX_EDGES
-from p3d_cli.repair.pipeline import repair_triangles
-from p3d_cli.repair.report import MassChange, RepairReport
-from p3d_cli.repair.solidity import check_tolerance
-from p3d_cli.repair.steps import resolve_steps
+from p3d_cli.repairs.draft import Draft
+from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES
+from p3d_cli.repairs.pipeline import repair_triangles
+from p3d_cli.repairs.report import MassChange, RepairReport
+from p3d_cli.repairs.solidity import check_tolerance
+from p3d_cli.repairs.steps import resolve_steps
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     """Fix what ``p3d check`` finds in a mesh, change nothing else, and say every change.
 
     A mesh that ``check`` passes comes back unchanged. Otherwise the steps run in their order
-    (``p3d_cli.repair.steps.STEPS``): ``weld`` (only with a tolerance), ``degenerate``,
+    (``p3d_cli.repairs.steps.STEPS``): ``weld`` (only with a tolerance), ``degenerate``,
     ``duplicate``, ``orient``, ``holes``, ``outward``. What they cannot fix (non-manifold edges
     and vertices, holes that are not simple and flat, self-intersections) is left and said.
 

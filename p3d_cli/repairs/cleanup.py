@@ -17,9 +17,9 @@ import numpy as np
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.edges import Edges
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
-from p3d_cli.repair import solidity
-from p3d_cli.repair.draft import Draft
-from p3d_cli.repair.report import StepReport
+from p3d_cli.repairs import solidity
+from p3d_cli.repairs.draft import Draft
+from p3d_cli.repairs.report import StepReport
 
 #: Faces per block when testing for zero area (bounded temporaries).
 _BLOCK = 1 << 14

@@ -9,7 +9,7 @@ import trimesh
 import p3d_cli as p3d
 from conftest import write_binary_stl
 from p3d_cli.errors import OutputError
-from p3d_cli.repair import repair_file
+from p3d_cli.repairs import repair_file
 from p3d_cli.io.writers import write_mesh
 
 pytestmark = pytest.mark.usefixtures("oracles")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 import p3d_cli as p3d
-from p3d_cli.repair import repair_file
+from p3d_cli.repairs import repair_file
 
 CLEAN = ("trimeshes__rockerarm.stl", "numpy-stl__rear_case.stl", "trimesh__1002_tray_bottom.STL",
          "trimesh__fuze.ply", "euclid__kitten.off", "common3d__spot_quadrangulated.obj")

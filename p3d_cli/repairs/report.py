@@ -28,7 +28,7 @@ class StepReport:
     Attributes
     ----------
     name : str
-        A key of ``p3d_cli.repair.steps.STEPS``.
+        A key of ``p3d_cli.repairs.steps.STEPS``.
     ran : bool
         False when the step was not asked for, or had nothing to work on (the mesh passed
         ``check`` already).

@@ -19,7 +19,7 @@ only flipped when an edge says it disagrees with most of its patch.
 volume is positive when it is wound outward. A solid's shells are outward where the region
 inside them is solid and inward around a cavity: a shell inside an odd number of others is a
 cavity. The step flips whole patches only, to that parity, with the nesting decided exactly
-(``p3d_cli.repair.solidity``).
+(``p3d_cli.repairs.solidity``).
 """
 
 from __future__ import annotations
@@ -30,9 +30,9 @@ import numpy as np
 
 from p3d_cli.mesh.edges import Edges
 from p3d_cli.mesh.shells import _numbered, chunked_roots, shells
-from p3d_cli.repair import solidity
-from p3d_cli.repair.draft import Draft
-from p3d_cli.repair.report import StepReport
+from p3d_cli.repairs import solidity
+from p3d_cli.repairs.draft import Draft
+from p3d_cli.repairs.report import StepReport
 
 #: Sides per arc chunk of the union-find.
 _STEP = 1 << 16

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import p3d_cli as p3d
-from p3d_cli.repair import repair
+from p3d_cli.repairs import repair
 
 pytestmark = pytest.mark.usefixtures("oracles")
 

@@ -11,11 +11,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from p3d_cli.errors import UsageError
-from p3d_cli.repair.draft import draft_edges
-from p3d_cli.repair.fill import fill_hole
-from p3d_cli.repair.loops import boundary_loops
-from p3d_cli.repair.orient import patches
-from p3d_cli.repair.steps import resolve_steps
+from p3d_cli.repairs.draft import draft_edges
+from p3d_cli.repairs.fill import fill_hole
+from p3d_cli.repairs.loops import boundary_loops
+from p3d_cli.repairs.orient import patches
+from p3d_cli.repairs.steps import resolve_steps
 
 DEFAULT = ("degenerate", "duplicate", "orient", "holes", "outward")
 
