@@ -2,11 +2,11 @@
 
 The benchmarks run this as a child process, so that their timing parent never imports numpy:
 
-    python benchmarks/torus.py stl U V PATH --at X Y Z [--open]   # binary STL, float32
+    python benchmarks/torus.py stl U V PATH --at X Y Z [--open] [--inward]   # binary STL, float32
     python benchmarks/torus.py ply U V PATH --at X Y Z [--soup]   # binary PLY, float64
 
 ``--at`` moves the torus's centre. ``--open`` removes the first two faces, which meet at a
-corner: two holes, six boundary edges. ``--soup`` gives every triangle its own three vertices,
+corner: two holes, six boundary edges. ``--inward`` winds every face the other way. ``--soup`` gives every triangle its own three vertices,
 shrunk by 2^-20 towards its centroid, so that no two triangles share an edge.
 """
 
@@ -67,10 +67,13 @@ def main(argv=None) -> None:
     parser.add_argument("--at", type=float, nargs=3, default=(0.0, 0.0, 0.0))
     parser.add_argument("--open", action="store_true", help="remove the first two faces")
     parser.add_argument("--soup", action="store_true", help="no two triangles share an edge")
+    parser.add_argument("--inward", action="store_true", help="wind every face inward")
     args = parser.parse_args(argv)
     vertices, faces = grid_torus(args.u, args.v, args.at)
     if args.open:
         faces = faces[2:]
+    if args.inward:
+        faces = faces[:, ::-1]
     if args.format == "stl":
         write_stl(args.path, vertices.astype(np.float32)[faces])
         return

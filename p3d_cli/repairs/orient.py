@@ -121,16 +121,16 @@ def _pair_components(face_count: int, edges: Edges):
     return _numbered(chunked_roots(face_count, arcs))
 
 
-def patch_volumes(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, count: int) -> np.ndarray:
-    """Signed volume of every patch: tetrahedra from the patch's own first vertex (so a patch
-    far from the origin keeps its digits), in float64."""
+def patch_volumes(triangles: np.ndarray, labels: np.ndarray, count: int) -> np.ndarray:
+    """Signed volume of every patch of ``triangles`` ``(k, 3, 3)``: tetrahedra from the patch's
+    own first corner (so a patch far from the origin keeps its digits), in float64."""
     origin = np.zeros((count, 3))
-    origin[labels[::-1]] = points[faces[::-1, 0]]
+    origin[labels[::-1]] = triangles[::-1, 0]
     total = np.zeros(count)
-    for lo in range(0, len(faces), _STEP):
-        f, lab = faces[lo:lo + _STEP], labels[lo:lo + _STEP]
+    for lo in range(0, len(triangles), _STEP):
+        block, lab = triangles[lo:lo + _STEP].astype(np.float64), labels[lo:lo + _STEP]
         o = origin[0] if count == 1 else origin[lab]
-        a, b, c = (points[f[:, k]].astype(np.float64) - o for k in range(3))
+        a, b, c = (block[:, k] - o for k in range(3))
         b -= a
         c -= a
         det = a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1]) + a[:, 1] * (b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2]) \
@@ -188,9 +188,12 @@ def joined(found: Patches, holes) -> Patches:
     return Patches(labels, found.count, np.zeros(labels.size, dtype=bool), merged[found.nonorientable])
 
 
-def outward_step(draft: Draft, found: Patches, open_patches: np.ndarray) -> tuple[Draft, StepReport]:
+def outward_step(draft: Draft, triangles: np.ndarray, found: Patches,
+                 open_patches: np.ndarray) -> tuple[Draft, StepReport, np.ndarray]:
     """Flip every closed patch whose winding does not match its nesting (outward at even
-    depth, a cavity at odd); ``open_patches`` take no part."""
+    depth, a cavity at odd); ``open_patches`` take no part. ``triangles`` are the draft's
+    faces as triangles (``Draft.output_triangles``). Returns the draft, the report and the
+    faces flipped."""
     labels, count = found.labels, found.count
     closed = np.ones(count, dtype=bool)
     closed[open_patches] = False
@@ -198,7 +201,7 @@ def outward_step(draft: Draft, found: Patches, open_patches: np.ndarray) -> tupl
     present = np.zeros(count, dtype=bool)
     present[labels] = True                 # patches merged into another have no face of their own
     closed &= present
-    volume = patch_volumes(draft.points, draft.faces, labels, count)
+    volume = patch_volumes(triangles, labels, count)
     flat = np.flatnonzero(closed & (volume == 0))
     closed = np.flatnonzero(closed & (volume != 0))
     notes = [f"the shell from face {first_origin(draft, labels, p)} encloses no volume: its outward side is "
@@ -214,7 +217,7 @@ def outward_step(draft: Draft, found: Patches, open_patches: np.ndarray) -> tupl
     except solidity.Unavailable:
         notes.append(f"{closed.size} closed shells: which lie inside which needs the exact nesting test, "
                      "which this build of p3d lacks; left as they were")
-        return draft, StepReport("outward", ran=False, notes=tuple(notes))
+        return draft, StepReport("outward", ran=False, notes=tuple(notes)), np.zeros(0, dtype=np.int64)
     wrong = [p for p in closed.tolist() if (volume[p] > 0) != (depth[p] % 2 == 0)]
     flip = np.isin(labels, np.array(wrong, dtype=np.int64))
     flipped = np.flatnonzero(flip)
@@ -225,4 +228,4 @@ def outward_step(draft: Draft, found: Patches, open_patches: np.ndarray) -> tupl
                            "closed_shells": int(closed.size), "cavities": sum(depth[p] % 2 for p in closed.tolist())},
         faces=tuple(int(f) for f in draft.origin[flipped] if f >= 0),
         new_faces=tuple(int(f) for f in flipped if draft.origin[f] < 0), places=places, notes=tuple(notes))
-    return (draft.flip(flip) if flipped.size else draft), report
+    return (draft.flip(flip) if flipped.size else draft), report, flipped

@@ -15,10 +15,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import dataclasses
+
 import numpy as np
 
 from p3d_cli.io.source import array_source
-from p3d_cli.mesh.report import TopologyReport
+from p3d_cli.mesh.report import Shell, TopologyReport
 from p3d_cli.mesh.topology import corner_vertex_ids, topology, topology_of_blocks
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
 from p3d_cli.repairs.draft import Draft, Grouping, grouping
@@ -36,13 +38,16 @@ class Outcome:
     Attributes
     ----------
     draft : Draft or None
-        The repaired faces; None when the input passed ``check`` (nothing changed).
+        The repaired faces; None when no vertex ids were needed (nothing changed, or every face
+        was turned round).
     triangles : (k, 3, 3)
         The output's triangles (``Draft.output_triangles``; the input's when nothing changed).
     before, after : TopologyReport
     steps : tuple of StepReport
         Every step, in order.
     unfixed : tuple of str
+    changed : bool
+        Whether any face was removed, flipped, moved or added.
     """
 
     draft: Draft | None
@@ -51,6 +56,7 @@ class Outcome:
     after: TopologyReport
     steps: tuple[StepReport, ...]
     unfixed: tuple[str, ...]
+    changed: bool
 
 
 def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: str = "<array>",
@@ -79,7 +85,9 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
     if not failed_checks(before):
         clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
                                    if name in steps else ()) for name in STEPS)
-        return Outcome(None, triangles, before, before, clean, ())
+        return Outcome(None, triangles, before, before, clean, (), False)
+    if _only_inward(before, steps):
+        return _turned_out(triangles, before, steps)
     ids, _ = corner_vertex_ids(triangles)
     points = np.empty((int(ids.max()) + 1, 3), dtype=triangles.dtype)
     points[ids.ravel()] = triangles.reshape(-1, 3)
@@ -115,14 +123,45 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         found = joined(found, holes.holes)
         open_faces = np.union1d(_open_faces(grouped, "orient" in steps, boundary=False), holes.open_faces)
     shells_left: tuple[str, ...] = ()
+    out = draft.output_triangles()
     if "outward" in steps:
         open_patches = np.unique(found.labels[open_faces])
-        draft, reports["outward"] = outward_step(draft, found, open_patches)
+        draft, reports["outward"], turned = outward_step(draft, out, found, open_patches)
+        out[turned] = out[turned][:, [0, 2, 1]]
         shells_left = reports["outward"].notes
-    out = draft.output_triangles()
     after = topology(out)
     ordered = tuple(reports[name] for name in STEPS)
-    return Outcome(draft, out, before, after, ordered, unfixed(after, steps, holes_left, shells_left))
+    return Outcome(draft, out, before, after, ordered, unfixed(after, steps, holes_left, shells_left),
+                   draft.changed)
+
+
+def _only_inward(before: TopologyReport, steps: tuple[str, ...]) -> bool:
+    """Whether the input's one fault is being one shell wound inward: every edge used once
+    each way, nothing to remove or weld, and a negative volume."""
+    return (before.shells == 1 and before.volume < 0 and "outward" in steps and "weld" not in steps
+            and before.closed and before.degenerate_faces == 0 and before.duplicate_faces == 0)
+
+
+def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str, ...]) -> Outcome:
+    """One closed shell wound inward: every face turned round, with no vertex ids or edges
+    needed. Turning every face negates every signed term of ``check``'s sums exactly (the
+    cross product of the swapped sides is the negated one, bit for bit, and so are the sums),
+    so the output's topology is the input's with its volumes negated: nothing to check again."""
+    n = len(triangles)
+    out = triangles[:, [0, 2, 1]]
+    after = dataclasses.replace(before, volume=-before.volume,
+                                shell_list=tuple(Shell(s.faces, s.first_face, -s.volume) for s in before.shell_list))
+    reports = {name: StepReport(name, ran=name in steps) for name in STEPS}
+    for name, counts in (("degenerate", {"faces_removed": 0}), ("duplicate", {"faces_removed": 0}),
+                         ("orient", {"faces_flipped": 0, "shells": 0}),
+                         ("holes", {"holes_filled": 0, "holes_left": 0, "faces_added": 0})):
+        if name in steps:
+            reports[name] = StepReport(name, counts=counts)
+    reports["outward"] = StepReport(
+        "outward", counts={"shells_flipped": 1, "faces_flipped": n, "closed_shells": 1, "cavities": 0},
+        faces=tuple(range(n)), places=({"shell_first_face": 0, "faces": n, "signed_volume_before": before.volume,
+                                         "cavity": False},))
+    return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS), (), True)
 
 
 def _open_faces(grouped: Grouping, oriented: bool, boundary: bool = True) -> np.ndarray:

@@ -144,7 +144,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
                                flatness=float(flatness), max_hole_edges=int(max_hole_edges))
     out = outcome.triangles
     before = measure.props(triangles).properties
-    after = before if outcome.draft is None else measure.props(out).properties
+    after = measure.props(out).properties if outcome.changed else before
     notes = []
     if mesh.objects:
         notes.append(f"the file's {len(mesh.objects)} {mesh.object_kind or 'objects'} were repaired and are "
@@ -152,7 +152,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     if mesh.length_unit:
         notes.append(f"coordinates and mass properties are in the file's unit ({mesh.length_unit})")
     report = RepairReport(solid.source, mesh.format, outcome.steps, outcome.before, outcome.after,
-                          MassChange(before, after), changed=outcome.draft is not None and outcome.draft.changed,
+                          MassChange(before, after), changed=outcome.changed,
                           unfixed=outcome.unfixed, notes=tuple(notes))
     return RepairedMesh(out, mesh.coordinate_dtype, outcome.draft), report
 

@@ -17,8 +17,12 @@ from p3d_cli.mesh.report import TopologyReport
 from p3d_cli.mesh.verdicts import CHECKS, passes
 from p3d_cli.results import MassProperties
 
-#: Locations listed per step in the text report (the record lists every one).
+#: Locations listed per step in the text report (the record lists every face).
 SHOWN = 5
+#: Places (holes, merged vertices, repeated faces) a step's record describes one by one, and
+#: notes it keeps; the counts and face numbers are always complete.
+PLACES = 1000
+NOTES = 20
 
 
 @dataclass(frozen=True)
@@ -40,9 +44,10 @@ class StepReport:
         Output faces it added.
     places : tuple of dict
         Where it acted or what it left, one record each (a hole: its edge count, centre, size,
-        flatness, whether filled and why not; a shell: its first face, faces, volume).
+        flatness, whether filled and why not; a shell: its first face, faces, volume); the
+        first ``PLACES``.
     notes : tuple of str
-        What it left as it was, and why.
+        What it left as it was, and why (the first ``NOTES``).
     """
 
     name: str
@@ -53,15 +58,37 @@ class StepReport:
     places: tuple[dict, ...] = ()
     notes: tuple[str, ...] = ()
 
+    def __post_init__(self) -> None:
+        notes = list(self.notes)
+        if len(self.places) > PLACES:
+            notes.append(f"{len(self.places) - PLACES} more places not described (the first {PLACES} are)")
+            object.__setattr__(self, "places", tuple(self.places[:PLACES]))
+        if len(notes) > NOTES:
+            notes = notes[:NOTES - 1] + [f"and {len(notes) - NOTES + 1} more notes like these"]
+        object.__setattr__(self, "notes", tuple(notes))
+
     @property
     def changes(self) -> int:
         """Faces this step removed, flipped, moved or added."""
         return len(self.faces) + len(self.new_faces)
 
     def to_dict(self) -> dict:
-        return {"step": self.name, "ran": self.ran, "counts": dict(self.counts), "faces": list(self.faces),
-                "new_faces": list(self.new_faces), "places": [dict(p) for p in self.places],
+        """The step's record; face numbers as runs ``[first, last]`` (inclusive), so that a step
+        that turns a million faces round says so in one pair."""
+        return {"step": self.name, "ran": self.ran, "counts": dict(self.counts), "faces": runs(self.faces),
+                "new_faces": runs(self.new_faces), "places": [dict(p) for p in self.places],
                 "notes": list(self.notes)}
+
+
+def runs(numbers) -> list[list[int]]:
+    """``[[first, last], ...]``: ascending integers as runs of consecutive ones."""
+    values = np.unique(np.asarray(numbers, dtype=np.int64))
+    if values.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(values) != 1)
+    starts = np.r_[values[0], values[breaks + 1]]
+    ends = np.r_[values[breaks], values[-1]]
+    return [[int(a), int(b)] for a, b in zip(starts.tolist(), ends.tolist())]
 
 
 @dataclass(frozen=True)

@@ -53,8 +53,9 @@ def test_json_record_says_every_change(tmp_path):
     steps = {s["step"]: s for s in record["steps"]}
     assert list(steps) == ["weld", "degenerate", "duplicate", "orient", "holes", "outward"]
     assert not steps["weld"]["ran"]
-    assert steps["duplicate"]["faces"] == [12] and steps["duplicate"]["places"] == [{"face": 12, "repeats": 5}]
-    assert steps["orient"]["faces"] == [0]
+    assert steps["duplicate"]["faces"] == [[12, 12]] and steps["duplicate"]["places"] == [{"face": 12, "repeats": 5}]
+    assert steps["orient"]["faces"] == [[0, 0]]
+    assert steps["outward"]["faces"] == [[0, 11]]           # runs of face numbers, first and last
     assert steps["outward"]["counts"]["faces_flipped"] == 12
     assert record["mass"]["after"]["volume"] == 1.0 and record["mass"]["relative_volume_change"] >= 0
     assert set(record["mass"]["before"]) == {"volume", "center_of_mass", "inertia"}
