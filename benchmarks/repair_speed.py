@@ -37,13 +37,13 @@ import json
 import os
 import platform
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
-from installed import cache_bytecode, run_once
+from check_speed import time_all
+from installed import cache_bytecode
 
 #: name -> torus.py flags of a 1M-triangle grid torus (u = 1000, v = 500).
 MESHES = {"closed": [], "open": ["--open"], "inward": ["--inward"]}
@@ -83,24 +83,6 @@ def commands(paths: dict, out: str, admesh: str | None) -> dict:
             tools[f"admesh -e -f -d {name}"] = ([admesh, "-e", "-f", "-d", "-b", out, paths[name]],
                                                 added(2 if name == "open" else 0))
     return tools
-
-
-def time_all(tools: dict, runs: int, env) -> dict:
-    results = {name: {"wall": [], "cpu": [], "rss": []} for name in tools}
-    names = list(tools)
-    for name in names:                              # warm-up, and the answer checks
-        argv, ok = tools[name]
-        *_, status, text = run_once(argv, env)
-        if not ok(status, text):
-            raise SystemExit(f"{name}: unexpected answer (exit {status}): {text[:400]}")
-    for r in range(runs):
-        shift = r % len(names)
-        for name in names[shift:] + names[:shift]:
-            wall, cpu, rss, _, _ = run_once(tools[name][0], env)
-            results[name]["wall"].append(wall)
-            results[name]["cpu"].append(cpu)
-            results[name]["rss"].append(rss)
-    return {name: {k: statistics.median(v) for k, v in got.items()} for name, got in results.items()}
 
 
 def table(medians: dict, runs: int, load: tuple) -> str:

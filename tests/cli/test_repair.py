@@ -133,3 +133,18 @@ def test_help_has_examples_and_every_step():
     assert "p3d repair part.stl -o fixed.stl" in result.output
     for step in ("weld", "degenerate", "duplicate", "orient", "holes", "outward"):
         assert step in result.output
+
+
+def test_ci_reports_name_what_was_not_fixed(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "bent.stl", BENT)
+    junit, summary = tmp_path / "repair.xml", tmp_path / "summary.json"
+    result = run("repair", tmp_path / "open.stl", tmp_path / "bent.stl", "-o", tmp_path / "out",
+                 "--report", f"junit:{junit}", "--summary", f"json:{summary}")
+    assert result.exit_code == 1
+    xml = junit.read_text()
+    assert xml.count("<testcase") == 2 and xml.count("<failure") == 1
+    assert 'type="not-fixed"' in xml and "4 boundary edges remain" in xml
+    record = json.loads(summary.read_text())
+    assert record["command"] == "p3d repair" and record["ok"] == 1 and record["failed"] == 1
+    assert "2 files: 1 ok, 1 not fixed" in result.stderr
