@@ -131,6 +131,8 @@ def _step_text(step: StepReport) -> str:
         filled, left = c.get("holes_filled", 0), c.get("holes_left", 0)
         parts.append(f"{plural(filled, 'hole')} filled" + (f" with {plural(c['faces_added'], 'new face')} "
                                                           f"({_faces(step.new_faces)})" if filled else ""))
+        if c.get("faces_split"):
+            parts.append(f"{plural(c['faces_split'], 'face')} split at a T-junction ({_faces(step.faces)})")
         if left:
             parts.append(f"{left} left")
     elif step.name == "outward":

@@ -75,6 +75,16 @@ class Draft:
             flipped=np.concatenate([self.flipped, np.zeros(j, dtype=bool)]),
             moved=np.concatenate([self.moved, np.zeros(j, dtype=bool)]))
 
+    def replaced(self, rows: np.ndarray, faces: np.ndarray) -> "Draft":
+        """Faces ``rows`` given new corners ``faces`` ``(r, 3)`` (a face split: the same input face,
+        made smaller); they are marked ``moved``, so their coordinates come from ``points``."""
+        rows = np.asarray(rows, dtype=np.int64)
+        new = self.faces.copy()
+        new[rows] = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        moved = self.moved.copy()
+        moved[rows] = True
+        return dataclasses.replace(self, faces=new, moved=moved)
+
     def renamed(self, target: np.ndarray, points: np.ndarray | None = None) -> "Draft":
         """Every vertex id ``v`` replaced by ``target[v]`` (a weld); faces whose corners changed
         are marked ``moved``."""

@@ -59,6 +59,10 @@ class Hole:
         The filling triangles (vertex ids), or None when the hole is left.
     reason : str or None
         Why it was left.
+    replaced : (int, (3,) int64) or None
+        A hole of no area closed by splitting the face across it
+        (``p3d_cli.repairs.junctions``): that face, and the triangle that takes its place
+        (``triangles`` are then the split's other triangles).
     """
 
     vertices: np.ndarray
@@ -68,12 +72,15 @@ class Hole:
     flatness: float
     triangles: np.ndarray | None = None
     reason: str | None = None
+    replaced: tuple[int, np.ndarray] | None = None
 
     @property
     def filled(self) -> bool:
         return self.triangles is not None
 
 
+#: Why a loop of collinear corners is left (``p3d_cli.repairs.holes`` tries a face split then).
+NO_AREA = "it encloses no area (its edges are collinear: a slit or a T-junction)"
 #: Fill policies: ``flat`` fills loops within the flatness limit, ``any`` every simple loop.
 POLICIES = ("flat", "any")
 #: Default flatness limit: a corner at most this fraction of the loop's size off its plane
@@ -118,7 +125,7 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
         return Hole(vertices, k, where, size, flat, None, reason)
 
     if k < 3 or length == 0 or size == 0:
-        return left("it encloses no area (its edges are collinear: a slit or a T-junction)")
+        return left(NO_AREA)
     deviation = float(np.abs(relative @ (normal / length)).max())
     flat = deviation / size
     if policy == "flat" and flat > flatness:

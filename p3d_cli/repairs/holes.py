@@ -17,7 +17,8 @@ import numpy as np
 
 from p3d_cli.repairs import solidity
 from p3d_cli.repairs.draft import Draft, Grouping
-from p3d_cli.repairs.fill import Hole, fill_hole
+from p3d_cli.repairs.fill import NO_AREA, Hole, fill_hole
+from p3d_cli.repairs.junctions import junction_split
 from p3d_cli.repairs.loops import boundary_loops
 from p3d_cli.repairs.report import SHOWN, StepReport
 
@@ -74,17 +75,37 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
         else:
             hole = fill_hole(draft.points, v[loop], policy=policy, flatness=flatness, max_edges=max_edges,
                              has_edge=has_edge)
+            if not hole.filled and hole.reason == NO_AREA:
+                hole = _split_junction(draft, hole, face[loop], has_edge)
         if hole.filled:
             has_edge.add(hole.triangles)
+            if hole.replaced is not None:
+                has_edge.add(hole.replaced[1].reshape(1, 3))
         found.append((hole, face[loop]))
     start = len(draft.faces)
-    new = [hole.triangles for hole, _ in found if hole.filled]
-    filled = draft.add(np.concatenate(new)) if new else draft
-    found, note = _refuse_crossings(filled, found, start)
-    new = [hole.triangles for hole, _ in found if hole.filled]
-    draft = draft.add(np.concatenate(new)) if new else draft
+    found, note = _refuse_crossings(_applied(draft, found), found, start)
     result = Holes(tuple(found), face[stray])
+    draft = _applied(draft, found)
     return draft, _report(draft, result, start, note), result
+
+
+def _applied(draft: Draft, found) -> Draft:
+    """The draft with the holes' fillings: split faces replaced, new faces after the others."""
+    split = [hole.replaced for hole, _ in found if hole.filled and hole.replaced is not None]
+    if split:
+        draft = draft.replaced(np.array([f for f, _ in split]), np.array([t for _, t in split]))
+    new = [hole.triangles for hole, _ in found if hole.filled]
+    return draft.add(np.concatenate(new)) if new else draft
+
+
+def _split_junction(draft: Draft, hole: Hole, around: np.ndarray, has_edge) -> Hole:
+    """A hole of no area closed by splitting the face across its long side, if it is a
+    T-junction (``p3d_cli.repairs.junctions``); else the hole as it was."""
+    found = junction_split(draft.points, draft.faces, hole.vertices, around, has_edge)
+    if found is None:
+        return hole
+    face, triangles = found
+    return dataclasses.replace(hole, triangles=triangles[1:], replaced=(face, triangles[0]), reason=None)
 
 
 def lone_face(draft: Draft, vertices: np.ndarray, face: int) -> Hole:
@@ -156,6 +177,8 @@ def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepRe
             count = len(hole.triangles)
             place["new_faces"] = list(range(position, position + count))
             position += count
+            if hole.replaced is not None:
+                place["split_face"] = int(draft.origin[hole.replaced[0]])
         else:
             place["reason"] = hole.reason
             notes.append(f"hole of {hole.edges} edges at {_point(hole.centre)} left: {hole.reason}")
@@ -166,10 +189,14 @@ def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepRe
     if note:
         notes.append(note)
     filled = sum(1 for hole, _ in result.holes if hole.filled)
-    return StepReport("holes", counts={"holes_filled": filled, "holes_left": len(result.holes) - filled,
-                                       "faces_added": position - start,
-                                       "boundary_edges_not_in_loops": int(result.stray.size)},
-                      new_faces=tuple(range(start, position)), places=tuple(places), notes=tuple(notes))
+    split = sorted(int(draft.origin[hole.replaced[0]]) for hole, _ in result.holes
+                   if hole.filled and hole.replaced is not None)
+    counts = {"holes_filled": filled, "holes_left": len(result.holes) - filled, "faces_added": position - start,
+              "boundary_edges_not_in_loops": int(result.stray.size)}
+    if split:
+        counts["faces_split"] = len(split)
+    return StepReport("holes", counts=counts, faces=tuple(split), new_faces=tuple(range(start, position)),
+                      places=tuple(places), notes=tuple(notes))
 
 
 def _point(p) -> str:

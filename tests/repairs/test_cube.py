@@ -156,3 +156,22 @@ def test_steps_left_out_are_not_run_and_say_so(cube):
     assert not report.step("holes").ran and not report.fixed
     assert report.unfixed == ("closed: 4 boundary edges remain (the holes step was not asked for)",)
     assert mesh.triangles.tobytes() == cube[2:].tobytes()
+
+
+def test_a_sliver_in_the_surface_is_removed_and_its_t_junction_closed(cube):
+    """A cap sliver (0, 1, m), m the midpoint of edge 0-1, between the bottom face and the side
+    face split at m: removing it leaves a hole of no area, closed by splitting the bottom face
+    at m. Nothing moves; the volume stays exactly 1."""
+    v0, v1, v5 = cube[4][0], cube[4][1], cube[4][2]              # face 4 is (0, 1, 5): y = 0
+    m = (v0 + v1) / 2
+    side = np.array([[v0, m, v5], [m, v1, v5]])
+    sliver = np.array([[v0, v1, m]])
+    broken = np.concatenate([cube[:4], side, cube[5:], sliver])
+    mesh, report = repair(broken)
+    assert report.failed_before == ("no-degenerate",)
+    assert report.step("degenerate").faces == (13,)
+    holes = report.step("holes")
+    assert holes.counts["faces_split"] == 1 and holes.faces == (0,) and holes.new_faces == (13,)
+    assert holes.places[0]["split_face"] == 0
+    assert report.fixed and exact_volume(mesh.triangles) == 1
+    untouched_rows_equal(mesh.triangles[1:], broken[1:13], range(12))

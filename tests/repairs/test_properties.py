@@ -65,7 +65,10 @@ def test_repairs_never_fail_and_keep_their_word(triangles):
     assert len(out) == len(triangles) - len(removed) + len(added)
     kept = [f for f in range(len(triangles)) if f not in removed]
     flipped = set(report.step("orient").faces) ^ set(report.step("outward").faces)
+    split = set(report.step("holes").faces)
     for row, f in enumerate(kept):           # untouched, or the same corners turned round
+        if f in split:
+            continue
         expected = triangles[f][[0, 2, 1]] if f in flipped else triangles[f]
         assert out[row].tobytes() == expected.tobytes()
     assert list(added) == list(range(len(kept), len(out)))
