@@ -222,6 +222,11 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     unknown = [name for name in required if name not in CHECKS]
     if unknown:
         raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
+    assembly = _assembly(thing) if format is None else None
+    if assembly is not None:   # each mesh part on its own (p3d_cli.assembly_check)
+        from p3d_cli.assembly_check import check_assembly
+
+        return check_assembly(assembly, check, required, min_volume, max_faces)
     solid = as_solid(thing, format=format, stdin=stdin)
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",

@@ -20,6 +20,9 @@ settings.register_profile("dev", max_examples=60, deadline=None)
 settings.register_profile("thorough", max_examples=1000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
+# Every --json record a test makes is validated against the package's schema of its kind.
+pytest_plugins = ["helpers.record_schemas"]
+
 REPO = Path(__file__).resolve().parents[1]
 REAL_MESHES = REPO.parent / "shared" / "real-meshes"
 

@@ -28,7 +28,10 @@ CUBE_F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5,
 def cli_json(*args, stdin=None) -> dict:
     result = CliRunner().invoke(cli, ["props", *args, "--json"], input=stdin)
     assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
+    record = json.loads(result.stdout)
+    # what the command line adds to the library's record: the record's version, the settings used
+    assert record.pop("schema_version") == 1 and record.pop("settings") is None
+    return record
 
 
 def comparable(record: dict) -> dict:

@@ -81,3 +81,21 @@ def test_ci_runs_the_readme_test_command_as_written():
                           capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.rstrip("\n") == _readme_blocks()[1]
+
+
+def test_docs_name_only_install_lines_that_work():
+    """p3d is not on PyPI (issue 24.4): no `pip install p3d-cli`, no `p3d-cli[extra]` to install, and
+    every extra named in an install line is one pyproject declares."""
+    try:
+        import tomllib
+    except ImportError:      # Python 3.10
+        import tomli as tomllib
+    extras = set(tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["optional-dependencies"])
+    pages = [REPO / "README.md", REPO / "CHANGELOG.md", *sorted((REPO / "docs").glob("*.md"))]
+    for page in pages:
+        for number, line in enumerate(page.read_text().splitlines(), 1):
+            for command in re.findall(r"pip install [^`\n]*", line):
+                assert "p3d-cli" not in command, f"{page.name}:{number}: {command}"
+                for named in re.findall(r"'\.\[([a-z,]+)\]'", command):
+                    assert set(named.split(",")) <= extras, f"{page.name}:{number}: {command}"
+    assert "p3d is not on PyPI" in " ".join(README.split())

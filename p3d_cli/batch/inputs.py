@@ -35,6 +35,9 @@ def expand_inputs(inputs: Iterable[str | InputError],
     for item in inputs:
         if isinstance(item, P3DError):
             yield item
+        elif "\0" in item:   # no file name holds one: the list was NUL-separated, or is not a list
+            yield InputError(item, "the name holds a NUL byte, which no file name can",
+                             "a NUL-separated list (find -print0, git ls-files -z) needs -0")
         elif item != "-" and os.path.isdir(item):
             found: list[str] = []
             passed: dict[str, list[str]] = {}

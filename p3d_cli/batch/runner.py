@@ -9,7 +9,7 @@ Where the work runs:
 - in ``jobs`` worker processes on this machine, in chunks, results in order: forked
   workers (``p3d_cli.batch.workers``), or ``multiprocessing.Pool`` where fork is unsafe; the
   default is the number of cores this process may use;
-- on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``p3d-cli[dask]``;
+- on an existing Dask cluster with ``dask=ADDRESS`` (optional extra ``dask``;
   the workers need p3d installed and must see the same paths), in chunks of files sized from
   the files' sizes (``p3d_cli.batch.chunks``), a chunk's results delivered when it is done.
 
@@ -34,6 +34,21 @@ from typing import Callable, Generator, Iterable
 from p3d_cli.batch import chunks
 from p3d_cli.batch.inputs import expand_inputs
 from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError
+
+
+class ClusterLost(P3DError):
+    """The Dask scheduler was lost (or stopped answering) part way through a batch: the
+    inputs whose results had arrived were yielded; the rest were not done. Ends the batch
+    (exit status 2); ``p3d_cli.cli.reporting.Batch`` counts what was not done."""
+
+    ends_batch = True
+
+
+#: Seconds p3d waits for a Dask scheduler: to connect (and finish the handshake), and for an
+#: answer to a ping when no result has come for ``DASK_PING`` seconds. A scheduler that is lost
+#: or silent that long ends the batch.
+DASK_TIMEOUT = 10.0
+DASK_PING = 5.0
 
 
 @dataclass(frozen=True)
@@ -142,31 +157,122 @@ def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, N
         from dask.distributed import Client
     except ImportError:
         raise MissingExtraError("dask", "needs dask.distributed, which is not installed",
-                                "pip install 'p3d-cli[dask]'") from None
-    try:
-        client = Client(address, timeout="10s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise UsageError("dask", f"cannot connect to a Dask scheduler at {address!r} ({exc})",
-                         "give the scheduler's address, e.g. tcp://host:8786") from None
+                                "install p3d's extra 'dask': pip install 'dask[distributed]>=2023.1' "
+                                "(or pip install '.[dask]' in a clone of p3d)") from None
+    _quiet_dask_logs()
+    client = _connect(Client, address)
+    lost = False
     try:
         remote = [item for item in items if item != "-"]
-        slots = sum(client.nthreads().values())  # worker threads now (0 if none has joined yet)
-        spans = chunks.plan_chunks(chunks.file_weights(remote), slots)
-        # One submit per chunk, in order: each is its own graph, so the scheduler runs them
-        # first come, first served, and results come back roughly in input order.
-        futures = [client.submit(chunks.run_chunk, (_run_packed, work, remote[span.start:span.stop]), pure=False)
-                   for span in spans]
-        results = _chunk_results(client, work, [remote[span.start:span.stop] for span in spans], futures)
+        try:
+            slots = sum(client.nthreads().values())  # worker threads now (0 if none has joined yet)
+            spans = chunks.plan_chunks(chunks.file_weights(remote), slots)
+            # One submit per chunk, in order: each is its own graph, so the scheduler runs them
+            # first come, first served, and results come back roughly in input order.
+            futures = [client.submit(chunks.run_chunk, (_run_packed, work, remote[span.start:span.stop]),
+                                     pure=False) for span in spans]
+        except (OSError, TimeoutError) as exc:
+            raise _lost(address, exc) from None
+        results = _chunk_results(client, work, [remote[span.start:span.stop] for span in spans], futures, address)
         for item in items:
             yield _unpack(item, _run_packed((work, item)) if item == "-" else next(results))
+    except ClusterLost:
+        lost = True
+        raise
     finally:
-        client.close()
+        try:
+            client.close(timeout=1 if lost else DASK_TIMEOUT)
+        except Exception:  # noqa: BLE001 - a lost cluster's client may fail to close: nothing is left to save
+            pass
 
 
-def _chunk_results(client, work, parts: list[list[str]], futures: list) -> Generator[tuple, None, None]:
+def _quiet_dask_logs() -> None:
+    """Dask's own log lines (reconnection attempts, a lost scheduler's tracebacks from its event
+    loop) would interleave with p3d's output; p3d reports a lost cluster itself, in one line.
+    Only loggers of the client's libraries, and only in a process that runs a ``--dask`` batch."""
+    import logging
+
+    names = ("distributed", "tornado", "asyncio")
+    known = [name for name in logging.root.manager.loggerDict if name.split(".")[0] in names]
+    for name in {*names, *known}:
+        logger = logging.getLogger(name)
+        logger.setLevel(logging.CRITICAL + 1)   # Dask's configuration sets levels on child loggers too
+        for handler in logger.handlers:
+            handler.setLevel(logging.CRITICAL + 1)
+
+
+def _connect(Client, address: str):
+    """A client of the scheduler at ``address``, or ``UsageError`` within ``DASK_TIMEOUT`` (plus
+    a second): Dask's own timeout covers the TCP connection, not a listener that accepts and
+    never answers, so the connection is made in a thread given that long. A thread still
+    waiting is left behind (a daemon: it does not keep the process alive)."""
+    import threading
+
+    box: dict = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = Client(address, timeout=f"{DASK_TIMEOUT:g}s", set_as_default=False)
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread below
+            box["error"] = exc
+
+    thread = threading.Thread(target=connect, name="p3d-dask-connect", daemon=True)
+    thread.start()
+    thread.join(DASK_TIMEOUT + 1)
+    hint = "give the scheduler's address, e.g. tcp://host:8786"
+    if thread.is_alive():
+        raise UsageError("dask", f"no answer from a Dask scheduler at {address!r} within {DASK_TIMEOUT:g} s "
+                         "(something listens there, but does not answer as a scheduler)", hint)
+    error = box.get("error")
+    if isinstance(error, (OSError, TimeoutError, ValueError)):
+        raise UsageError("dask", f"cannot connect to a Dask scheduler at {address!r} ({error})", hint) from None
+    if error is not None:
+        raise UsageError("dask", f"cannot connect to a Dask scheduler at {address!r} "
+                         f"({type(error).__name__}: {error})", hint) from None
+    return box["client"]
+
+
+def _lost(address: str, exc: BaseException | None = None) -> ClusterLost:
+    why = f" ({type(exc).__name__}{': ' + str(exc) if str(exc) else ''})" if exc is not None else ""
+    return ClusterLost("dask", f"lost the Dask scheduler at {address!r} part way (no answer, or the connection "
+                       f"closed){why}",
+                       f"the results that arrived are written; start the scheduler again and rerun the inputs "
+                       f"not done (p3d waits {DASK_TIMEOUT:g} s for a scheduler that stops answering)")
+
+
+def _alive(client) -> bool:
+    """Whether the scheduler answers a ping within ``DASK_TIMEOUT`` seconds."""
+    if getattr(client, "status", "running") not in ("running", "connecting"):
+        return False
+    try:
+        client.sync(client.scheduler.identity, callback_timeout=DASK_TIMEOUT)
+    except Exception:  # noqa: BLE001 - a timeout, a closed connection: no answer either way
+        return False
+    return True
+
+
+def _result(future, client, address: str):
+    """``future.result()``, pinging the scheduler whenever no result has come for ``DASK_PING``
+    seconds; ``ClusterLost`` when it is gone or silent."""
+    import asyncio
+
+    while True:
+        try:
+            return future.result(timeout=DASK_PING)
+        except (TimeoutError, asyncio.TimeoutError):   # one class from Python 3.11 on
+            if not _alive(client):
+                raise _lost(address) from None
+        except OSError as exc:   # the connection to the scheduler closed under the wait
+            raise _lost(address, exc) from None
+
+
+def _chunk_results(client, work, parts: list[list[str]], futures: list,
+                   address: str = "") -> Generator[tuple, None, None]:
     """The packed results of each chunk in turn, as each is done. A chunk that killed its
     workers (``KilledWorker``) is done again one input at a time, ahead of the rest, so that
-    only the input that kills a worker again is lost, as with forked workers."""
+    only the input that kills a worker again is lost, as with forked workers. A chunk
+    cancelled (the scheduler, or this client's connection to it, was lost) or a scheduler that
+    stops answering ends the batch: ``ClusterLost``, after every result that arrived."""
     from concurrent.futures import CancelledError
 
     from dask.distributed import KilledWorker
@@ -174,24 +280,33 @@ def _chunk_results(client, work, parts: list[list[str]], futures: list) -> Gener
     for k, (part, future) in enumerate(zip(parts, futures)):
         futures[k] = None  # the cluster may forget a chunk's results once they are taken
         try:
-            yield from future.result()
-            continue
+            results = _result(future, client, address)
         except KilledWorker as exc:
             if len(part) == 1:
                 yield _dask_failure(part[0], exc)
                 continue
-        except CancelledError as exc:  # the scheduler or this client's connection was lost
+        except CancelledError:  # the scheduler or this client's connection was lost
+            raise _lost(address) from None
+        except ClusterLost:
+            raise
+        except Exception as exc:  # noqa: BLE001 - the task itself failed on the worker (not p3d's work,
+            # which returns its errors): p3d missing there, a result that cannot be sent back
             for item in part:
-                yield _dask_failure(item, exc)
+                yield _died(item, f"the Dask worker could not run it ({type(exc).__name__}: {exc})")
+            continue
+        else:
+            yield from results
             continue
         # One at a time, ahead of the chunks still queued: a task waiting on a worker when it
         # dies counts as a suspect as well, so inputs redone side by side would be lost with
         # the culprit (Dask gives up on a task after ``allowed-failures`` such deaths).
         for item in part:
             try:
-                yield client.submit(_run_packed, (work, item), pure=False, priority=1).result()
-            except (KilledWorker, CancelledError) as exc:
+                yield _result(client.submit(_run_packed, (work, item), pure=False, priority=1), client, address)
+            except KilledWorker as exc:
                 yield _dask_failure(item, exc)
+            except CancelledError:
+                raise _lost(address) from None
 
 
 def _dask_failure(item: str, exc: BaseException) -> tuple:

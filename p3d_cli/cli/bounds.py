@@ -23,7 +23,7 @@ from p3d_cli.cli.options import (
 )
 from p3d_cli.cli.props import field, output_style, plural
 from p3d_cli.cli.reporting import Batch, Report
-from p3d_cli.cli.settings import WarningFilter
+from p3d_cli.cli.settings import WarningFilter, settings_for
 
 
 @click.command(help=f"""Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation
@@ -65,6 +65,8 @@ Examples:
 def bounds(inputs, fmt, placement, tessellate, units, output_units, as_json, fields, precision, settings, batch):
     style = output_style(as_json, batch.csv, fields, "table")
     run = Batch("p3d bounds", inputs, batch)
+    if style in ("table", "fields"):
+        run.note_settings(settings.config, "bounds", {"units": units})
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate,
@@ -83,15 +85,17 @@ def bounds_report(source: str, *, style: str, fields: tuple[str, ...] = (), prec
                   settings: WarningFilter = WarningFilter(), **options) -> Report:
     """One input's bounds in ``style`` (table, json, csv or fields), formatted where they were
     computed (module level, so that worker processes can receive it)."""
+    used = settings_for(settings.config, "bounds", source, options)
     result = measure.bounds(source, **options)
     kept = settings.keep(result.source, result.warnings)
     if style == "table":
         return Report(bounds_table(result, precision or 10), source=result.source, warnings=kept)
     record = bounds_record(result)
+    record["settings"] = used
     if style == "fields":
         text = "\t".join(output.bare(field(record, name)) for name in fields)
     elif style == "json":
-        text = output.dumps(record)
+        text = output.record_line("bounds", record)
     else:
         text = csv_row(record, precision or output.CSV_PRECISION)
     return Report(text, source=result.source, warnings=kept)
@@ -114,7 +118,7 @@ def error_line(outcome, *, style: str) -> str | None:
     record = {"source": outcome.source, "error": error_message(outcome.error)}
     if style in ("table", "fields"):
         return None if style == "table" else ""
-    return output.dumps(record) if style == "json" else csv_row(record)
+    return output.record_line("bounds", record) if style == "json" else csv_row(record)
 
 
 def bounds_record(result) -> dict:

@@ -43,18 +43,22 @@ def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), confi
     """One input's verdict in ``style`` (text, json, csv or fields), formatted where it was
     computed (module level, so that worker processes can receive it). Without ``require``, the
     project settings' ``require`` for the input applies (default: every check)."""
+    used = None
     if limits.get("require") is None:
-        limits["require"] = parse_require(tuple((config or Config()).get("require", source, ())),
-                                          where=f"{getattr(config, 'path', None)}: require")
+        config = config or Config()
+        limits["require"] = parse_require(tuple(config.get("require", source, ())),
+                                          where=config.where("require", source))
+        used = config.used("check", source)
     result = measure.check(source, **limits)
     if style == "text":
         text = check_text(result)
     else:
         record = check_record(result)
+        record["settings"] = used
         if style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record) if style == "json" else check_csv_line(record)
+            text = output.record_line("check", record) if style == "json" else check_csv_line(record)
     return Report(text, passed=result.ok, source=result.source, failures=failure_messages(result))
 
 
@@ -88,7 +92,7 @@ def error_line(outcome, *, style: str) -> str | None:
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
     if style in ("text", "fields"):
         return None if style == "text" else ""
-    return output.dumps(record) if style == "json" else check_csv_line(record)
+    return output.record_line("check", record) if style == "json" else check_csv_line(record)
 
 
 def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:
@@ -301,6 +305,8 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
     required = parse_require(require) if require else None   # None: the settings', or all
     style = output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
+    if style in ("text", "fields") and required is None:
+        run.note_settings(config, "check")
     work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
                              require=required, min_volume=min_volume, max_faces=max_faces)
     if batch.csv:

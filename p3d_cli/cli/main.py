@@ -80,8 +80,11 @@ FLAGS = {
 
 
 def error_line(text: str) -> None:
-    """Print one diagnostic line to stderr in p3d's format: ``p3d: error: <text>``."""
-    click.echo(f"p3d: error: {text}", err=True)
+    """Print one diagnostic line to stderr in p3d's format: ``p3d: error: <text>`` (control
+    characters of a file name escaped: one line, whatever the name)."""
+    from p3d_cli.cli.output import one_line
+
+    click.echo(f"p3d: error: {one_line(text)}", err=True)
 
 
 _PARAMETER = re.compile(r"\b([a-z_]+)=(\S?)")
@@ -130,8 +133,60 @@ Errors are one line on stderr: p3d: error: <where>: <what>; <how to fix>.
 """
 
 
+#: Each command's one-line summary, as ``p3d --help`` lists it: the first sentence of the
+#: command's docstring (tests/cli/test_startup.py checks that they agree). Kept here so that
+#: listing the commands imports none of them (numpy, the solver, yaml): ``p3d --help`` loads
+#: click and this module, not the ~270 modules of every command.
+SUMMARIES = {
+    "bounds": "Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation and --translate.",
+    "check": "Check that meshes are clean solids: one verdict per file, and an exit status.",
+    "config": "Show the project settings file p3d would use here, and what it sets.",
+    "diff": "Compare meshes with a baseline of their mass properties; exit 1 if anything changed.",
+    "props": "Volume, mass, centre of mass and inertia of meshes and shapes.",
+    "robot": "Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.",
+    "solve": "Solve ball, hinge and bar constraints between rigid bodies.",
+}
+
+
+#: Click 8.2's error for a command given no arguments where that means "show the help" (click
+#: 8.1, the declared minimum, prints the help and exits by itself): one name for both.
+_NO_ARGS_IS_HELP: type | None = getattr(click.exceptions, "NoArgsIsHelpError", None)
+
+
+def _shortened(text: str, width: int) -> str:
+    """``text`` cut after a whole word to fit ``width`` columns, with ``...``, as click shortens."""
+    if len(text) <= width:
+        return text
+    words: list[str] = []
+    used = 0
+    for word in text.split():
+        if used + len(word) + (1 if words else 0) > width - 3:
+            break
+        used += len(word) + (1 if words else 0)
+        words.append(word)
+    return " ".join(words).rstrip(",;:") + "..."
+
+
 class P3DGroup(click.Group):
     """A click group that turns every failure into one stderr line and a documented status."""
+
+    def format_commands(self, ctx, formatter):
+        """The command list of ``p3d --help``, from ``SUMMARIES`` where it can (no import)."""
+        rows = []
+        width = formatter.width - 6 - max((len(name) for name in self.list_commands(ctx)), default=0)
+        for name in self.list_commands(ctx):
+            summary = SUMMARIES.get(name)
+            if summary is None:       # a command added without a summary here: ask it
+                command = self.get_command(ctx, name)
+                if command is None or command.hidden:
+                    continue
+                summary = command.get_short_help_str(width)
+            else:
+                summary = _shortened(summary, width)
+            rows.append((name, summary))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if standalone_mode and hasattr(signal, "SIGPIPE"):
@@ -145,11 +200,13 @@ class P3DGroup(click.Group):
         except click.Abort:
             error_line("interrupted")
             status = 130
-        except click.exceptions.NoArgsIsHelpError as exc:
-            click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
-            status = EXIT_OK
         except click.ClickException as exc:
-            status = _usage_error(exc)
+            if _NO_ARGS_IS_HELP is not None and isinstance(exc, _NO_ARGS_IS_HELP):
+                context = getattr(exc, "ctx", None)
+                click.echo(context.get_help() if context else exc.format_message())
+                status = EXIT_OK
+            else:
+                status = _usage_error(exc)
         except P3DError as exc:
             error_line(error_message(exc))
             status = exit_status(exc)
@@ -169,7 +226,7 @@ class P3DGroup(click.Group):
 def _usage_error(exc: click.ClickException) -> int:
     ctx = getattr(exc, "ctx", None)
     command = ctx.command_path if ctx is not None else "p3d"
-    message = exc.format_message()
+    message = exc.format_message().rstrip(".")   # click ends some sentences with a full stop; ours go on
     if isinstance(exc, click.UsageError):
         error_line(f"{command}: {message}; see '{command} --help'")
         return EXIT_USAGE
@@ -223,6 +280,7 @@ class _Commands(MutableMapping):
 cli.commands = _Commands({
     "bounds": "p3d_cli.cli.bounds",
     "check": "p3d_cli.cli.check",
+    "config": "p3d_cli.cli.config",
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "render": "p3d_cli.cli.render",

@@ -146,21 +146,27 @@ def batch_options(f):
     from p3d_cli.cli.reports import parse_reports
 
     @functools.wraps(f)
-    def command(*args, files_from, null, jobs, dask, as_csv, reports, summary, **kwargs):
-        return f(*args, batch=BatchOptions(files_from, jobs, dask, as_csv, null, parse_reports(reports, summary)),
-                 **kwargs)
+    def command(*args, files_from, null, jobs, dask, as_csv, reports, summary, quiet, **kwargs):
+        jobs, dask = _environment_defaults(jobs, dask)
+        return f(*args, batch=BatchOptions(files_from, jobs, dask, as_csv, null, parse_reports(reports, summary),
+                                           quiet), **kwargs)
 
+    command = click.option("--quiet", "-q", is_flag=True,
+                           help="No progress bar, summary, settings line or warnings on stderr: only "
+                                "errors (and the results on stdout).")(command)
     command = report_options(command)
     command = click.option("--csv", "as_csv", is_flag=True,
                            help="A CSV table: a header, then one row per input (error rows fill "
                                 "the error column).")(command)
-    command = click.option("--dask", metavar="ADDRESS", default=None,
+    command = click.option("--dask", metavar="ADDRESS", default=None, envvar="P3D_DASK", show_envvar=True,
                            help="Run the batch on an existing Dask cluster (e.g. "
-                                "tcp://scheduler:8786; needs p3d-cli[dask], and p3d and the same "
-                                "paths on the workers).")(command)
+                                "tcp://scheduler:8786; needs p3d's extra 'dask', and p3d and the same "
+                                "paths on the workers). Default: $P3D_DASK, if set; --jobs on the "
+                                "command line wins over it.")(command)
     command = click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, metavar="N",
-                           help="Worker processes on this machine (default: one per core; one "
-                                "input or -j 1 runs in this process).")(command)
+                           envvar="P3D_JOBS", show_envvar=True,
+                           help="Worker processes on this machine (default: $P3D_JOBS, else one per "
+                                "core; one input or -j 1 runs in this process).")(command)
     command = click.option("--null", "-0", "null", is_flag=True,
                            help="The --files-from list is NUL-separated (git ls-files -z, find "
                                 "-print0): names are kept exactly, spaces and newlines too.")(command)
@@ -168,6 +174,26 @@ def batch_options(f):
                            help="Also read input paths from LIST, one per line (- for standard "
                                 "input).")(command)
     return command
+
+
+def _environment_defaults(jobs, dask):
+    """``--jobs`` and ``--dask`` after their environment defaults (``P3D_JOBS``, ``P3D_DASK``):
+    an option given on the command line wins over the other's environment default, so that
+    ``P3D_DASK`` set in a shell does not make ``-j 4`` a usage error (nor ``P3D_JOBS``
+    ``--dask``). An empty ``P3D_DASK`` is no address."""
+    from click.core import ParameterSource
+
+    context = click.get_current_context(silent=True)
+    if dask == "":
+        dask = None
+    if context is None or jobs is None or dask is None:
+        return jobs, dask
+    source = context.get_parameter_source
+    if source("dask") == ParameterSource.ENVIRONMENT and source("jobs") != ParameterSource.ENVIRONMENT:
+        return jobs, None
+    if source("jobs") == ParameterSource.ENVIRONMENT and source("dask") != ParameterSource.ENVIRONMENT:
+        return None, dask
+    return jobs, dask
 
 
 #: How --scale, --rotate/--quat and --translate combine; quoted in the commands' help.
@@ -279,7 +305,8 @@ def make_warning_filter(ignore, thresholds, no_config: bool):
     from p3d_cli.config import Config, load_config
 
     config = Config() if no_config else load_config()
-    limits = parse_thresholds(f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items())
+    limits = parse_thresholds((f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items()),
+                              where=config.where("warning-thresholds"))
     limits.update(parse_thresholds(thresholds))
     return WarningFilter(frozenset(ignore), limits, config)
 

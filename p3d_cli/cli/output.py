@@ -24,14 +24,61 @@ def jsonable(value):
     return value
 
 
+#: The layout version of every --json record (``schema_version``); the schemas of each kind of
+#: record are the package's ``p3d_cli/schemas/KIND.json`` (JSON Schema, draft 2020-12).
+SCHEMA_VERSION = 1
+
+#: The kinds of record, each with its schema file.
+RECORD_KINDS = ("props", "bounds", "check", "diff", "solve", "summary", "config")
+
+
+def record_line(kind: str, record: dict) -> str:
+    """One ``--json`` record of ``kind`` (``RECORD_KINDS``) as a line of JSON, with its
+    ``schema_version`` first. Every record p3d prints or writes goes through here."""
+    return dumps({"schema_version": SCHEMA_VERSION, **{k: v for k, v in record.items() if k != "schema_version"}})
+
+
+def schema(kind: str) -> dict:
+    """The JSON Schema of records of ``kind`` (shipped in the package)."""
+    from importlib.resources import files
+
+    return json.loads(files("p3d_cli").joinpath("schemas").joinpath(f"{kind}.json").read_text(encoding="utf-8"))
+
+
 def dumps(record: object) -> str:
     """One line of JSON; floats keep full precision (Python's repr round-trips float64).
 
     A path's bytes that are not UTF-8 (held by Python as surrogate escapes, ``U+DC80``-
     ``U+DCFF``) are written as ``\\udcNN`` escapes: valid JSON that Python's ``json.loads``
     and ``os.fsencode`` turn back into the original bytes."""
-    text = json.dumps(jsonable(record), ensure_ascii=False, allow_nan=False)
+    value = jsonable(record)
+    try:
+        text = json.dumps(value, ensure_ascii=False, allow_nan=False)
+    except ValueError:
+        raise _not_finite(value) from None
     return _SURROGATE.sub(lambda m: f"\\u{ord(m.group(0)):04x}", text)
+
+
+def _not_finite(value):
+    """The error for a record holding a number JSON cannot write (``inf``, ``nan``): the
+    computation overflowed float64. Named by the record's source and the first such field."""
+    from p3d_cli.errors import RangeError
+
+    def first(v, path: str) -> str | None:
+        if isinstance(v, float) and not math.isfinite(v):
+            return path
+        items = v.items() if isinstance(v, dict) else enumerate(v) if isinstance(v, list) else ()
+        for key, inner in items:
+            found = first(inner, f"{path}.{key}" if path else str(key))
+            if found is not None:
+                return found
+        return None
+
+    source = value.get("source", "") if isinstance(value, dict) else ""
+    return RangeError(str(source), f"{first(value, '') or 'a result'} is not a finite number (float64 overflowed: the "
+                      "coordinates or the placement are too large to compute with)",
+                      "scale the input down (--scale, or --units with a larger unit) or check its coordinates")
+
 
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
@@ -162,6 +209,23 @@ def shown_name(name: str, keep: str = "") -> str:
             out.append("\\\\")
         elif not ch.isprintable() and ch != " ":
             out.append(f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}")
+        else:
+            out.append(ch)
+    return "".join(out)
+
+
+def one_line(text: str) -> str:
+    """``text`` with its control characters (a file name's NUL, newline, escape) and undecodable
+    bytes as ``\\xNN`` escapes: a diagnostic stays one line and cannot drive the terminal."""
+    if text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:
+            out.append(f"\\x{code - 0xDC00:02x}")
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\x{code:02x}")
         else:
             out.append(ch)
     return "".join(out)

@@ -26,7 +26,7 @@ from p3d_cli.cli.options import (
 )
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.rounding import snapped
-from p3d_cli.cli.settings import WarningFilter
+from p3d_cli.cli.settings import WarningFilter, settings_for
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
 from p3d_cli.results import PropsResult
 
@@ -102,6 +102,8 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
                    units=units, output_units=output_units)
     measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
+    if style in ("table", "fields") or style.startswith("emit:"):
+        run.note_settings(settings.config, "props", options)
     work = functools.partial(props_report, style=style, fields=fields, strict=strict, settings=settings,
                              precision=precision, **options)
     if batch.csv:
@@ -123,12 +125,24 @@ def combined(run: Batch, work) -> int:
     bad = [item for item in run.items if not isinstance(item, str)]
     if bad:
         raise bad[0]
-    report = work(combine(run.items, "combined"))
-    for line in report.notes:
-        click.echo(line, err=True)
-    for code, text in report.warnings:
-        click.echo(f"p3d: warning: [{code}] {report.source}: {text}", err=True)
+    assembly = combine(run.items, "combined")
+    given = work.keywords.get("density") is not None or work.keywords.get("mass") is not None
+    config = work.keywords["settings"].config
+    if not given and config.paths:
+        # Each part's own [[paths]] density (the top level's stays the default of the rest).
+        import dataclasses
+
+        parts = []
+        for part in assembly.parts:
+            options = {"units": work.keywords.get("units"), "density": None, "mass": None}
+            settings_for(config, "props", part.thing, options)
+            own = options["density"] if options["density"] != config.settings.get("density") else None
+            parts.append(dataclasses.replace(part, density=own))
+        assembly = dataclasses.replace(assembly, parts=tuple(parts))
+    report = work(assembly)
+    run.record(report, "combined")      # its notes and warnings to stderr, its verdict for the reports
     click.echo(report.text)
+    run.write_reports()
     if not report.passed:
         raise CheckFailedError("--strict", "some result carries a warning (see above)",
                                "fix the mesh, or drop --strict to accept it")
@@ -153,8 +167,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
     FieldError
         A name in ``fields`` that the result does not have.
     """
-    if options.get("density") is None and options.get("mass") is None:
-        options["density"] = settings.config.get("density", src)
+    used = settings_for(settings.config, "props", src, options)
     result = measure.props(src, **options)
     kept = settings.keep(result.facts.source, result.warnings)
     if style == "table":
@@ -165,6 +178,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
         text = emit_result(style[5:], result)
     else:
         record = props_record(result)
+        record["settings"] = used
         if style == "csv":
             about = options.get("about") is not None
             rows = [{**part, "source": f"{record['source']}#{part['name']}"} for part in record.get("parts", ())]
@@ -173,7 +187,7 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
         elif style == "fields":
             text = "\t".join(output.bare(field(record, name)) for name in fields)
         else:
-            text = output.dumps(record)
+            text = output.record_line("props", record)
     failed = strict and bool(kept)
     return Report(text, passed=not failed, source=result.facts.source, warnings=kept,
                   failures=kept if failed else ())
@@ -196,7 +210,7 @@ def error_line(outcome, *, style: str, about: bool = False) -> str | None:
         return output.csv_line(props_row(record, about))
     if style == "fields":
         return ""
-    return output.dumps(record) if style == "json" else None
+    return output.record_line("props", record) if style == "json" else None
 
 
 INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"

@@ -12,19 +12,30 @@ A command's run (``p3d_cli.cli.reporting.Batch``) records one ``Entry`` per inpu
   ``::error file=PATH,title=p3d check::MESSAGE`` and ``::warning file=...::``.
 - ``--report html:DIR`` and ``github-summary:FILE``: a page with each input's picture (HTML,
   or Markdown appended to a GitHub job summary), by ``p3d_cli.render.pages``.
-- ``--summary json:FILE``: ``{"command", "inputs", "ok", "warned", "failed", "errored",
-  "skipped", "skipped_by_extension", "warnings_by_code", "exit_status"}``.
+- ``--summary json:FILE``: ``{"schema_version", "command", "inputs", "ok", "warned", "failed",
+  "errored", "not_done", "skipped", "skipped_by_extension", "warnings_by_code", "exit_status",
+  "complete"}``; ``not_done`` counts the errored inputs a batch ended part way never reached (a
+  lost Dask scheduler), and ``complete`` is false then.
+
+Every report file is written whole or not at all (``p3d_cli.io.atomic``), and a report that
+would overwrite one of the run's inputs is refused before any input is read. Before the run
+starts, each report file is replaced by an *incomplete* one (``prepare_reports``): a JUnit
+suite with one ``<error>``, a GitHub ``::error`` line, a summary with ``"complete": false``;
+so a run that is killed or interrupted never leaves the previous run's "all passed" for CI
+to publish. The finished run replaces it with the real report.
 """
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass
+from html import escape
+from pathlib import Path
 
 import click
 
-from p3d_cli.errors import InputError, UsageError
+from p3d_cli.cli import output
+from p3d_cli.errors import UsageError
 
 #: The states of one input, in the order of the summary.
 STATES = ("ok", "warned", "failed", "errored", "skipped")
@@ -98,9 +109,68 @@ def counts(entries) -> dict[str, int]:
     return out
 
 
+#: The message of a report a run has not finished (yet): killed, interrupted, or still running.
+INCOMPLETE = "the run did not finish (interrupted, killed, or still running); this report is not a result"
+
+
+def prepare_reports(options: ReportOptions, command: str, inputs=()) -> None:
+    """Before a run: refuse a report path that is one of ``inputs`` (or read-only, hard-linked,
+    in a missing folder), then replace every report file with an incomplete one.
+
+    Raises
+    ------
+    OutputError
+    """
+    from p3d_cli.io import atomic
+
+    inputs = [path for path in inputs if isinstance(path, str) and path != "-"]
+    for kind, path in _files(options):
+        atomic.destination(_page_file(kind, path), inputs=inputs, what=_what(kind))
+    entry = Entry("(run)", "errored", (("incomplete", INCOMPLETE),))
+    for kind, path in _files(options):
+        if kind == "github-summary":
+            # Appended to, never replaced: a run that dies appends nothing, so there is no
+            # earlier verdict of this run's to stand in for it.
+            continue
+        if kind == "html":
+            if Path(path).is_dir():
+                _write(str(_page_file(kind, path)), _incomplete_page(command), kind, inputs)
+            continue
+        if kind == "junit":
+            text = junit_xml(command, [entry])
+        elif kind == "github":
+            text = "".join(line + "\n" for line in github_lines(command, [entry]))
+        else:
+            text = output.record_line("summary", {"command": command, "complete": False, "exit_status": None}) + "\n"
+        _write(path, text, kind, inputs)
+
+
+def _files(options: ReportOptions) -> list[tuple[str, str]]:
+    """``(kind, path)`` of every report written to a file (``summary`` for ``--summary``)."""
+    out = [(kind, path) for kind, path in options.reports if path is not None]
+    return out + ([("summary", options.summary)] if options.summary is not None else [])
+
+
+def _what(kind: str) -> str:
+    return {"junit": "the JUnit report", "github": "the GitHub report", "summary": "the summary",
+            "html": "the HTML report", "github-summary": "the job summary"}[kind]
+
+
+def _page_file(kind: str, path: str) -> Path:
+    """The file a report kind writes at ``path``: ``html:DIR`` writes ``DIR/index.html`` (a DIR
+    that does not exist yet is made by the page's writer, so it is checked as a new path)."""
+    return Path(path) / "index.html" if kind == "html" and Path(path).is_dir() else Path(path)
+
+
+def _incomplete_page(command: str) -> str:
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>p3d {escape(command)}: incomplete</title>"
+            f"</head><body><h1>p3d {escape(command)}</h1><p>{escape(INCOMPLETE)}</p></body></html>\n")
+
+
 def write_reports(options: ReportOptions, command: str, entries, skipped: dict[str, list[str]],
-                  status: int, seconds: float = 0.0) -> None:
-    """Write every report ``options`` asks for (files are replaced whole)."""
+                  status: int, seconds: float = 0.0, inputs=()) -> None:
+    """Write every report ``options`` asks for (each file replaced whole, never over an input)."""
+    inputs = [path for path in inputs if isinstance(path, str) and path != "-"]
     entries = list(entries)
     skipped_entries = [Entry(path, "skipped", (("skipped", f"p3d does not read {ext or 'extensionless'} files"),))
                        for ext, paths in sorted(skipped.items()) for path in paths]
@@ -114,15 +184,16 @@ def write_reports(options: ReportOptions, command: str, entries, skipped: dict[s
         if kind in pages:
             continue
         if kind == "junit":
-            _write(path, junit_xml(command, entries + skipped_entries, seconds))
+            _write(path, junit_xml(command, entries + skipped_entries, seconds), kind, inputs)
         else:
             text = "".join(line + "\n" for line in github_lines(command, entries))
             if path is None:
                 click.echo(text, nl=False)
             else:
-                _write(path, text)
+                _write(path, text, kind, inputs)
     if options.summary is not None:
-        _write(options.summary, json.dumps(summary_record(command, entries, skipped, status)) + "\n")
+        _write(options.summary, output.record_line("summary", summary_record(command, entries, skipped, status)) + "\n",
+               "summary", inputs)
 
 
 def summary_record(command: str, entries, skipped: dict[str, list[str]], status: int) -> dict:
@@ -132,10 +203,12 @@ def summary_record(command: str, entries, skipped: dict[str, list[str]], status:
     for entry in entries:
         for code, _ in entry.warnings:
             by_code[code] = by_code.get(code, 0) + 1
-    return {"command": command, "inputs": len(entries), **{k: tally[k] for k in STATES[:-1]},
+    not_done = sum(1 for entry in entries if entry.failures[:1] and entry.failures[0][0] == "not-done")
+    return {"schema_version": output.SCHEMA_VERSION, "command": command, "inputs": len(entries),
+            **{k: tally[k] for k in STATES[:-1]}, "not_done": not_done,
             "skipped": sum(len(p) for p in skipped.values()),
             "skipped_by_extension": {ext: len(p) for ext, p in sorted(skipped.items())},
-            "warnings_by_code": dict(sorted(by_code.items())), "exit_status": status}
+            "warnings_by_code": dict(sorted(by_code.items())), "exit_status": status, "complete": not not_done}
 
 
 def junit_xml(command: str, entries, seconds: float = 0.0) -> str:
@@ -202,14 +275,12 @@ def _seconds(seconds: float) -> str:
     return f"{seconds:.3f}"
 
 
-def _write(path: str, text: str) -> None:
-    try:
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
-    except OSError as exc:
-        raise InputError(path, f"cannot write the report ({exc.strerror or exc})",
-                         "check that its folder exists and is writable") from None
+def _write(path: str, text: str, kind: str, inputs=()) -> None:
+    """``text`` as UTF-8 to ``path``, whole or not at all (``p3d_cli.io.atomic``)."""
+    from p3d_cli.io import atomic
+
+    atomic.write_bytes(path, text.encode("utf-8", "surrogateescape"), inputs=inputs, what=_what(kind))
 
 
-__all__ = ["Entry", "ReportOptions", "STATES", "counts", "github_lines", "junit_xml", "parse_reports",
-           "summary_record", "write_reports"]
+__all__ = ["Entry", "INCOMPLETE", "ReportOptions", "STATES", "counts", "github_lines", "junit_xml", "parse_reports",
+           "prepare_reports", "summary_record", "write_reports"]

@@ -94,9 +94,14 @@ def robot() -> None:
               help="How far outside the geometry's bounds a centre of mass may lie, as a fraction "
                    "of their diagonal.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON record per link.")
+@click.option("--report", "report", default=None, metavar="html:DIR",
+              help="Also write DIR/index.html (pictures in DIR/images/): each link's geometry with its declared "
+                   "and computed inertia drawn together, failed links first, with the numbers.")
+@click.option("--report-shape", "shape", type=click.Choice(["box", "ellipsoid"]), default="box", show_default=True,
+              help="The uniform solid the report draws for each inertia.")
 @_flagged
 def check(description, package_paths, xacro_args, role, require_inertial, open_mesh, tolerance, density_range,
-          com_slack, as_json):
+          com_slack, as_json, report, shape):
     """Check every link's declared inertial: possible, and consistent with its geometry.
 
     Rules: mass > 0; the inertia symmetric and positive definite; principal moments obeying
@@ -107,19 +112,31 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
     catches mm/m and g/kg slips). Links of at most 1 g are massless frames: reported, not
     failed. One line per problem on stdout, with the geometry, density and tolerance used.
 
+    --report html:DIR also writes a page to look at: per link, its geometry in the link frame
+    with two equivalent uniform boxes (same mass and principal moments), the declared one in
+    raspberry and the computed one in teal, its verdict and numbers; failed links first. It
+    stands alone (no network; open DIR/index.html). See docs/render.md.
+
     \b
     Exit statuses: 0 every link passes; 1 some link fails; 2 the description (or a mesh it
-    names) cannot be read.
+    names) cannot be read, or the report cannot be written.
 
     \b
     Examples:
       p3d robot check robot.urdf --package-path my_robot=./my_robot
       p3d robot check scene.xml --json
+      p3d robot check robot.urdf --report html:inertia-report
     """
     from p3d_cli.robots import check_robot, load_robot
 
     low_high = _range(density_range)
+    folder = _report_folder(report)
     robot_ = load_robot(description, package_paths, xacro_args)
+    if folder is not None:
+        from p3d_cli.render.robot_page import check_folder
+        from p3d_cli.robots.fill import description_files
+
+        check_folder(folder, description_files(robot_))
     for note in robot_.notes:
         click.echo(f"p3d: warning: {robot_.path}: {note}", err=True)
     checks = check_robot(robot_, tolerance=tolerance, role=role, com_slack=com_slack, density_range=low_high,
@@ -130,6 +147,10 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
             continue
         for p in c.problems:
             click.echo(f"{robot_.path}: link {c.link!r}: {p.message} (rule: {p.rule}; from {c.basis})")
+    if folder is not None:
+        from p3d_cli.render.robot_page import write_robot_report
+
+        write_robot_report(robot_, checks, folder, shape=shape, role=role)
     failed = [c.link for c in checks if not c.ok]
     frames = sum(1 for c in checks if c.status == "frame")
     if not as_json:
@@ -137,6 +158,16 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
             + (f": {', '.join(failed)}" if failed else "")
         click.echo(f"p3d robot check: {robot_.path}: {tally}", err=True)
     return 1 if failed else 0
+
+
+def _report_folder(value: str | None) -> str | None:
+    """The folder of ``--report html:DIR`` (the spelling of the other commands' ``--report``)."""
+    if value is None:
+        return None
+    kind, _, folder = value.partition(":")
+    if kind != "html" or not folder:
+        raise UsageError("--report", f"{value!r} is not a report p3d robot check writes", "use html:DIR (a folder)")
+    return folder
 
 
 def _range(text: str) -> tuple[float, float]:

@@ -63,3 +63,54 @@ def parse_thresholds(values, where: str = "--warning-threshold") -> dict[str, fl
                              "a threshold can only be raised (p3d does not warn below its default)")
         out[code] = limit
     return out
+
+
+def settings_for(config: Config, command: str, source, options: dict) -> dict | None:
+    """Fill ``options`` (a measurement's keyword arguments) from the project settings for
+    ``source`` where the command line gave nothing: ``units`` (the meshes' length unit) and
+    ``density`` (unless ``--density`` or ``--mass`` was given). Returns what the output names
+    (``Config.used``, with the keys the command line overrode left out), or None.
+
+    An inconsistency between a setting and the units (a density with a unit but no length
+    unit, or a bare density with one) is an error naming the file and the key, never a flag.
+
+    Raises
+    ------
+    FormatError
+    """
+    from p3d_cli.errors import FormatError
+    from p3d_cli.units import has_unit
+
+    key = source if isinstance(source, str) else getattr(source, "where", None)   # a loaded mesh: its path
+    used = config.used(command, key)
+    if used is None:
+        return None
+    settings = config.for_source(key) if key is not None else config.settings
+    keys = list(used["keys"])
+    if "units" in options:
+        if options.get("units") is None and "units" in settings:
+            options["units"] = settings["units"]
+        elif "units" in keys:
+            keys.remove("units")
+    if "density" in options:
+        if options.get("density") is None and options.get("mass") is None and "density" in settings:
+            density = options["density"] = settings["density"]
+            where = config.where("density", key)
+            if has_unit(density) and options.get("units") is None:
+                raise FormatError(where, f"{density!r} has a unit, but no length unit is set for the meshes",
+                                  'add units = "mm" (the unit of the meshes\' coordinates) to the file, '
+                                  "or pass --units")
+            if not has_unit(density) and options.get("units") is not None:
+                raise FormatError(where, f"{density!r} has no unit, and the meshes' length unit is set "
+                                  f"({options['units']})", 'write it with its unit: density = "7850 kg/m^3"')
+        elif "density" in keys:
+            keys.remove("density")
+    return {"file": used["file"], "keys": keys} if keys else None
+
+
+def settings_line(used: dict | None) -> str | None:
+    """The stderr line naming a settings file that applies: ``p3d: settings: FILE (keys); ...``."""
+    if not used:
+        return None
+    return (f"p3d: settings: {used['file']} applies ({', '.join(used['keys'])}); "
+            "p3d config --show prints it, --no-config ignores it")

@@ -61,10 +61,10 @@ def solve(scene, steps, dt, trajectory, plot, animate, as_json):
     elif trajectory is None:
         result = solve_scene(parsed, steps=steps, dt=dt)
     else:
-        with trajectory_writer(trajectory) as record:
+        with trajectory_writer(trajectory, inputs=[scene]) as record:
             result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
     if as_json:
-        click.echo(output.dumps(solve_record(result)))
+        click.echo(output.record_line("solve", solve_record(result)))
     else:
         click.echo(solve_table(scene, result))
 

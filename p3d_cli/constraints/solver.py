@@ -223,6 +223,25 @@ class PendingSolution:
 _DENSE_SCATTER = 20000
 
 
+def _scipy_sparse():
+    """``scipy.sparse``, which only large islands need: scipy is the optional extra ``solve``.
+
+    Raises
+    ------
+    MissingExtraError
+    """
+    try:
+        import scipy.sparse as sp
+        import scipy.sparse.linalg  # noqa: F401 - splu, loaded with it
+    except ImportError:
+        from p3d_cli.errors import MissingExtraError
+
+        raise MissingExtraError("solve", "a constraint island this large needs scipy (sparse factorisation), "
+                                "which is not installed", "install p3d's extra 'solve': pip install "
+                                "'scipy>=1.10' (or pip install '.[solve]' in a clone of p3d)") from None
+    return sp
+
+
 def _scatter_matrix(n: int, row_a: np.ndarray, row_b: np.ndarray):
     """``S`` (n, 2m) with ``S @ [X_a; X_b]`` the per-body sums of rows ``X_a`` on their side-a
     bodies plus rows ``X_b`` on their side-b bodies (one matrix product per ``W Jᵀ λ``)."""
@@ -231,8 +250,7 @@ def _scatter_matrix(n: int, row_a: np.ndarray, row_b: np.ndarray):
         out = np.zeros((n, bodies.size))
         out[bodies, np.arange(bodies.size)] = 1.0
         return out
-    import scipy.sparse as sp
-
+    sp = _scipy_sparse()
     return sp.csr_matrix((np.ones(bodies.size), (bodies, np.arange(bodies.size))), shape=(n, bodies.size))
 
 
@@ -306,8 +324,8 @@ class _BodySpace:
 
 class _Sparse:
     def __init__(self, maps, ja, jb, inv_mass, inv_inertia) -> None:
-        import scipy.sparse as sp
-        from scipy.sparse.linalg import splu
+        sp = _scipy_sparse()
+        splu = sp.linalg.splu
 
         self.maps = maps
         m, nb = maps.m, maps.nb

@@ -7,26 +7,29 @@ import csv
 from typing import Callable, Iterator
 
 from p3d_cli.constraints.simulation import TRAJECTORY_HEADER, trajectory_row
-from p3d_cli.errors import UsageError
 
 
 @contextlib.contextmanager
-def trajectory_writer(path: str) -> Iterator[Callable]:
+def trajectory_writer(path: str, inputs=()) -> Iterator[Callable]:
     """An ``on_step(t, bodies)`` callback for ``solve_scene`` that writes ``path`` as CSV.
 
     Columns are ``TRAJECTORY_HEADER`` (x, y, z: the centre of mass); floats in full precision.
 
+    The file is written whole or not at all (``p3d_cli.io.atomic``): a run that fails or is
+    interrupted part way leaves what was there before. A path that is one of ``inputs`` (the
+    scene) is refused.
+
     Raises
     ------
-    UsageError
-        ``path`` cannot be written.
+    OutputError
+        ``path`` cannot be written, or is an input.
     """
-    try:
-        handle = open(path, "w", newline="", encoding="utf-8")
-    except OSError as exc:
-        raise UsageError("trajectory", f"cannot write {path!r} ({exc.strerror or exc})",
-                         "choose a writable path") from None
-    with handle:
+    import io
+
+    from p3d_cli.io import atomic
+
+    with atomic.replacing(path, inputs=inputs, what="the trajectory") as raw:
+        handle = io.TextIOWrapper(raw, encoding="utf-8", newline="")
         writer = csv.writer(handle)
         writer.writerow(TRAJECTORY_HEADER)
 
@@ -35,3 +38,5 @@ def trajectory_writer(path: str) -> Iterator[Callable]:
                 writer.writerow([repr(v) if isinstance(v, float) else v for v in trajectory_row(t, body)])
 
         yield record
+        handle.flush()
+        handle.detach()   # the binary file stays open for ``replacing`` to finish

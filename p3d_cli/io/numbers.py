@@ -16,7 +16,7 @@ import re
 
 import numpy as np
 
-__all__ = ["to_float", "to_int", "lone_sign", "saturated", "INT64_LIMITS"]
+__all__ = ["to_float", "to_int", "lone_sign", "saturated", "INT64_LIMITS", "fromstring"]
 
 _FLOAT = re.compile(rb"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _INT = re.compile(rb"[+-]?[0-9]+")
@@ -72,3 +72,18 @@ def saturated(values: np.ndarray) -> bool:
     if not values.size:
         return False
     return bool(values.min() == INT64_LIMITS[0] or values.max() == INT64_LIMITS[1])
+
+
+def fromstring(text: bytes, dtype) -> np.ndarray:
+    """``np.fromstring(text, dtype, sep=" ")``, raising ``ValueError`` on text it cannot read to
+    its end on every numpy p3d supports: numpy 2 raises, while numpy 1.x only warns
+    (``DeprecationWarning``) and returns the numbers before the bad word, which the fast paths
+    would take for the whole."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            return np.fromstring(text, dtype=dtype, sep=" ")
+        except DeprecationWarning as exc:
+            raise ValueError(str(exc)) from None

@@ -21,7 +21,7 @@ from typing import Iterator
 
 import numpy as np
 
-from p3d_cli.io.numbers import lone_sign, saturated
+from p3d_cli.io.numbers import fromstring, lone_sign, saturated
 from p3d_cli.io.polygons import fan_triangles
 
 #: Bytes of text parsed at a time: the temporaries (~10 bytes per byte of a chunk) stay small
@@ -173,7 +173,7 @@ def _vertices(text: bytes, n: int) -> np.ndarray | None:
     # A NaN after every line marks where each line's numbers end.
     text = _strip_keyword(text).replace(b"\n", b" nan\n") + b" nan"
     try:
-        numbers = np.fromstring(text, dtype=np.float64, sep=" ")
+        numbers = fromstring(text, np.float64)
     except ValueError:
         return None
     del text
@@ -204,7 +204,7 @@ def faces(text: bytes, n: int):
 
 def _parse_ints(text: bytes) -> np.ndarray | None:
     try:
-        numbers = np.fromstring(text, dtype=np.int64, sep=" ")
+        numbers = fromstring(text, np.int64)
     except ValueError:
         return None
     if saturated(numbers) or lone_sign(text):

@@ -18,7 +18,7 @@ import re
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.numbers import lone_sign, saturated, to_float, to_int
+from p3d_cli.io.numbers import fromstring, lone_sign, saturated, to_float, to_int
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
@@ -99,7 +99,7 @@ def _per_line(lines: list[bytes], integers: bool):
     marker = b" -1 " if integers else b" nan "
     text = (marker + b"\n").join(lines) + marker
     try:
-        numbers = np.fromstring(text, dtype=np.int64 if integers else np.float64, sep=" ")
+        numbers = fromstring(text, np.int64 if integers else np.float64)
     except ValueError:
         return None
     if integers:

@@ -15,7 +15,7 @@ from array import array
 import numpy as np
 
 from p3d_cli.errors import FormatError
-from p3d_cli.io.numbers import lone_sign, saturated, to_float
+from p3d_cli.io.numbers import fromstring, lone_sign, saturated, to_float
 from p3d_cli.io.ply_header import HINT, Element, Header, is_kept, list_positions, wanted
 
 _NUMBERS_HINT = "PLY ASCII data holds only numbers; fix or export the file again"
@@ -34,7 +34,7 @@ def read_ascii(where: str, header: Header, data: bytes):
 def _parse(block: bytes, integers: bool) -> np.ndarray | None:
     """The numbers of ``block`` when numpy reads them as the grammar does, else None."""
     try:
-        numbers = np.fromstring(block, dtype=np.int64 if integers else np.float64, sep=" ")
+        numbers = fromstring(block, np.int64 if integers else np.float64)
     except ValueError:
         return None
     if integers:

@@ -26,7 +26,7 @@ from array import array
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.numbers import to_float
+from p3d_cli.io.numbers import fromstring, to_float
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, array_source
 
@@ -163,7 +163,7 @@ def _triangles(body: bytes) -> np.ndarray | None:
         return None     # a letter inside a number word ('1x'): every letter must be a keyword's
     mapped[table[:, _E_COLUMNS] + _E_OFFSETS] = 32   # the keywords' own e's are no exponents
     try:
-        numbers = np.fromstring(bytes(text), dtype=np.float64, sep=" ")
+        numbers = fromstring(bytes(text), np.float64)
     except ValueError:
         return None
     if numbers.size != 12 * facets or not np.isfinite(numbers).all():

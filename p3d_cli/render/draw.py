@@ -135,13 +135,17 @@ def draw_layer(image: np.ndarray, layer, camera: Camera, frame: Frame, depth: np
     if len(layer.segments):
         x, y, z, segment, step = line_samples(layer.segments, camera, frame)
         seen = visible_samples(x, y, z, reach, slack)
-        dashed = ~seen & ((step // DASH) % 2 == 0)
-        stamp(image, x[dashed], y[dashed], colour, 1.0, HIDDEN_ALPHA)
+        hidden_width = max(1.0, round(width / 2)) if layer.xray else 1.0
+        if layer.xray:
+            stamp(image, x[~seen], y[~seen], colour, hidden_width)
+        else:
+            dashed = ~seen & ((step // DASH) % 2 == 0)
+            stamp(image, x[dashed], y[dashed], colour, 1.0, HIDDEN_ALPHA)
         stamp(image, x[seen], y[seen], colour, width)
         rows, flags = runs(x, y, segment, seen)
         for flag in (False, True):
             if (flags == flag).any():
-                strokes.append(Stroke(layer.key, colour, flag, rows[flags == flag], width if flag else 1.0))
+                strokes.append(Stroke(layer.key, colour, flag, rows[flags == flag], width if flag else hidden_width))
     if len(layer.points):
         view = camera.view(np.asarray(layer.points, dtype=np.float64))
         px, py = frame.pixels(view)

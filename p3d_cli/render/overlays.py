@@ -12,6 +12,9 @@ Every overlay has its own colour, used for nothing else in a picture (the tests 
   placed on the principal frame (half-extents ``a_k² = 3 (I_i + I_j - I_k) / (2 m)``);
   ``ellipsoid`` the equivalent ellipsoid (``a_k² = 5 (I_i + I_j - I_k) / (2 m)``);
 - ``bounds``: the axis-aligned bounding box.
+
+``declared`` is the colour of a robot link's declared inertia, drawn beside the one its
+geometry gives (``inertia``) in ``p3d robot check --report`` (``p3d_cli.render.robot_page``).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ COLOURS = {
     "ellipsoid": (110, 40, 160),
     "bounds": (90, 90, 110),
     "joint": (200, 90, 0),
+    "declared": (215, 35, 115),
 }
 
 
@@ -63,6 +67,10 @@ class Layer:
     ring : bool
         Circle each place where the layer draws (in a neutral colour) when there are few: a
         single short defect edge on a large part is then found at a glance.
+    xray : bool
+        Draw the lines behind the surface in full colour too (half as wide, not dashed): for
+        what lies mostly inside a part, such as the inertia boxes of a robot link (PNG; the
+        SVG writer draws them dashed, as other hidden lines).
     """
 
     key: str
@@ -73,6 +81,7 @@ class Layer:
     tags: tuple = ()
     width: int = 2
     ring: bool = False
+    xray: bool = False
 
     @property
     def colour(self) -> tuple[int, int, int]:

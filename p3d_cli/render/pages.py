@@ -30,7 +30,9 @@ CHECK_COUNTS = (("faces", "faces"), ("shells", "shells"), ("boundary_edges", "bo
                 ("nonmanifold_edges", "non-manifold edges"), ("misoriented_edges", "misoriented edges"),
                 ("nonmanifold_vertices", "non-manifold vertices"), ("degenerate_faces", "degenerate faces"),
                 ("duplicate_faces", "duplicate faces"), ("volume", "volume"))
-_ORDER = {"errored": 0, "failed": 1, "warned": 2, "ok": 3, "skipped": 4}
+_ORDER = {"errored": 0, "failed": 1, "warned": 2, "ok": 3, "skipped": 4, "frame": 4}
+#: How the tally names each state (``frame``: a robot link that is a massless frame).
+_STATES = ("ok", "warned", "failed", "errored", "skipped", "frame")
 
 
 @dataclass(frozen=True)
@@ -41,10 +43,11 @@ class Row:
     ----------
     source : str
     state : str
-        ``ok``, ``warned``, ``failed``, ``errored`` or ``skipped``.
+        ``ok``, ``warned``, ``failed``, ``errored`` or ``skipped`` (a robot link: ``frame``).
     failures, warnings : tuple of (code, text)
     numbers : dict
-        Named counts and quantities shown beside the picture.
+        Named counts and quantities shown beside the picture; a tuple value fills the columns
+        ``html_page`` names (one value spans them).
     picture : bytes or None
         PNG.
     note : str
@@ -118,12 +121,13 @@ def image_name(index: int, source: str) -> str:
     return f"{index:04d}-{stem}.png"
 
 
-def tally_line(command: str, rows: list[Row]) -> str:
+def tally_line(command: str, rows: list[Row], noun: str = "input") -> str:
     counts: dict[str, int] = {}
     for row in rows:
         counts[row.state] = counts.get(row.state, 0) + 1
-    parts = [f"{counts[s]} {s}" for s in ("ok", "warned", "failed", "errored", "skipped") if counts.get(s)]
-    return f"{command}: {len(rows)} input{'s' if len(rows) != 1 else ''}" + (": " + ", ".join(parts) if parts else "")
+    parts = [f"{counts[s]} {s}" if s != "frame" else f"{counts[s]} massless frame{'s' if counts[s] != 1 else ''}"
+             for s in _STATES if counts.get(s)]
+    return f"{command}: {len(rows)} {noun}{'s' if len(rows) != 1 else ''}" + (": " + ", ".join(parts) if parts else "")
 
 
 _CSS = """
@@ -131,23 +135,32 @@ body{font:14px/1.45 system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;margin:
 h1{font-size:20px;margin:0 0 4px} p.tally{color:#555;margin:0 0 18px}
 table.rows{border-collapse:collapse;width:100%} table.rows>tbody>tr{border-top:1px solid #ddd}
 td{vertical-align:top;padding:10px 12px} td.picture img{max-width:100%;height:auto;border:1px solid #e4e4ea}
+td.picture{width:50%} td.side{white-space:nowrap}
+table.numbers th{font-weight:600;color:#555;padding:1px 10px 1px 0}
 .state{display:inline-block;padding:1px 8px;border-radius:10px;font-weight:600;font-size:12px;color:#fff}
 .ok{background:#2e7d32}.warned{background:#b26a00}.failed{background:#c62828}.errored{background:#6a1b9a}
-.skipped{background:#757575} .source{font-family:ui-monospace,Menlo,Consolas,monospace;word-break:break-all}
+.skipped{background:#757575}.frame{background:#546e7a}
+.source{font-family:ui-monospace,Menlo,Consolas,monospace;word-break:break-all}
 table.numbers td{padding:1px 10px 1px 0} table.numbers td.n{text-align:right;font-variant-numeric:tabular-nums}
-ul{margin:6px 0;padding-left:18px} .note{color:#777}
+ul{margin:6px 0;padding-left:18px} .note{color:#777} div.intro{margin:0 0 14px;max-width:60em}
+.swatch{display:inline-block;width:22px;height:4px;vertical-align:middle;margin-right:4px}
 """
 
 
-def html_page(command: str, rows: list[Row], images: dict[int, str]) -> str:
+def html_page(command: str, rows: list[Row], images: dict[int, str], *, noun: str = "input",
+              intro: str = "", columns: tuple[str, ...] = ()) -> str:
     """The HTML page of ``rows`` (already ordered); ``images`` maps a row's index to its picture's
-    relative path."""
-    title = html.escape(tally_line(command, rows))
+    relative path. ``noun`` names what a row is in the tally; ``intro`` is HTML put above the
+    rows (its maker escapes what it quotes); ``columns`` heads the numbers' value columns (a
+    tuple value fills them, side by side)."""
+    title = html.escape(tally_line(command, rows, noun))
     out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
            '<meta name="viewport" content="width=device-width, initial-scale=1">',
            f"<title>{html.escape(command)} report</title><style>{_CSS}</style></head><body>",
-           f"<h1>{html.escape(command)} report</h1>", f'<p class="tally">{title}</p>',
-           '<table class="rows"><tbody>']
+           f"<h1>{html.escape(command)} report</h1>", f'<p class="tally">{title}</p>']
+    if intro:
+        out.append(f'<div class="intro">{intro}</div>')
+    out.append('<table class="rows"><tbody>')
     for i, row in enumerate(rows):
         out.append(f'<tr id="row-{i}"><td class="about">')
         out.append(f'<div class="source">{html.escape(row.source)}</div>')
@@ -157,9 +170,7 @@ def html_page(command: str, rows: list[Row], images: dict[int, str]) -> str:
         if items:
             out.append("<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>")
         if row.numbers:
-            out.append('<table class="numbers">' + "".join(
-                f'<tr><td>{html.escape(k)}</td><td class="n">{html.escape(_shown(v))}</td></tr>'
-                for k, v in row.numbers.items()) + "</table>")
+            out.append(_numbers_table(row.numbers, columns))
         if row.note:
             out.append(f'<p class="note">{html.escape(row.note)}</p>')
         out.append('</td><td class="picture">')
@@ -170,6 +181,21 @@ def html_page(command: str, rows: list[Row], images: dict[int, str]) -> str:
         out.append("</td></tr>")
     out.append("</tbody></table></body></html>")
     return "\n".join(out) + "\n"
+
+
+def _numbers_table(numbers: dict, columns: tuple[str, ...]) -> str:
+    span = max(len(columns), 1)
+    head = "" if not columns else "<tr><td></td>" + "".join(f'<th class="n">{html.escape(c)}</th>'
+                                                           for c in columns) + "</tr>"
+    cells = []
+    for key, value in numbers.items():
+        if isinstance(value, tuple):
+            row = "".join(f'<td class="n side">{html.escape(_shown(v))}</td>' for v in value)
+        else:
+            wide = f' colspan="{span}"' if span > 1 else ""
+            row = f'<td class="n"{wide}>{html.escape(_shown(value))}</td>'
+        cells.append(f"<tr><td>{html.escape(key)}</td>{row}</tr>")
+    return '<table class="numbers">' + head + "".join(cells) + "</table>"
 
 
 def markdown_summary(command: str, rows: list[Row], images: dict[int, str]) -> str:
@@ -211,16 +237,7 @@ def write_pages(command: str, rows: list[Row], *, html_dir: str | None = None, s
 
     rows = ordered([with_picture(row, command) for row in rows])
     if html_dir is not None:
-        folder = Path(html_dir)
-        _make_folder(folder / "images")
-        images = {}
-        for i, row in enumerate(rows):
-            if row.picture is not None:
-                name = image_name(i, row.source)
-                write_bytes(folder / "images" / name, row.picture, inputs=inputs, what="a report picture")
-                images[i] = f"images/{name}"
-        write_bytes(folder / "index.html", html_page(command, rows, images).encode("utf-8"), inputs=inputs,
-                    what="the HTML report")
+        write_html(html_dir, command, rows, inputs=inputs)
     if summary is not None:
         target = Path(summary)
         pictures = target.parent / f"{target.name}-images"
@@ -236,6 +253,30 @@ def write_pages(command: str, rows: list[Row], *, html_dir: str | None = None, s
         text = markdown_summary(command, rows, images).encode("utf-8")
         separator = b"\n" if before and not before.endswith(b"\n") else b""
         write_bytes(target, before + separator + text, inputs=inputs, what="the job summary")
+
+
+def write_html(html_dir: str | os.PathLike, command: str, rows: list[Row], *, inputs=(), noun: str = "input",
+               intro: str = "", columns: tuple[str, ...] = ()) -> Path:
+    """Write ``html_dir/index.html`` for ``rows`` (already ordered, with their pictures) and the
+    pictures in ``html_dir/images/``, each file whole or not at all; returns the page's path.
+
+    Raises
+    ------
+    OutputError
+        A file cannot be written, or would replace one of ``inputs``.
+    """
+    from p3d_cli.io.atomic import write_bytes
+
+    folder = Path(html_dir)
+    _make_folder(folder / "images")
+    images = {}
+    for i, row in enumerate(rows):
+        if row.picture is not None:
+            name = image_name(i, row.source)
+            write_bytes(folder / "images" / name, row.picture, inputs=inputs, what="a report picture")
+            images[i] = f"images/{name}"
+    page = html_page(command, rows, images, noun=noun, intro=intro, columns=columns)
+    return write_bytes(folder / "index.html", page.encode("utf-8"), inputs=inputs, what="the HTML report")
 
 
 def _make_folder(folder: Path) -> None:

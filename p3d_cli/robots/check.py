@@ -85,6 +85,10 @@ class LinkCheck:
         The factor allowed between declared and geometric moments.
     frame : bool
         A massless or near-massless frame (mass at most ``MASSLESS``).
+    role : str or None
+        ``collision`` or ``visual``: the geometry compared with (None when none was).
+    measured : LinkGeometry or None
+        That geometry as measured, at the declared mass (for the report's pictures).
     """
 
     link: str
@@ -96,6 +100,8 @@ class LinkCheck:
     tolerance: float = 2.0
     frame: bool = False
     stand_in: str | None = None
+    role: str | None = None
+    measured: LinkGeometry | None = field(default=None, repr=False, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -203,7 +209,7 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
         if geometry is None:
             continue
         trial = LinkCheck(link.name, tolerance=tolerance, geometry=r if geometry.stand_in is None else
-                          f"{r} ({geometry.stand_in})", stand_in=geometry.stand_in)
+                          f"{r} ({geometry.stand_in})", stand_in=geometry.stand_in, role=r, measured=geometry)
         _geometry_rules(trial, inertial, principal if positive else None, geometry, tolerance, com_slack,
                         density_range)
         distance = _distance(trial)
@@ -216,7 +222,7 @@ def check_link(link: Link, source: str, tolerance: float, role: str, com_slack: 
     out.problems += trial.problems
     out.notes += trial.notes
     out.geometry, out.implied_density, out.moment_ratios = trial.geometry, trial.implied_density, trial.moment_ratios
-    out.stand_in = trial.stand_in
+    out.stand_in, out.role, out.measured = trial.stand_in, trial.role, trial.measured
     if role == "auto" and all(link.geoms(r) for r in roles):
         out.notes.append(f"compared with its {trial.geometry} geometry, the closer match")
     return out
@@ -240,7 +246,9 @@ def _frame(out: LinkCheck, mass: float, tensor: np.ndarray) -> LinkCheck:
         out.problems.append(Problem("positive definite", tensor.tolist(), "the inertia is not finite"))
         return out
     scale = max(float(np.abs(tensor).max()), 1e-300)
-    principal = np.linalg.eigvalsh(0.5 * (tensor + tensor.T) / scale) * scale
+    unit = tensor / scale  # scaled before the sum: 1e308 + 1e308 would overflow
+    with np.errstate(over="ignore"):
+        principal = np.linalg.eigvalsh(0.5 * (unit + unit.T)) * scale
     if principal[0] < -1e-9 * scale:
         out.problems.append(Problem("positive definite", principal.tolist(),
                                     f"principal moments {_vec(principal)}: one is negative"))

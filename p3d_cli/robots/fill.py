@@ -296,7 +296,7 @@ def write_fill(robot: Robot, result: FillResult, output: str | None = None) -> l
     if others:
         raise UsageError("output", f"filled inertials are in included files too ({', '.join(others)}), which "
                          "one output cannot hold", "rewrite each file in place (in_place=True)")
-    inputs = _inputs(robot)
+    inputs = description_files(robot)
     for source in inputs:
         if same_file(output, source):
             raise OutputError(output, f"{what} would overwrite the input {source}",
@@ -306,7 +306,7 @@ def write_fill(robot: Robot, result: FillResult, output: str | None = None) -> l
     return [os.fspath(output)]
 
 
-def _inputs(robot: Robot) -> list[str]:
+def description_files(robot: Robot) -> list[str]:
     """Every file a description reads: itself, its included files, its meshes."""
     import os
 

@@ -169,8 +169,8 @@ def test_missing_dask_names_the_extra(tmp_path, monkeypatch):
     write_binary_stl(path, CUBE)
     result = run("check", path, path, "--dask", "tcp://127.0.0.1:1")
     assert result.exit_code == 2
-    assert "p3d: error: --dask: needs dask.distributed, which is not installed; pip install 'p3d-cli[dask]'" \
-        in result.stderr
+    assert "p3d: error: --dask: needs dask.distributed, which is not installed; install p3d's extra 'dask': " \
+        "pip install 'dask[distributed]>=2023.1'" in result.stderr
 
 
 # --- the machinery ------------------------------------------------------------------------------
@@ -314,7 +314,7 @@ def test_dask_losing_a_task_is_that_input_error(monkeypatch):
         def __init__(self, fn, task):
             self.fn, self.task = fn, task
 
-        def result(self):
+        def result(self, timeout=None):
             if "b" in self.task[-1]:  # a chunk holding "b", or "b" alone: every worker that tried it died
                 raise distributed.KilledWorker("run-b", None, 3)
             return self.fn(self.task)

@@ -142,7 +142,7 @@ def test_unreadable_inputs_exit_2_with_error_records(tmp_path):
     records = [json.loads(line) for line in result.stdout.splitlines()]
     assert [r["source"] for r in records] == [str(good), str(corrupt), str(missing)]
     assert records[0]["ok"] is True and "error" not in records[0]
-    assert set(records[1]) == {"source", "ok", "error"} and records[1]["ok"] is False
+    assert set(records[1]) == {"schema_version", "source", "ok", "error"} and records[1]["ok"] is False
     assert records[2]["error"] == f"{missing}: no such file; check the path (primitive specs are box, wedge, corner, cylinder, sphere)"
     assert f"p3d: error: {missing}: no such file" in result.stderr
     assert result.stderr.rstrip().endswith("p3d: 3 files: 1 ok, 2 errors")

@@ -52,7 +52,7 @@ def test_gate_passes_on_unchanged_clean_parts(checkout):
     assert "::" not in done.stdout                     # no annotations when all is well
     lxml = pytest.importorskip("lxml.etree")
     schema = lxml.XMLSchema(lxml.parse(str(SCHEMA)))
-    for name in ("p3d-check.xml", "p3d-diff.xml"):
+    for name in ("p3d-gate.xml",):
         assert schema.validate(lxml.parse(str(checkout[0] / name))), name
     summary = json.loads((checkout[0] / "p3d-summary.json").read_text())
     assert (summary["inputs"], summary["ok"], summary["exit_status"]) == (3, 3, 0)
@@ -67,6 +67,20 @@ def test_gate_fails_on_a_planted_change_and_annotates_it(checkout):
     assert annotations and all("file=parts/cube.off," in line for line in annotations)
     summary = json.loads((checkout[0] / "p3d-summary.json").read_text())
     assert (summary["failed"], summary["exit_status"]) == (1, 1)
+
+
+def test_gate_fails_on_a_part_that_is_no_longer_closed(checkout):
+    """The one-command gate applies check's requirements (issue 24.6)."""
+    part = checkout[0] / "parts" / "cube.off"
+    lines = part.read_text().splitlines()
+    header = lines[1].split()
+    faces = int(header[1])
+    lines[1] = f"{header[0]} {faces - 1} {header[2]}"
+    part.write_text("\n".join(lines[:-1]) + "\n")          # the last face removed: open
+    done = gate(checkout)
+    assert done.returncode == 1, done.stderr
+    assert any(line.startswith("::error file=parts/cube.off,title=p3d diff [check%3Aclosed]")
+               for line in done.stdout.splitlines()), done.stdout
 
 
 def test_ci_jobs_parse_and_run_the_script():

@@ -77,3 +77,15 @@ def test_field_with_json_or_csv_is_a_usage_error(cube, command, other):
     result = run(command, cube, "--field", "source", other)
     assert result.exit_code == 2 and result.stdout == ""
     assert "both given" in result.stderr and "--field" in result.stderr
+
+
+def test_a_result_json_cannot_hold_is_a_range_error_naming_the_field_not_a_bug():
+    """Issue 27: --json of a result that overflowed float64 was an internal error (exit 3)."""
+    from click.testing import CliRunner
+
+    from p3d_cli.cli.main import cli
+
+    result = CliRunner().invoke(cli, ["bounds", "box:1,1,1", "--translate", "1e308,0,0", "--json"])
+    assert result.exit_code == 2, result.output
+    assert "internal error" not in result.output
+    assert "box:1,1,1: center.0 is not a finite number (float64 overflowed" in result.stderr

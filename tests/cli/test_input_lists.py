@@ -53,3 +53,22 @@ def test_directory_of_only_unread_files_says_what_it_holds(tmp_path):
     result = run("check", tmp_path)
     assert result.exit_code == 2
     assert "directory holds no mesh files, only files p3d does not read (1 .3ds, 1 .blend, 1 .fbx)" in result.stderr
+
+
+def test_a_list_line_with_a_nul_byte_is_that_input_s_error_not_a_bug(tmp_path):
+    """Issue 27: a --files-from line holding a NUL byte was an internal error (exit 3)."""
+    from click.testing import CliRunner
+
+    from conftest import cube_triangles, write_binary_stl
+    from p3d_cli.cli.main import cli
+
+    write_binary_stl(tmp_path / "a.stl", cube_triangles())
+    listing = tmp_path / "list.txt"
+    listing.write_bytes(f"{tmp_path / 'a.stl'}\nbad\0name.stl\n".encode())
+    for command in ("check", "props", "bounds"):
+        result = CliRunner().invoke(cli, [command, "--files-from", str(listing)])
+        assert result.exit_code == 2, (command, result.output)
+        errors = [line for line in result.stderr.splitlines() if line.startswith("p3d: error:")]
+        assert errors == ["p3d: error: bad\\x00name.stl: the name holds a NUL byte, which no file name can; "
+                          "a NUL-separated list (find -print0, git ls-files -z) needs -0"]
+        assert "internal error" not in result.output and "\0" not in result.output

@@ -52,3 +52,22 @@ def test_in_the_program_import_frozen_freezes_what_start_up_made():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["True", "True", "True"]
+
+
+def test_usage_errors_are_one_line_whatever_click_s_version(monkeypatch):
+    """Issue 24.3: click 8.1 (the declared minimum) has no NoArgsIsHelpError; naming it in an except
+    clause turned every usage error into a traceback with exit 1."""
+    import click
+    from click.testing import CliRunner
+
+    from p3d_cli.cli import main
+
+    for present in (True, False):
+        if not present:
+            monkeypatch.delattr(click.exceptions, "NoArgsIsHelpError", raising=False)
+            monkeypatch.setattr(main, "_NO_ARGS_IS_HELP", None)
+        for args in (["props", "--nosuch"], ["nosuch"], ["props", "box", "--jobs", "0"]):
+            result = CliRunner().invoke(main.cli, args)
+            assert result.exit_code == 2, (present, args, result.output)
+            assert result.stderr.count("\n") == 1 and result.stderr.startswith("p3d: error: ")
+            assert ".;" not in result.stderr

@@ -120,3 +120,26 @@ def test_bad_report_kinds_are_usage_errors(folder):
     assert run("check", folder, "--report", "xml:x").exit_code == 2
     assert run("check", folder, "--report", "junit").exit_code == 2
     assert run("check", folder, "--summary", "yaml:x").exit_code == 2
+
+
+def test_page_reports_are_prepared_like_the_others(tmp_path):
+    """html:DIR and github-summary:FILE go through prepare_reports too (they were unknown to it):
+    an existing report folder's page says the run is incomplete until the run ends; a summary,
+    which is appended to, is left alone; a page path naming an input is refused first."""
+    from p3d_cli.cli.reports import INCOMPLETE, parse_reports, prepare_reports
+    from p3d_cli.errors import OutputError
+
+    folder = tmp_path / "report"
+    folder.mkdir()
+    (folder / "index.html").write_text("<p>all passed</p>")
+    summary = tmp_path / "summary.md"
+    summary.write_text("earlier step\n")
+    options = parse_reports([f"html:{folder}", f"github-summary:{summary}"], None)
+    prepare_reports(options, "check", inputs=["part.stl"])
+    assert INCOMPLETE in (folder / "index.html").read_text()
+    assert summary.read_text() == "earlier step\n"
+    mesh = tmp_path / "part.stl"
+    mesh.write_bytes(b"solid")
+    with pytest.raises(OutputError, match="would overwrite the input"):
+        prepare_reports(parse_reports([f"github-summary:{mesh}"], None), "check", inputs=[str(mesh)])
+    assert mesh.read_bytes() == b"solid"

@@ -123,4 +123,14 @@ def test_unwritable_trajectory_is_a_usage_error(tmp_path):
     target = str(tmp_path / "no-such-dir" / "swing.csv")
     result = CliRunner().invoke(cli, ["solve", scene, "--steps", "2", "--dt", "0.01", "--trajectory", target])
     assert result.exit_code == 2
-    assert result.stderr.startswith(f"p3d: error: --trajectory: cannot write {target!r}")
+    assert result.stderr.startswith(f"p3d: error: {target}: cannot write the trajectory: the folder")
+    assert result.stderr.count("\n") == 1
+
+
+def test_trajectory_over_the_scene_is_refused_and_the_scene_kept(tmp_path):
+    scene = tmp_path / "pendulum.yaml"
+    scene.write_bytes((REPO / "examples" / "pendulum.yaml").read_bytes())
+    before = scene.read_bytes()
+    result = CliRunner().invoke(cli, ["solve", str(scene), "--steps", "2", "--dt", "0.01", "--trajectory", str(scene)])
+    assert result.exit_code == 2 and "would overwrite the input" in result.stderr
+    assert scene.read_bytes() == before

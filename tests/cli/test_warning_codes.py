@@ -143,7 +143,7 @@ def test_bad_settings_are_one_clear_error(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     result = run("props", "box")
     assert result.exit_code == 2
-    assert "p3d.toml: unknown p3d setting 'densty'" in result.stderr and "Traceback" not in result.output
+    assert "p3d.toml: densty: unknown p3d setting" in result.stderr and "Traceback" not in result.output
     (tmp_path / "p3d.toml").write_text("density = [\n")
     assert "not valid TOML" in run("props", "box").stderr
 

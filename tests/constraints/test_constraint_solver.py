@@ -300,3 +300,20 @@ def test_rotated_body_uses_world_frame_inverse_inertia():
                                atol=1e-12)
     np.testing.assert_allclose(body.velocity, np.array([0, 0, 1]) + p, atol=1e-12)
     np.testing.assert_allclose(body.velocity + np.cross(body.angular_velocity, r), 0, atol=1e-12)
+
+
+def test_a_large_island_without_scipy_names_the_extra(monkeypatch):
+    """Issue 24.5: scipy is the extra 'solve'; without it a large island is one clear error."""
+    import sys
+
+    from p3d_cli.errors import MissingExtraError
+
+    for name in [m for m in sys.modules if m == "scipy" or m.startswith("scipy.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "scipy", None)   # import scipy now raises ImportError
+    ball = {"type": "ball", "a": "a", "b": "b", "attach_a": [0.5, 0, 0]}
+    _, small = solve_data({"bodies": two_bodies(), "constraints": [ball]})   # small islands need no scipy
+    assert small.rank == 3
+    with pytest.raises(MissingExtraError) as missing:
+        solve_data({"bodies": two_bodies(), "constraints": [ball]}, dense_limit=0)
+    assert missing.value.where == "solve" and "'scipy>=1.10'" in missing.value.hint

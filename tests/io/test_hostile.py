@@ -308,3 +308,17 @@ def test_symlink_loop_and_broken_link(tmp_path):
         open_input(str(broken))
     with pytest.raises(InputError, match="no such file"):
         open_input(str(tmp_path / "missing.stl"))
+
+
+def test_fromstring_refuses_text_it_cannot_read_to_its_end_on_every_numpy():
+    """Issue 24.3: numpy 1.24 (the declared minimum) only warns and returns the numbers before the
+    bad word, where numpy 2 raises; the text readers' fast paths rely on the error."""
+    import numpy as np
+    import pytest as _pytest
+
+    from p3d_cli.io.numbers import fromstring
+
+    assert fromstring(b"1 2 3", np.float64).tolist() == [1.0, 2.0, 3.0]
+    for text, dtype in ((b"1 2 x 4", np.float64), (b"1 2_0 3", np.int64), (b"1 2 3\n4 5 6 x", np.float64)):
+        with _pytest.raises(ValueError):
+            fromstring(text, dtype)

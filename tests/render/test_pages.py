@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import re
-from html.parser import HTMLParser
 
 import numpy as np
 from click.testing import CliRunner
 from conftest import cube_triangles, write_binary_stl
+from helpers.html_pages import Resources
 
 from p3d_cli.cli.main import cli
 from p3d_cli.render.overlays import COLOURS
@@ -16,18 +16,6 @@ from p3d_cli.render.png import decode_png
 
 def run(*args):
     return CliRunner().invoke(cli, [str(a) for a in args])
-
-
-class Resources(HTMLParser):
-    """Every URL the page would load (src, href, url(...)), and its tags."""
-
-    def __init__(self):
-        super().__init__()
-        self.urls, self.tags = [], []
-
-    def handle_starttag(self, tag, attrs):
-        self.tags.append(tag)
-        self.urls += [v for k, v in attrs if k in ("src", "href", "srcset", "data") and v]
 
 
 def inputs(tmp_path):

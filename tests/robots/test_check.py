@@ -204,3 +204,15 @@ def test_auto_compares_with_the_closer_geometry_and_says_so(tmp_path):
     assert "(rule: moments; from collision geometry, density " in result.stdout and "tolerance x2)" in result.stdout
     record = json.loads(run("robot", "check", path, "--json").stdout)
     assert record["geometry"] == "visual" and record["tolerance"] == 2.0 and record["status"] == "ok"
+
+
+def test_a_frame_whose_tensor_is_near_floats_limit_is_checked_not_crashed(tmp_path):
+    """A 1 g frame declaring 1e308 moments: summing the tensor with its transpose before scaling
+    overflowed to inf, and numpy's eigensolver raised (an internal error, exit 3)."""
+    path = tmp_path / "huge.xml"
+    path.write_text('<mujoco><worldbody><body name="tip"><inertial pos="0 0 0" mass="0.001" '
+                    'fullinertia="1e308 1e308 1e308 -1e308 0 0"/></body></worldbody></mujoco>')
+    (check,) = check_robot(load_robot(path))
+    assert check.status == "frame"                 # eigenvalues 0, 1e308, 2e308 (inf): none negative
+    result = run("robot", "check", path)
+    assert result.exit_code == 0, result.output
