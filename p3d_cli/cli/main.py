@@ -143,6 +143,8 @@ SUMMARIES = {
     "config": "Show the project settings file p3d would use here, and what it sets.",
     "diff": "Compare meshes with a baseline of their mass properties; exit 1 if anything changed.",
     "props": "Volume, mass, centre of mass and inertia of meshes and shapes.",
+    "render": "Draw a shaded picture of a mesh, shape or assembly: PNG or SVG, no display needed.",
+    "repair": "Repair meshes: fix what p3d check finds, change nothing else, say every change.",
     "robot": "Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.",
     "solve": "Solve ball, hinge and bar constraints between rigid bodies.",
 }

@@ -32,7 +32,7 @@ def repair_report(source: str, *, style: str, targets: dict, **options) -> Repor
         raise target
     report = repair_file(source, target, **options)
     if style == "json":
-        text = output.dumps(report.to_dict())
+        text = output.record_line("repair", report.to_dict())
     elif style == "csv":
         text = output.csv_line(csv_row(report.to_dict()).get(key, "") for key in CSV_COLUMNS)
     else:
@@ -64,7 +64,7 @@ def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done (JSON or CSV; nothing in text)."""
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
     if style == "json":
-        return output.dumps(record)
+        return output.record_line("repair", record)
     if style == "csv":
         return output.csv_line(record.get(key, "") for key in CSV_COLUMNS)
     return None

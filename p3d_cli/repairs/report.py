@@ -140,9 +140,13 @@ class MassChange:
         def props(p: MassProperties) -> dict:
             return {"volume": p.volume, "center_of_mass": p.center_of_mass, "inertia": p.inertia}
 
+        def finite(x):        # a change from nothing has no relative size: null in the record
+            return x if x is None or np.isfinite(x) else None
+
         return {"before": props(self.before), "after": props(self.after),
-                "volume_change": self.volume_change, "relative_volume_change": self.relative_volume_change,
-                "center_shift": self.center_shift, "relative_inertia_change": self.relative_inertia_change}
+                "volume_change": self.volume_change,
+                "relative_volume_change": finite(self.relative_volume_change),
+                "center_shift": self.center_shift, "relative_inertia_change": finite(self.relative_inertia_change)}
 
 
 def check_summary(report: TopologyReport) -> dict:

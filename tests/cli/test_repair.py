@@ -148,3 +148,16 @@ def test_ci_reports_name_what_was_not_fixed(tmp_path):
     record = json.loads(summary.read_text())
     assert record["command"] == "p3d repair" and record["ok"] == 1 and record["failed"] == 1
     assert "2 files: 1 ok, 1 not fixed" in result.stderr
+
+
+def test_records_carry_the_schema_version_and_validate(tmp_path):
+    from helpers import record_schemas
+    from p3d_cli.cli import output
+
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    (tmp_path / "bad.stl").write_bytes(b"not a mesh at all")
+    before = record_schemas.VALIDATED["repair"]
+    result = run("repair", tmp_path / "open.stl", tmp_path / "bad.stl", "--dry-run", "--json", "--jobs", "1")
+    lines = result.stdout.splitlines()
+    assert len(lines) == 2 and all(json.loads(line)["schema_version"] == output.SCHEMA_VERSION for line in lines)
+    assert json.loads(lines[1])["error"] and record_schemas.VALIDATED["repair"] == before + 2
