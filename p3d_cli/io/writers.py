@@ -5,10 +5,12 @@ Every writer takes an indexed mesh (``vertices`` ``(m, 3)`` float32 or float64, 
 corners exactly as stored, so that ``-0.0`` keeps its sign). Nothing is rounded that the
 format can hold:
 
-- **binary STL** stores float32: float32 coordinates are written as they are; float64
-  coordinates are written only when every one is a float32 value (otherwise ``OutputError``:
-  PLY, OBJ and OFF keep float64). Each record's normal is the unit normal of its float32
-  corners (computed in float64, rounded once), its attribute 0.
+- **STL** is written binary, unless asked for ASCII (``ascii_stl``: what an ASCII STL repaired
+  in place is written as, every coordinate as OBJ's are). Binary STL stores float32: float32
+  coordinates are written as they are; float64 coordinates are written only when every one is
+  a float32 value (otherwise ``OutputError``: PLY, OBJ and OFF keep float64). Each record's
+  normal is the unit normal of its float32 corners (computed in float64, rounded once), its
+  attribute 0.
 - **PLY** is written binary little-endian with the coordinates' own type (``float`` for
   float32, ``double`` for float64) and ``uchar``-counted ``int`` face lists.
 - **OBJ** and **OFF** are text: every coordinate is written as Python's ``repr`` of its
@@ -75,7 +77,7 @@ def output_format(path: str | os.PathLike, override: str | None = None) -> str:
 def write_mesh(path: str | os.PathLike, vertices: np.ndarray | None, faces: np.ndarray | None, *,
                triangles: np.ndarray | None = None, format: str | None = None,
                inputs: Iterable[str | os.PathLike] = (), in_place: bool = False,
-               what: str = "the mesh") -> Path:
+               what: str = "the mesh", ascii_stl: bool = False) -> Path:
     """Write an indexed mesh to ``path`` (replaced whole, or left as it was on any error).
 
     Parameters
@@ -90,6 +92,8 @@ def write_mesh(path: str | os.PathLike, vertices: np.ndarray | None, faces: np.n
     inputs, in_place, what
         As for ``p3d_cli.io.atomic.replacing``: writing over an input is refused unless
         ``in_place``.
+    ascii_stl : bool
+        Write STL as text (float64 coordinates kept exactly) rather than binary.
 
     Returns
     -------
@@ -103,7 +107,7 @@ def write_mesh(path: str | os.PathLike, vertices: np.ndarray | None, faces: np.n
     from p3d_cli.io.formats import FORMATS
 
     name = output_format(path, format)
-    writer: Callable = globals()[FORMATS[name].writer or ""]
+    writer: Callable = write_stl_ascii if name == "stl" and ascii_stl else globals()[FORMATS[name].writer or ""]
     if vertices is None or faces is None:
         if name != "stl" or triangles is None:
             raise UsageError("vertices, faces", "not given", "give the mesh's vertices and faces")
@@ -114,7 +118,8 @@ def write_mesh(path: str | os.PathLike, vertices: np.ndarray | None, faces: np.n
             vertices = vertices.astype(np.float64)
         if triangles is None and name == "stl":
             triangles = vertices[faces]
-    _refuse_rounding(path, name, triangles if name == "stl" else vertices)
+    if not ascii_stl:
+        _refuse_rounding(path, name, triangles if name == "stl" else vertices)
     with replacing(path, inputs=inputs, in_place=in_place, what=what) as f:
         writer(f, vertices, faces, triangles)
     return Path(os.path.realpath(path))
@@ -143,6 +148,22 @@ def write_stl(f: BinaryIO, vertices: np.ndarray, faces: np.ndarray, triangles: n
         record["corners"] = part
         record["normal"] = _unit_normals(part)
         f.write(record.tobytes())
+
+
+def write_stl_ascii(f: BinaryIO, vertices, faces, triangles: np.ndarray) -> None:
+    """ASCII STL: one ``solid``, each facet's unit normal and its corners as ``repr`` floats."""
+    corners = np.asarray(triangles)
+    f.write(b"solid repaired\n")
+    for start in range(0, len(corners), _CHUNK):
+        part = corners[start:start + _CHUNK]
+        normals = _unit_normals(part.astype(np.float32)).astype(np.float64).tolist()
+        text = []
+        for normal, tri in zip(normals, part.astype(np.float64).tolist()):
+            text.append("facet normal {!r} {!r} {!r}\n outer loop\n".format(*normal))
+            text.extend("  vertex {!r} {!r} {!r}\n".format(*p) for p in tri)
+            text.append(" endloop\nendfacet\n")
+        f.write("".join(text).encode("ascii"))
+    f.write(b"endsolid repaired\n")
 
 
 def _unit_normals(corners: np.ndarray) -> np.ndarray:

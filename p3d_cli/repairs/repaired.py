@@ -157,6 +157,30 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     return RepairedMesh(out, mesh.coordinate_dtype, outcome.draft), report
 
 
+def _what_is_not_carried(report: RepairReport, source: str, in_place: bool) -> RepairReport:
+    """The report with a note of what the input holds that the output will not (colours,
+    texture coordinates, ...: ``p3d_cli.io.carried``); in place, such a loss is refused.
+
+    Raises
+    ------
+    OutputError
+    """
+    if source == "-" or not os.path.isfile(source):
+        return report
+    from p3d_cli.io.carried import extras
+
+    lost = extras(source, report.format)
+    if not lost:
+        return report
+    if in_place:
+        from p3d_cli.errors import OutputError
+
+        raise OutputError(source, "repairing it in place would drop its " + ", ".join(lost),
+                          "write the repair to another file with output= (p3d writes positions and faces only)")
+    return dataclasses.replace(report, notes=report.notes + ("not carried into the output: the input's "
+                                                             + ", ".join(lost),))
+
+
 def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = None, *, in_place: bool = False,
                 only_if_needed: bool = False, output_format: str | None = None,
                 max_volume_change: float | None = None, steps: Iterable[str] | str | None = None,
@@ -179,7 +203,9 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
         Where to write (format from its extension, or ``output_format``); None with
         ``in_place`` False writes nothing (a dry run).
     in_place : bool
-        Replace ``source`` itself (atomically), in its own format.
+        Replace ``source`` itself (atomically), in its own format (an ASCII STL as ASCII STL);
+        refused when the file holds what p3d does not write (colours, texture coordinates,
+        ``p3d_cli.io.carried``).
     only_if_needed : bool
         Write nothing when nothing needs repair.
     output_format : str, optional
@@ -212,6 +238,8 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
     if in_place:
         if output is not None:
             raise UsageError("output, in_place", "both given", "give one: in_place writes over the input")
+        if output_format is not None:
+            raise UsageError("output_format, in_place", "both given", "in place, a file keeps its own format")
         if name == "-":
             raise UsageError("in_place", "standard input cannot be repaired in place", "give an output path")
         output = name
@@ -246,9 +274,10 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
             with replacing(output, inputs=inputs, what="the repaired mesh") as f, open(name, "rb") as original:
                 shutil.copyfileobj(original, f, 1 << 20)
             return dataclasses.replace(report, written="copied")
+    report = _what_is_not_carried(report, name, in_place)
     if target_format == "stl":      # triangles only: no vertex list to build
         write_mesh(output, None, None, triangles=mesh.triangles, format=target_format, inputs=inputs,
-                   in_place=in_place, what="the repaired mesh")
+                   in_place=in_place, what="the repaired mesh", ascii_stl=in_place and report.format == "stl-ascii")
     else:
         write_mesh(output, mesh.vertices, mesh.faces, triangles=mesh.triangles, format=target_format,
                    inputs=inputs, in_place=in_place, what="the repaired mesh")

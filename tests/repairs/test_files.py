@@ -107,3 +107,39 @@ def test_a_dry_run_writes_nothing(tmp_path, cube):
     report = repair_file(source)
     assert report.fixed and report.written == "dry run" and report.output is None
     assert sorted(p.name for p in tmp_path.iterdir()) == ["open.stl"]
+
+
+def test_what_a_file_holds_beyond_positions_and_faces_is_never_dropped_in_place(tmp_path, cube):
+    source = tmp_path / "textured.obj"
+    lines = ["mtllib part.mtl", "usemtl steel"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in cube.reshape(-1, 3).tolist()]
+    lines += ["vt 0 0", "vn 0 0 1"] + [f"f {3 * i + 1}/1/1 {3 * i + 2}/1/1 {3 * i + 3}/1/1" for i in range(2, 12)]
+    source.write_text("\n".join(lines) + "\n")
+    before = source.read_bytes()
+    with pytest.raises(OutputError, match="would drop its material libraries, materials, normals, "
+                                          "texture coordinates"):
+        repair_file(source, in_place=True)
+    assert source.read_bytes() == before
+    report = repair_file(source, tmp_path / "fixed.obj")
+    assert report.fixed and report.notes[-1].startswith("not carried into the output: the input's material")
+    coloured = tmp_path / "coloured.stl"
+    write_binary_stl(coloured, cube[2:])
+    data = bytearray(coloured.read_bytes())
+    data[84 + 48:84 + 50] = b"\x1f\x80"                    # a colour in face 0's attribute word
+    coloured.write_bytes(bytes(data))
+    with pytest.raises(OutputError, match="attribute words"):
+        repair_file(coloured, in_place=True)
+
+
+def test_an_ascii_stl_repaired_in_place_stays_ascii_and_keeps_its_decimals(tmp_path, cube):
+    from conftest import write_ascii_stl
+
+    source = tmp_path / "part.stl"
+    part = cube * 0.1 + 0.3                                 # decimals no float32 holds
+    write_ascii_stl(source, part[2:])
+    report = repair_file(source, in_place=True)
+    assert report.fixed and report.written == "written"
+    assert source.read_bytes().startswith(b"solid")
+    again = p3d.load_mesh(str(source))
+    assert again.format == "stl-ascii"
+    assert np.array_equal(again.triangles()[:10], part[2:])
+    assert p3d.check(str(source)).ok
