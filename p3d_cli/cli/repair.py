@@ -17,6 +17,9 @@ from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
 from p3d_cli.repairs.report import SHOWN, RepairReport, StepReport
 from p3d_cli.repairs.steps import STEPS
 
+#: Notes of a step shown in the text report.
+NOTES_SHOWN = 3
+
 #: Columns of ``--csv``, in order.
 CSV_COLUMNS = ("source", "output", "ok", "fixed", "changed", "written", "failed_before", "failed_after",
                "faces_removed", "faces_flipped", "holes_filled", "holes_left", "faces_added",
@@ -79,11 +82,12 @@ def repair_text(report: RepairReport) -> str:
     where = f" -> {output.shown_name(report.output)}" if report.output and report.output != report.source else ""
     lines = [f"{name}{where}: {verdict} ({_written(report)})"]
     lines.append(f"  before: {_verdict(report.failed_before, report.before)}")
-    for step in report.steps:
-        text = _step_text(step)
-        if text:
-            lines.append(f"  {step.name}: {text}")
-    lines.append(f"  after: {_verdict(report.failed_after, report.after)}")
+    if report.failed_before:             # a mesh check passes runs no step: nothing to say of them
+        for step in report.steps:
+            text = _step_text(step)
+            if text:
+                lines.append(f"  {step.name}: {text}")
+        lines.append(f"  after: {_verdict(report.failed_after, report.after)}")
     lines.append("  " + _mass_text(report))
     for line in report.unfixed:
         lines.append(f"  not fixed: {line}")
@@ -142,8 +146,10 @@ def _step_text(step: StepReport) -> str:
         if c.get("cavities"):
             parts.append(f"{plural(c['cavities'], 'cavity')} kept wound inward")
     text = "; ".join(parts)
-    for note in step.notes:
+    for note in step.notes[:NOTES_SHOWN]:
         text += f"\n    {note}"
+    if len(step.notes) > NOTES_SHOWN:
+        text += "\n    and more like these (--json lists them)"
     return text
 
 
