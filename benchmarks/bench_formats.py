@@ -10,7 +10,8 @@ What it does:
    wall time and user+sys CPU time from ``os.wait4`` (the same numbers as ``/usr/bin/time``):
 
    - p3d: ``p3d props FILE --field volume --output-units U`` in the file's own unit U, as
-     trimesh answers (reads with trimesh's loader, then p3d's checks and exact integrals);
+     trimesh answers (GLB and 3MF read by p3d's own readers, DAE by trimesh's loader; then
+     p3d's checks and exact integrals);
    - trimesh: ``trimesh.load(FILE, force="mesh")`` (the scene's meshes, placed, as one mesh)
      then ``mesh.mass_properties``.
 

@@ -103,6 +103,12 @@ class MissingExtraError(P3DError):
     """An optional backend is needed but not installed."""
 
 
+def install_hint(extra: str, requirements: str) -> str:
+    """How to install p3d's extra ``extra`` (whose packages are ``requirements``, as pip takes
+    them): p3d itself is not on PyPI, so the hint names the packages, and the extra of a clone."""
+    return f"install p3d's extra '{extra}': pip install {requirements} (or pip install '.[{extra}]' in a clone of p3d)"
+
+
 class CheckFailedError(P3DError):
     """A result failed a requirement (``--strict``, ``p3d check``)."""
 

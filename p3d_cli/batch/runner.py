@@ -33,7 +33,7 @@ from typing import Callable, Generator, Iterable
 
 from p3d_cli.batch import chunks
 from p3d_cli.batch.inputs import expand_inputs
-from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError
+from p3d_cli.errors import InputError, InternalError, MissingExtraError, P3DError, UsageError, install_hint
 
 
 class ClusterLost(P3DError):
@@ -157,8 +157,7 @@ def _on_dask(items: list[str], work, address: str) -> Generator[Outcome, None, N
         from dask.distributed import Client
     except ImportError:
         raise MissingExtraError("dask", "needs dask.distributed, which is not installed",
-                                "install p3d's extra 'dask': pip install 'dask[distributed]>=2023.1' "
-                                "(or pip install '.[dask]' in a clone of p3d)") from None
+                                install_hint("dask", "'dask[distributed]>=2023.1'")) from None
     _quiet_dask_logs()
     client = _connect(Client, address)
     lost = False

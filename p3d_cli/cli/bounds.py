@@ -21,7 +21,8 @@ from p3d_cli.cli.options import (
     units_options,
     warning_options,
 )
-from p3d_cli.cli.props import field, output_style, plural
+from p3d_cli.cli.output import plural
+from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.settings import WarningFilter, settings_for
 

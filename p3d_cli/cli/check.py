@@ -18,7 +18,8 @@ from p3d_cli.cli.options import (
     inputs_argument,
     json_option,
 )
-from p3d_cli.cli.props import field, output_style, plural
+from p3d_cli.cli.output import plural
+from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.config import Config
 from p3d_cli.errors import UsageError

@@ -229,3 +229,10 @@ def one_line(text: str) -> str:
         else:
             out.append(ch)
     return "".join(out)
+
+
+def plural(count: int, noun: str) -> str:
+    """``1 face``, ``12 faces``, ``0 non-manifold vertices``."""
+    if count == 1:
+        return f"{count} {noun}"
+    return f"{count} {noun[:-2] + 'ices' if noun.endswith('vertex') else noun + 's'}"

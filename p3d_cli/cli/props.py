@@ -255,11 +255,6 @@ def props_record(result: PropsResult) -> dict:
     return record
 
 
-def plural(count: int, noun: str) -> str:
-    """``1 face``, ``12 faces``."""
-    return f"{count} {noun}{'' if count == 1 else 's'}"
-
-
 def units_line(units: dict | None) -> list[str]:
     """The table's statement of units, 80 columns wide."""
     if not units or units.get("system") == "mesh":
@@ -282,7 +277,7 @@ def props_table(result: PropsResult, precision: int = 10) -> str:
     objects = f"{result.details['objects']}, " if "objects" in result.details else ""
     lines = [
         whole + name + output.shown_name(f.source),
-        f"  {f.format}, " + ("" if f.format == "primitive" else f"{plural(f.faces, 'face')}, ")
+        f"  {f.format}, " + ("" if f.format == "primitive" else f"{output.plural(f.faces, 'face')}, ")
         + f"{objects}closed: {closed}, method: {result.method}",
         *units_line(result.units),
         f"  volume            {number(p['volume'])}",

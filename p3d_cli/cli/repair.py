@@ -10,7 +10,7 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
-from p3d_cli.cli.props import plural
+
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import OutputError, UsageError
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
@@ -24,7 +24,6 @@ NOTES_SHOWN = 3
 CSV_COLUMNS = ("source", "output", "ok", "fixed", "changed", "written", "failed_before", "failed_after",
                "faces_removed", "faces_flipped", "holes_filled", "holes_left", "faces_added",
                "volume_before", "volume_after", "relative_volume_change", "error")
-
 
 def repair_report(source: str, *, style: str, targets: dict, **options) -> Report:
     """One input repaired and its report formatted (module level: workers receive it)."""
@@ -46,7 +45,6 @@ def repair_report(source: str, *, style: str, targets: dict, **options) -> Repor
                       f"(relative), over the limit {report.max_volume_change:g}: nothing written"),)
     return Report(text, passed=report.ok, source=source, failures=failures)
 
-
 def csv_row(record: dict) -> dict:
     """The ``--csv`` cells of a JSON record."""
     steps = {s["step"]: s["counts"] for s in record["steps"]}
@@ -62,7 +60,6 @@ def csv_row(record: dict) -> dict:
             "volume_before": mass["before"]["volume"], "volume_after": mass["after"]["volume"],
             "relative_volume_change": mass["relative_volume_change"]}
 
-
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done (JSON or CSV; nothing in text)."""
     record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
@@ -71,7 +68,6 @@ def error_line(outcome, *, style: str) -> str | None:
     if style == "csv":
         return output.csv_line(record.get(key, "") for key in CSV_COLUMNS)
     return None
-
 
 def repair_text(report: RepairReport) -> str:
     """The human report of one repair."""
@@ -95,23 +91,19 @@ def repair_text(report: RepairReport) -> str:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
 
-
 def _written(report: RepairReport) -> str:
     return {"written": "written", "copied": "copied unchanged", "not written": "nothing written: not needed",
             "unchanged": "left unchanged", "refused": "nothing written", "dry run": "dry run: nothing written",
             "": "not written"}.get(report.written, report.written)
 
-
 def _verdict(failed: tuple[str, ...], topology) -> str:
     head = "passes p3d check" if not failed else "fails " + ", ".join(failed)
-    return f"{head} ({plural(topology.faces, 'face')}, {plural(topology.shells, 'shell')})"
-
+    return f"{head} ({output.plural(topology.faces, 'face')}, {output.plural(topology.shells, 'shell')})"
 
 def _faces(numbers, noun: str = "face") -> str:
     shown = ", ".join(str(f) for f in numbers[:SHOWN])
     more = f", ... ({len(numbers) - SHOWN} more)" if len(numbers) > SHOWN else ""
     return f"{noun}{'s' if len(numbers) != 1 else ''} {shown}{more}"
-
 
 def _step_text(step: StepReport) -> str:
     """One line for a step (empty for a step not asked for that left no note)."""
@@ -120,38 +112,37 @@ def _step_text(step: StepReport) -> str:
     c = step.counts
     parts = []
     if step.name == "weld":
-        parts.append(f"{plural(c['vertices_merged'], 'vertex')} merged (within {c['tolerance']:g}, largest "
-                     f"distance {c['largest_distance']:.3g}), {plural(c['faces_moved'], 'face')} moved")
+        parts.append(f"{output.plural(c['vertices_merged'], 'vertex')} merged (within {c['tolerance']:g}, largest "
+                     f"distance {c['largest_distance']:.3g}), {output.plural(c['faces_moved'], 'face')} moved")
         if step.faces:
             parts[-1] += f" ({_faces(step.faces)})"
     elif step.name in ("degenerate", "duplicate"):
         removed = c.get("faces_removed", 0)
-        parts.append(f"{plural(removed, 'face')} removed" + (f" ({_faces(step.faces)})" if removed else ""))
+        parts.append(f"{output.plural(removed, 'face')} removed" + (f" ({_faces(step.faces)})" if removed else ""))
     elif step.name == "orient":
         flipped = c.get("faces_flipped", 0)
-        parts.append(f"{plural(flipped, 'face')} flipped" + (f" in {plural(c['shells'], 'shell')} "
+        parts.append(f"{output.plural(flipped, 'face')} flipped" + (f" in {output.plural(c['shells'], 'shell')} "
                                                              f"({_faces(step.faces)})" if flipped else ""))
     elif step.name == "holes":
         filled, left = c.get("holes_filled", 0), c.get("holes_left", 0)
-        parts.append(f"{plural(filled, 'hole')} filled" + (f" with {plural(c['faces_added'], 'new face')} "
-                                                          f"({_faces(step.new_faces)})" if filled else ""))
+        added = f" with {output.plural(c['faces_added'], 'new face')} ({_faces(step.new_faces)})" if filled else ""
+        parts.append(f"{output.plural(filled, 'hole')} filled{added}")
         if c.get("faces_split"):
-            parts.append(f"{plural(c['faces_split'], 'face')} split at a T-junction ({_faces(step.faces)})")
+            parts.append(f"{output.plural(c['faces_split'], 'face')} split at a T-junction ({_faces(step.faces)})")
         if left:
             parts.append(f"{left} left")
     elif step.name == "outward":
         flipped = c.get("shells_flipped", 0)
-        parts.append(f"{plural(flipped, 'shell')} flipped" + (f" ({plural(c['faces_flipped'], 'face')})" if flipped
-                                                              else ""))
+        faces = f" ({output.plural(c['faces_flipped'], 'face')})" if flipped else ""
+        parts.append(f"{output.plural(flipped, 'shell')} flipped{faces}")
         if c.get("cavities"):
-            parts.append(f"{plural(c['cavities'], 'cavity')} kept wound inward")
+            parts.append(f"{output.plural(c['cavities'], 'cavity')} kept wound inward")
     text = "; ".join(parts)
     for note in step.notes[:NOTES_SHOWN]:
         text += f"\n    {note}"
     if len(step.notes) > NOTES_SHOWN:
         text += "\n    and more like these (--json lists them)"
     return text
-
 
 def _mass_text(report: RepairReport) -> str:
     m = report.mass
@@ -163,7 +154,6 @@ def _mass_text(report: RepairReport) -> str:
     if m.relative_inertia_change:
         text += f"; inertia changed {m.relative_inertia_change:.3g} (relative)"
     return text
-
 
 def output_targets(inputs, items, out: str | None, output_format: str | None) -> tuple[dict, bool]:
     """The output of every input (None: in place or a dry run), and whether they mirror the
@@ -186,7 +176,6 @@ def output_targets(inputs, items, out: str | None, output_format: str | None) ->
 
         extension = "." + format_of(out, output_format)
     return mirrored(names, [i for i in inputs if i != "-" and os.path.isdir(i)], out, extension), True
-
 
 @click.command()
 @inputs_argument

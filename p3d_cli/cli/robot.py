@@ -51,7 +51,7 @@ def _open_mesh_option(f):
                         show_default=True,
                         help="What stands in for a mesh that bounds no solid (open, non-manifold, inward): "
                              "nothing; a thin shell of the link's mass over its surface; or the mesh's "
-                             "convex hull (needs scipy: pip install 'p3d-cli[robots]').")(f)
+                             "convex hull (needs scipy: p3d's extra 'robots').")(f)
 
 
 def _from_option(f):
@@ -67,7 +67,7 @@ def robot() -> None:
     mesh (STL, OBJ, PLY, DAE in its declared unit, ... at its origin, with its scale, mirrored
     if negative) and each primitive (box, cylinder, sphere, capsule, ellipsoid) in the link
     frame. Descriptions are in SI (m, kg). xacro files are expanded when the xacro package is
-    installed (pip install 'p3d-cli[robots]'). See docs/robots.md.
+    installed (p3d's extra 'robots'). See docs/robots.md.
 
     \b
     Examples:
@@ -154,8 +154,9 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
     failed = [c.link for c in checks if not c.ok]
     frames = sum(1 for c in checks if c.status == "frame")
     if not as_json:
-        tally = f"{len(checks)} links, {len(failed)} failed" + (f", {frames} massless frames" if frames else "") \
-            + (f": {', '.join(failed)}" if failed else "")
+        tally = (f"{output.plural(len(checks), 'link')}, {len(failed)} failed"
+                 + (f", {output.plural(frames, 'massless frame')}" if frames else "")
+                 + (f": {', '.join(failed)}" if failed else ""))
         click.echo(f"p3d robot check: {robot_.path}: {tally}", err=True)
     return 1 if failed else 0
 

@@ -24,9 +24,9 @@ from p3d_cli.errors import UsageError
                    "(x, y, z: the centre of mass).")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None, metavar="FILE.png|svg|pdf",
               help="With --steps: plot positions, turns, joint errors and energy against time "
-                   "(needs p3d-cli[render]).")
+                   "(needs p3d's extra 'render').")
 @click.option("--animate", type=click.Path(dir_okay=False), default=None, metavar="FILE.gif|mp4",
-              help="With --steps: an animation of the bodies (needs p3d-cli[render]; MP4 also ffmpeg).")
+              help="With --steps: an animation of the bodies (needs p3d's extra 'render'; MP4 also ffmpeg).")
 @json_option
 def solve(scene, steps, dt, trajectory, plot, animate, as_json):
     """Solve ball, hinge and bar constraints between rigid bodies.

@@ -234,11 +234,10 @@ def _scipy_sparse():
         import scipy.sparse as sp
         import scipy.sparse.linalg  # noqa: F401 - splu, loaded with it
     except ImportError:
-        from p3d_cli.errors import MissingExtraError
+        from p3d_cli.errors import MissingExtraError, install_hint
 
         raise MissingExtraError("solve", "a constraint island this large needs scipy (sparse factorisation), "
-                                "which is not installed", "install p3d's extra 'solve': pip install "
-                                "'scipy>=1.10' (or pip install '.[solve]' in a clone of p3d)") from None
+                                "which is not installed", install_hint("solve", "'scipy>=1.10'")) from None
     return sp
 
 

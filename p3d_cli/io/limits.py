@@ -103,3 +103,12 @@ def check_instances(where: str, instances: int, faces: int, what: str) -> None:
     if faces > MAX_PLACED_FACES:
         raise FormatError(where, f"its {what} place {faces:,} triangles, more than p3d places "
                           f"({MAX_PLACED_FACES:,})", "measure the meshes apart, or check the file's instancing")
+
+
+#: Depth of nested 3MF components (an object made of objects made of objects...): deeper than
+#: any real file. The walks are iterative; glTF node trees and XML elements are walked without
+#: recursion too, and need no depth limit (a 20,000-deep node chain reads).
+NESTING_DEPTH = 1000
+
+#: Bytes of a ``.gltf`` file's JSON (a GLB's JSON chunk is bounded by the file itself).
+GLTF_JSON_BYTES = 1 << 30

@@ -2,10 +2,10 @@
 
 glTF, 3MF, COLLADA (DAE) and AMF files describe a scene graph: meshes instanced by nodes whose
 transforms compose down the tree, and a length unit for the whole file. Their readers
-(``p3d_cli.io.dae``, ``p3d_cli.io.amf``, and ``p3d_cli.io.trimesh_scene`` for the formats read
-by trimesh) hand this module a list of ``SceneObject`` (one per mesh instance: a mesh's vertices
-and all its faces, whatever their materials, and the instance's whole transform) and the file's
-unit in metres; ``scene_source`` turns them into one ``MeshSource``:
+(``p3d_cli.io.dae``, ``p3d_cli.io.amf``, ``p3d_cli.io.gltf``, ``p3d_cli.io.threemf``) hand
+this module a list of ``SceneObject`` (one per mesh instance: a mesh's vertices and all its
+faces, whatever their materials, and the instance's whole transform) and the file's unit in
+metres; ``scene_source`` turns them into one ``MeshSource``:
 
 - every object's vertices are carried through its transform as its blocks are read (float64,
   one matrix product, so that many instances of one mesh hold the mesh once; an
@@ -24,37 +24,17 @@ unit in metres; ``scene_source`` turns them into one ``MeshSource``:
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
-from types import ModuleType
 from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from p3d_cli.errors import FormatError, InputError, MissingExtraError
+from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import BLOCK, MeshSource
-
-#: The optional extra that brings the scene readers' libraries.
-EXTRA = "p3d-cli[formats]"
 
 #: Relative tolerance for recognising a declared unit as one of ``LENGTHS`` (``0.0254`` as
 #: written in a file is the inch).
 _UNIT_RTOL = 1e-9
-
-
-def require(module: str, where: str, what: str) -> ModuleType:
-    """Import ``module`` for reading ``what``, or say which extra to install.
-
-    Raises
-    ------
-    MissingExtraError
-    """
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        package = module.split(".")[0]
-        raise MissingExtraError(where, f"reading {what} needs the {package} package, which is not installed",
-                                f"install the formats extra: pip install '{EXTRA}'") from None
 
 
 @dataclass(frozen=True)

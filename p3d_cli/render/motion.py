@@ -20,7 +20,7 @@ from typing import Iterable
 
 import numpy as np
 
-from p3d_cli.errors import MissingExtraError, UsageError
+from p3d_cli.errors import MissingExtraError, UsageError, install_hint
 
 #: Most frames of an animation, and its frame rate.
 FRAMES = 150
@@ -37,7 +37,7 @@ def _pyplot(where: str):
         import matplotlib.pyplot as plt
     except ImportError:
         raise MissingExtraError(where, "plots need matplotlib, which is not installed",
-                                "pip install 'p3d-cli[render]'") from None
+                                install_hint("render", "'matplotlib>=3.7'")) from None
     return plt
 
 
@@ -191,7 +191,7 @@ def write_animation(motion, bodies: list[np.ndarray], path: str, *, inputs: Iter
         need = "Pillow" if ext == ".gif" else "ffmpeg on PATH"
         raise MissingExtraError("animate", f"writing {ext[1:].upper()} needs {need}, which is not available",
                                 "install ffmpeg (e.g. apt-get install ffmpeg), or write a .gif" if ext == ".mp4"
-                                else "pip install 'p3d-cli[render]'")
+                                else install_hint("render", "'matplotlib>=3.7'"))
     frames = animation_frames(motion, bodies, size, view, scene=scene)
     h, w = frames.shape[1:3]
     figure = plt.figure(figsize=(w / 100, h / 100), dpi=100)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.errors import InputError, MissingExtraError
+from p3d_cli.errors import InputError, MissingExtraError, install_hint
 from p3d_cli.results import MassProperties
 
 #: What ``open_mesh`` may be.
@@ -52,7 +52,7 @@ def hull_triangles(triangles: np.ndarray, where: str) -> np.ndarray:
         from scipy.spatial import ConvexHull, QhullError
     except ImportError:
         raise MissingExtraError(where, "the convex hull of an open mesh needs scipy",
-                                "install it: pip install 'p3d-cli[robots]'") from None
+                                install_hint("robots", "'scipy>=1.10'")) from None
     points = np.unique(np.asarray(triangles, dtype=np.float64).reshape(-1, 3), axis=0)
     try:
         hull = ConvexHull(points)

@@ -15,11 +15,11 @@ from __future__ import annotations
 import contextlib
 import os
 
-from p3d_cli.errors import InputError, MissingExtraError
+from p3d_cli.errors import InputError, MissingExtraError, install_hint
 from p3d_cli.robots.model import PACKAGE_VARIABLES
 from p3d_cli.robots.xmltree import Node, parse_xml
 
-INSTALL = "pip install 'p3d-cli[robots]'"
+INSTALL = install_hint("robots", "'xacro>=2.0'")
 
 
 def parse_xacro_args(items) -> dict[str, str]:
@@ -68,7 +68,7 @@ def expand_xacro(path: str, root: Node, packages: dict[str, str], xacro_args=Non
         import xacro.substitution_args as substitution
     except ImportError:
         raise MissingExtraError(path, "is a xacro file, and expanding it needs the xacro package",
-                                f"install it: {INSTALL}; or expand it yourself: xacro {os.path.basename(path)} "
+                                f"{INSTALL}; or expand it yourself: xacro {os.path.basename(path)} "
                                 "> robot.urdf") from None
     arguments = parse_xacro_args(xacro_args)
     missing: list[str] = []

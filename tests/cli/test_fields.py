@@ -80,12 +80,19 @@ def test_field_with_json_or_csv_is_a_usage_error(cube, command, other):
 
 
 def test_a_result_json_cannot_hold_is_a_range_error_naming_the_field_not_a_bug():
-    """Issue 27: --json of a result that overflowed float64 was an internal error (exit 3)."""
+    """Issue 27: --json of a result that overflowed float64 was an internal error (exit 3). The
+    library now keeps such results finite (the centre of bounds at 1e308 is a number) or refuses
+    them; the JSON writer stays the backstop: a record holding inf or nan is a range error that
+    names the source and the field, never an internal error."""
+    import pytest
     from click.testing import CliRunner
 
     from p3d_cli.cli.main import cli
+    from p3d_cli.cli.output import dumps
+    from p3d_cli.errors import RangeError
 
     result = CliRunner().invoke(cli, ["bounds", "box:1,1,1", "--translate", "1e308,0,0", "--json"])
-    assert result.exit_code == 2, result.output
-    assert "internal error" not in result.output
-    assert "box:1,1,1: center.0 is not a finite number (float64 overflowed" in result.stderr
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["center"] == [1e308, 0.0, 0.0]
+    with pytest.raises(RangeError, match=r"^box:1,1,1: center\.0 is not a finite number \(float64 overflowed"):
+        dumps({"source": "box:1,1,1", "min": [1.0, 0.0, 0.0], "center": [float("inf"), 0.0, 0.0]})

@@ -5,8 +5,8 @@ Usage::
     python tests/fuzz/run_atheris.py TARGET [libFuzzer options]
     python tests/fuzz/run_atheris.py ply -max_total_time=3600 -rss_limit_mb=2048 corpus-ply/
 
-TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, dae, amf, vtp, scene, scene_steps, urdf, mjcf,
-sdf, robot_fill). The run starts from the
+TARGET is one of ``targets.TARGETS`` (stl, obj, ply, off, gltf, glb, 3mf, dae, amf, vtp, scene, scene_steps,
+urdf, mjcf, sdf, robot_fill). The run starts from the
 target's seeds (written to the corpus folder if it is empty); any exception other than a
 P3DError, a crash, a timeout or a memory blow-up stops it with the input that caused it, which
 then belongs in ``tests/fuzz/corpus/TARGET/`` (docs/fuzzing.md).
@@ -20,6 +20,7 @@ import sys
 import atheris
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))   # tests/: helpers
 
 with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.exact  # noqa: F401 - instrumented before the targets import them
@@ -27,6 +28,8 @@ with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.io.amf  # noqa: F401 - the readers are imported on first use: instrument them here
     import p3d_cli.io.dae  # noqa: F401
     import p3d_cli.io.vtp  # noqa: F401
+    import p3d_cli.io.gltf  # noqa: F401
+    import p3d_cli.io.threemf  # noqa: F401
     import p3d_cli.constraints.scene  # noqa: F401 - the scene targets' code, instrumented too
     import p3d_cli.constraints.simulation  # noqa: F401
     import p3d_cli.robots  # noqa: F401 - the robot targets' readers, checks and fill

@@ -92,6 +92,8 @@ def seeds(name: str) -> list[bytes]:
         return [(samples / "cube.off").read_bytes()]
     if name == "ply":
         return [_ply("ascii"), _ply("binary_little_endian"), _ply("binary_big_endian")]
+    if name in ("gltf", "glb", "3mf"):
+        return _scene_seeds(name)
     if name == "dae":
         return [_dae()]
     if name == "amf":
@@ -103,6 +105,50 @@ def seeds(name: str) -> list[bytes]:
     if name == "robot_fill":
         return [seed for seeds_ in ROBOT_SEEDS.values() for seed in seeds_]
     raise KeyError(name)
+
+
+def _scene_seeds(name: str) -> list[bytes]:
+    """glTF JSON (buffers as data: URIs), GLB, and 3MF model XML: a two-material cube, nodes
+    with TRS and matrices, a strip, sparse positions, instancing; components and items."""
+    import base64
+    import json
+
+    from helpers.gltf_writer import CUBE_FACES, CUBE_VERTICES, TET_FACES, TET_VERTICES, Gltf
+    from helpers.threemf_writer import component_object, mesh_object, model
+
+    if name == "3mf":
+        return [model([mesh_object(1, CUBE_VERTICES, CUBE_FACES, "cube"),
+                       component_object(2, [(1, np.diag([1.0, 1.0, -1.0, 1.0]), None), (1, None, None)])],
+                      [(2, None, None), (1, np.eye(4), None)], unit="inch").encode(),
+                model([mesh_object(1, TET_VERTICES, TET_FACES)], [(1, None, None)]).encode()]
+    doc = Gltf()
+    cube = doc.mesh(doc.primitive(CUBE_VERTICES, CUBE_FACES[:6], index_dtype="uint16"),
+                    doc.primitive(CUBE_VERTICES, CUBE_FACES[6:], index_dtype="uint8"))
+    child = doc.node(doc.mesh(doc.primitive(CUBE_VERTICES, [4, 0, 5, 1, 6, 2, 7, 3, 4, 0], mode=5)), root=False,
+                     matrix=[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1])
+    doc.node(cube, rotation=[0.0, 0.0, 0.6, 0.8], scale=[1.0, 2.0, 1.0], children=[child])
+    ext = {"attributes": {"TRANSLATION": doc.accessor(np.array([[0, 0, 0], [5, 0, 0]]))}}
+    doc.node(doc.mesh(doc.primitive(TET_VERTICES, TET_FACES, mode=4)), extensions={"EXT_mesh_gpu_instancing": ext})
+    doc.json["extensionsUsed"] = ["EXT_mesh_gpu_instancing"]
+    if name == "glb":
+        return [doc.glb()]
+    uri = "data:application/octet-stream;base64," + base64.b64encode(bytes(doc.blob)).decode()
+    return [json.dumps(doc.document(uri)).encode()]
+
+
+def threemf_bytes(data: bytes):
+    """A 3MF target: ``data`` is a whole package when it starts as a zip does, else the root
+    model part's XML, zipped here (so that mutations reach the model reader, not only the zip's
+    checksums)."""
+    import io
+    import zipfile
+
+    if data[:2] != b"PK":
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w", zipfile.ZIP_STORED) as archive:
+            archive.writestr("3D/3dmodel.model", data)
+        data = buffer.getvalue()
+    return measure_bytes(data, "3mf")
 
 
 _TET_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
@@ -286,6 +332,9 @@ TARGETS = {
     "obj": lambda data: measure_bytes(data, "obj"),
     "ply": lambda data: measure_bytes(data, "ply"),
     "off": lambda data: measure_bytes(data, "off"),
+    "gltf": lambda data: measure_bytes(data, "gltf"),
+    "glb": lambda data: measure_bytes(data, "gltf"),
+    "3mf": threemf_bytes,
     "dae": lambda data: measure_bytes(data, "dae"),
     "amf": lambda data: measure_bytes(data, "amf"),
     "vtp": lambda data: measure_bytes(data, "vtp"),

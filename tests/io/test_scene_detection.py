@@ -16,7 +16,7 @@ from click.testing import CliRunner
 import p3d_cli as p3d
 from conftest import write_binary_stl
 from p3d_cli.cli.main import cli
-from p3d_cli.errors import FormatError, MissingExtraError, UnknownFormatError
+from p3d_cli.errors import FormatError, UnknownFormatError
 from p3d_cli.io import detect_format, format_names, is_mesh_path, open_input
 
 BOX = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
@@ -90,17 +90,19 @@ def test_directory_search_picks_up_scene_formats():
         assert not is_mesh_path(name), name
 
 
-def test_missing_library_names_the_extra(tmp_path, monkeypatch):
+def test_scene_formats_need_no_optional_library(tmp_path, monkeypatch):
+    """glTF, 3MF and COLLADA are read by p3d itself: neither trimesh, pycollada, lxml nor
+    networkx is needed (each is made unimportable here)."""
     path = tmp_path / "box.glb"
     path.write_bytes(trimesh.Scene(BOX).export(file_type="glb"))
+    three = tmp_path / "box.3mf"
+    three.write_bytes(trimesh.Scene(BOX).export(file_type="3mf"))
     dae = tmp_path / "box.dae"
     dae.write_bytes(BOX.export(file_type="dae"))
-    monkeypatch.setitem(sys.modules, "trimesh", None)
-    with pytest.raises(MissingExtraError, match="trimesh") as caught:
-        p3d.props(path)
-    assert "p3d-cli[formats]" in caught.value.hint
-    # COLLADA is read by p3d itself: neither trimesh nor pycollada is needed.
-    monkeypatch.setitem(sys.modules, "collada", None)
+    for module in ("trimesh", "collada", "lxml", "networkx"):
+        monkeypatch.setitem(sys.modules, module, None)
+    assert p3d.props(path).properties.volume == pytest.approx(6.0, rel=1e-12)
+    assert p3d.props(three, output_units="mm").properties.volume == pytest.approx(6.0, rel=1e-12)
     assert p3d.props(dae).properties.volume == pytest.approx(BOX.volume, rel=1e-6)
 
 
@@ -118,9 +120,9 @@ def _glb_with(document_change) -> bytes:
 
 @pytest.mark.parametrize("change, match", [
     (lambda d: d.update(extensionsRequired=["KHR_draco_mesh_compression"]), "draco"),
-    (lambda d: d["meshes"][0]["primitives"][0].update(mode=6), "triangle fans"),
+    (lambda d: d.update(extensionsRequired=["EXT_unknown_geometry"]), "does not know"),
 ])
-def test_gltf_that_trimesh_would_misread_is_refused(tmp_path, change, match):
+def test_gltf_that_p3d_cannot_apply_is_refused(tmp_path, change, match):
     path = tmp_path / "bad.glb"
     path.write_bytes(_glb_with(change))
     with pytest.raises(FormatError, match=match):

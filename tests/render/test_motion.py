@@ -73,4 +73,4 @@ def test_without_matplotlib_the_extra_is_named(tmp_path, monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_matplotlib)
     result = run("solve", PENDULUM, "--steps", "10", "--dt", "0.01", "--plot", tmp_path / "p.png")
     assert result.exit_code == 2
-    assert "p3d-cli[render]" in result.output and len(result.output.strip().splitlines()) == 1
+    assert "extra 'render'" in result.output and len(result.output.strip().splitlines()) == 1

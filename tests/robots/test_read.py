@@ -116,7 +116,7 @@ def test_xacro_without_the_package_is_refused_with_the_install_line(tmp_path, mo
     monkeypatch.setitem(sys.modules, "xacro", None)  # as if not installed
     for given in (path, tmp_path / "arm.urdf"):
         given.write_text(path.read_text())
-        with pytest.raises(MissingExtraError, match=r"xacro package.*pip install 'p3d-cli\[robots\]'"):
+        with pytest.raises(MissingExtraError, match=r"xacro package.*extra 'robots': pip install 'xacro>=2.0'"):
             load_robot(given)
 
 
