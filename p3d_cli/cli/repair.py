@@ -10,7 +10,6 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
-
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.errors import OutputError, UsageError
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
