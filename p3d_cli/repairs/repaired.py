@@ -132,7 +132,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     solid = as_solid(thing, format=format, stdin=stdin)
     mesh = solid.mesh
     if mesh is None:
-        raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction", "repair mesh files")
+        raise UsageError(solid.source, "is a shape spec, a clean solid by construction", "repair mesh files")
     where = mesh.where
     if mesh.tetrahedra is not None:
         raise InputError(where, "is a volume (tetrahedral) mesh; p3d repair mends triangle surfaces",
