@@ -49,7 +49,10 @@ def _stl(path) -> list[str]:
     """A binary STL's attribute words (some programs keep colours there); its normals are
     derived from the corners, and written anew."""
     record = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
-    data = np.fromfile(path, dtype=record, offset=84)
+    count = (os.path.getsize(path) - 84) // 50
+    if count <= 0:
+        return []
+    data = np.memmap(path, dtype=record, mode="r", offset=84, shape=(count,))    # no copy of the file
     return ["per-face attribute words (colours)"] if np.any(data["attr"]) else []
 
 

@@ -147,9 +147,12 @@ class Grouping:
     flipped: np.ndarray
 
 
-def grouping(draft: Draft) -> Grouping:
-    """The edges of ``draft``'s faces (``draft_edges``)."""
-    return Grouping(draft_edges(draft.faces), draft.faces, draft.flipped.copy())
+def grouping(draft: Draft, corners: Corners | None = None) -> Grouping:
+    """The edges of ``draft``'s faces (``draft_edges``); or, given the input's ``corners`` as
+    ``p3d_cli.mesh.vertices.group_corners`` sorted them (the draft's faces being the input's),
+    grouped from those directly (``group_edges`` frees their keys)."""
+    edges = draft_edges(draft.faces) if corners is None else group_edges(corners)
+    return Grouping(edges, draft.faces, draft.flipped.copy())
 
 
 def draft_edges(faces: np.ndarray) -> Edges:

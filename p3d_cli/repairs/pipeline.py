@@ -21,7 +21,8 @@ import numpy as np
 
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.report import Shell, TopologyReport
-from p3d_cli.mesh.topology import corner_vertex_ids, topology, topology_of_blocks
+from p3d_cli.mesh.topology import topology, topology_of_blocks
+from p3d_cli.mesh.vertices import group_corners
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
 from p3d_cli.repairs.draft import Draft, Grouping, grouping
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
@@ -81,16 +82,21 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         raise UsageError("fill_holes", f"unknown policy {fill_holes!r}", "use " + " or ".join(POLICIES))
     n = len(triangles)
     # In blocks, as a file is read (the topology's passes are tuned to cache-sized blocks).
-    before = topology_of_blocks(array_source("array", triangles, str(triangles.dtype)).read_blocks, n, where)
+    blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
+    before = topology_of_blocks(blocks, n, where)
     if not failed_checks(before):
         clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
                                    if name in steps else ()) for name in STEPS)
         return Outcome(None, triangles, before, before, clean, (), False)
     if _only_inward(before, steps):
         return _turned_out(triangles, before, steps)
-    ids, _ = corner_vertex_ids(triangles)
-    points = np.empty((int(ids.max()) + 1, 3), dtype=triangles.dtype)
-    points[ids.ravel()] = triangles.reshape(-1, 3)
+    # check's exact vertex ids; its sorted corners also give the first edge grouping for free
+    # (no second sort) while the faces are the input's.
+    corners = group_corners(blocks, n)
+    ids = corners.ids.reshape(n, 3)
+    points = np.empty((corners.count, 3), dtype=triangles.dtype)
+    points[corners.ids] = triangles.reshape(-1, 3)
+    corners.points = None
     draft = Draft.of(triangles, ids, points)
     reports = {name: StepReport(name, ran=False) for name in STEPS}
     if "weld" in steps:
@@ -101,7 +107,8 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
             draft, reports["degenerate"] = degenerate_step(draft)
         else:
             reports["degenerate"] = StepReport("degenerate", counts={"faces_removed": 0})
-    grouped = grouping(draft)
+    grouped = grouping(draft) if draft.moved.any() or len(draft.faces) != n else grouping(draft, corners)
+    del corners
     if "duplicate" in steps:
         if before.duplicate_faces or changed:
             draft, reports["duplicate"] = duplicate_step(draft, grouped.edges)
