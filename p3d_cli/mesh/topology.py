@@ -50,6 +50,7 @@ from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
+from p3d_cli.mesh.layout import Layout
 from p3d_cli.mesh.paired import Paired, paired_topology
 from p3d_cli.mesh.report import SAMPLES, EdgeSample, Shell, TopologyReport, VertexSample
 from p3d_cli.mesh.shells import LISTED_SHELLS, Components, components, shell_volumes, shells
@@ -57,7 +58,7 @@ from p3d_cli.mesh.vertices import corner_coords, group_corners
 
 __all__ = ["Components", "EdgeSample", "LISTED_SHELLS", "SAMPLES", "Shell",
            "TopologyReport", "VertexSample", "components", "corner_vertex_ids",
-           "topology", "topology_of_blocks"]
+           "topology", "topology_and_layout", "topology_of_blocks"]
 
 
 def corner_vertex_ids(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -110,7 +111,15 @@ def _array_blocks(triangles: np.ndarray):
 
 
 def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyReport:
-    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()``.
+    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()`` (see
+    ``topology_and_layout``)."""
+    return topology_and_layout(blocks, n, where)[0]
+
+
+def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
+    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()``, and the
+    vertex ids, shells and edges it found (None for no faces), for the passes that follow
+    (``p3d repair``'s steps).
 
     Parameters
     ----------
@@ -127,21 +136,22 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         volume of 1e300 and more), where an infinite or NaN volume would be a wrong number.
     """
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
-        report = _topology_of_blocks(blocks, n, where)
+        report, layout = _topology_of_blocks(blocks, n, where)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
         from p3d_cli.errors import RangeError
 
         raise RangeError(where or "mesh", "the signed volume overflows float64 (coordinates too large for "
                          "their cubes)", "scale the mesh into a larger unit (e.g. km instead of mm)")
-    return report
+    return report, layout
 
 
-def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
+def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyReport, Layout | None]:
     if n == 0:
-        return _empty_report()
+        return _empty_report(), None
     fast = paired_topology(blocks, n, where)
     if fast is not None:
-        return _paired_report(blocks, n, fast)
+        layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area)
+        return _paired_report(blocks, n, fast), layout
     zero_area: list[np.ndarray] = []
 
     def per_block(first_face: int, cols: np.ndarray, block) -> None:
@@ -175,7 +185,8 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
     boundary, nonmanifold_edges, misoriented = (
         tuple(EdgeSample(faces, (points[a], points[b])) for faces, a, b in samples)
         for samples in edge_samples)
-    return TopologyReport(
+    layout = Layout(ids, m, found, zero, edges, duplicates)
+    report = TopologyReport(
         faces=n, vertices=m, edges=edges.count,
         boundary_edges=int(edges.boundary.size), nonmanifold_edges=int(edges.nonmanifold.size),
         misoriented_edges=int(edges.misoriented.size), nonmanifold_vertices=int(nonmanifold.size),
@@ -189,6 +200,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> TopologyReport:
         degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
+    return report, layout
 
 
 def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:

@@ -15,10 +15,9 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.mesh.columns import columns
-from p3d_cli.mesh.edges import Edges
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.repairs import solidity
-from p3d_cli.repairs.draft import Draft
+from p3d_cli.repairs.draft import Draft, draft_edges
 from p3d_cli.repairs.report import StepReport
 
 #: Faces per block when testing for zero area (bounded temporaries).
@@ -61,26 +60,43 @@ def _most_used(group: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return leader[group]
 
 
-def degenerate_step(draft: Draft) -> tuple[Draft, StepReport]:
-    """Remove the faces of exactly zero area."""
-    zero = []
-    for lo in range(0, len(draft.faces), _BLOCK):
-        block = draft.points[draft.faces[lo:lo + _BLOCK]]
-        zero.append(zero_area_faces(columns(block)) + lo)
-    gone = np.concatenate(zero) if zero else np.zeros(0, dtype=np.int64)
+def degenerate_step(draft: Draft, known: np.ndarray | None = None) -> tuple[Draft, StepReport]:
+    """Remove the faces of exactly zero area (``known``: those ``p3d check``'s topology found,
+    while the draft's faces are the input's)."""
+    if known is not None:
+        gone = np.asarray(known, dtype=np.int64)
+    else:
+        zero = []
+        for lo in range(0, len(draft.faces), _BLOCK):
+            block = draft.points[draft.faces[lo:lo + _BLOCK]]
+            zero.append(zero_area_faces(columns(block)) + lo)
+        gone = np.concatenate(zero) if zero else np.zeros(0, dtype=np.int64)
+    if gone.size == len(draft.faces):
+        return draft, StepReport("degenerate", counts={"faces_removed": 0}, notes=(
+            f"every face ({gone.size}) has zero area: removing them would leave nothing; left as they were",))
     keep = np.ones(len(draft.faces), dtype=bool)
     keep[gone] = False
     return draft.keep(keep), StepReport("degenerate", counts={"faces_removed": int(gone.size)},
                                         faces=tuple(int(f) for f in draft.origin[gone]))
 
 
-def duplicate_step(draft: Draft, edges: Edges) -> tuple[Draft, StepReport]:
-    """Remove every face that repeats an earlier one (``edges``: the draft's grouping, which
-    narrows the faces to compare as ``p3d check`` narrows them)."""
+def duplicate_step(draft: Draft, known: np.ndarray | None = None) -> tuple[Draft, StepReport]:
+    """Remove every face that repeats an earlier one. ``known``: the ``(first, later)`` pairs
+    of *input* faces ``p3d check``'s topology found (while no face has moved), else the pairs are
+    found on the draft's own edges, narrowed as ``check`` narrows them."""
     faces = draft.faces
-    repeated = repeated_vertex_faces(faces)
-    candidates = duplicate_candidates(len(faces), edges.side, edges.starts, edges.counts, repeated)
-    pairs = duplicate_faces(faces, candidates)
+    if known is not None:
+        # Input numbers to draft rows; a pair one of whose faces is gone (degenerate: then both
+        # are) is no pair any more.
+        rows = np.searchsorted(draft.origin, known)
+        rows = np.minimum(rows, max(len(draft.origin) - 1, 0))
+        present = (draft.origin[rows] == known).all(axis=1) if len(draft.origin) else np.zeros(len(known), bool)
+        pairs = rows[present]
+    else:
+        edges = draft_edges(faces)
+        repeated = repeated_vertex_faces(faces)
+        candidates = duplicate_candidates(len(faces), edges.side, edges.starts, edges.counts, repeated)
+        pairs = duplicate_faces(faces, candidates)
     keep = np.ones(len(faces), dtype=bool)
     keep[pairs[:, 1]] = False
     places = tuple({"face": int(draft.origin[b]), "repeats": int(draft.origin[a])} for a, b in pairs.tolist())

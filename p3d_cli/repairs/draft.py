@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.mesh.edges import Edges, group_edges
+from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.vertices import Corners
 
 
@@ -107,7 +107,11 @@ class Draft:
         out = np.empty((len(self.faces), 3, 3), dtype=self.triangles.dtype)
         kept = (self.origin >= 0) & ~self.moved
         rows = np.flatnonzero(kept)
-        out[rows] = self.triangles[self.origin[rows]]
+        source = self.origin[rows]
+        if rows.size and rows[-1] == rows.size - 1 and source[-1] - source[0] == rows.size - 1:
+            out[:rows.size] = self.triangles[source[0]:source[-1] + 1]     # one run: a copy, no gather
+        else:
+            out[rows] = self.triangles[source]
         turned = np.flatnonzero(kept & self.flipped)
         if turned.size:
             out[turned] = out[turned][:, [0, 2, 1]]
@@ -147,12 +151,19 @@ class Grouping:
     flipped: np.ndarray
 
 
-def grouping(draft: Draft, corners: Corners | None = None) -> Grouping:
-    """The edges of ``draft``'s faces (``draft_edges``); or, given the input's ``corners`` as
-    ``p3d_cli.mesh.vertices.group_corners`` sorted them (the draft's faces being the input's),
-    grouped from those directly (``group_edges`` frees their keys)."""
-    edges = draft_edges(draft.faces) if corners is None else group_edges(corners)
-    return Grouping(edges, draft.faces, draft.flipped.copy())
+def grouping(draft: Draft) -> Grouping:
+    """The edges of ``draft``'s faces (``draft_edges``)."""
+    return Grouping(draft_edges(draft.faces), draft.faces, draft.flipped.copy())
+
+
+def with_directions(edges: Edges, ids: np.ndarray) -> Edges:
+    """``edges`` with ``forward`` (which the topology lets go) from the vertex ids ``(3n,)``:
+    side ``3 f + k`` runs forward when its start's id is below its end's."""
+    if edges.forward is not None:
+        return edges
+    side = edges.side.astype(np.int64)
+    ids = np.asarray(ids).ravel()
+    return dataclasses.replace(edges, forward=ids[side] < ids[next_corner(side)])
 
 
 def draft_edges(faces: np.ndarray) -> Edges:

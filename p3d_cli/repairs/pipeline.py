@@ -21,13 +21,13 @@ import numpy as np
 
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.report import Shell, TopologyReport
-from p3d_cli.mesh.topology import topology, topology_of_blocks
-from p3d_cli.mesh.vertices import group_corners
+from p3d_cli.mesh.layout import Layout
+from p3d_cli.mesh.topology import topology, topology_and_layout
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
-from p3d_cli.repairs.draft import Draft, Grouping, grouping
+from p3d_cli.repairs.draft import Draft, Grouping, grouping, with_directions
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
 from p3d_cli.repairs.holes import holes_step
-from p3d_cli.repairs.orient import joined, orient_step, outward_step, patches
+from p3d_cli.repairs.orient import Patches, joined, orient_step, outward_step, patches
 from p3d_cli.repairs.report import SHOWN, StepReport, failed_checks
 from p3d_cli.repairs.steps import STEPS
 
@@ -83,52 +83,61 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
     n = len(triangles)
     # In blocks, as a file is read (the topology's passes are tuned to cache-sized blocks).
     blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
-    before = topology_of_blocks(blocks, n, where)
+    before, layout = topology_and_layout(blocks, n, where)
     if not failed_checks(before):
         clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
                                    if name in steps else ()) for name in STEPS)
         return Outcome(None, triangles, before, before, clean, (), False)
     if _only_inward(before, steps):
         return _turned_out(triangles, before, steps)
-    # check's exact vertex ids; its sorted corners also give the first edge grouping for free
-    # (no second sort) while the faces are the input's.
-    corners = group_corners(blocks, n)
-    ids = corners.ids.reshape(n, 3)
-    points = np.empty((corners.count, 3), dtype=triangles.dtype)
-    points[corners.ids] = triangles.reshape(-1, 3)
-    corners.points = None
-    draft = Draft.of(triangles, ids, points)
+    assert layout is not None                   # n > 0
+    # check's exact vertex ids, shells, zero-area and duplicate faces and edges: the steps
+    # start from what the topology found, and group again only faces it did not see.
+    points = np.empty((layout.vertex_count, 3), dtype=triangles.dtype)
+    points[layout.ids] = triangles.reshape(-1, 3)
+    draft = Draft.of(triangles, layout.faces, points)
     reports = {name: StepReport(name, ran=False) for name in STEPS}
     if "weld" in steps:
         draft, reports["weld"] = weld_step(draft, float(weld or 0))
-    changed = draft.moved.any()
+    moved = bool(draft.moved.any())
     if "degenerate" in steps:
-        if before.degenerate_faces or changed:
-            draft, reports["degenerate"] = degenerate_step(draft)
+        if before.degenerate_faces or moved:
+            draft, reports["degenerate"] = degenerate_step(draft, None if moved else layout.zero_area)
         else:
             reports["degenerate"] = StepReport("degenerate", counts={"faces_removed": 0})
-    grouped = grouping(draft) if draft.moved.any() or len(draft.faces) != n else grouping(draft, corners)
-    del corners
     if "duplicate" in steps:
-        if before.duplicate_faces or changed:
-            draft, reports["duplicate"] = duplicate_step(draft, grouped.edges)
-            if reports["duplicate"].counts["faces_removed"]:
-                grouped = grouping(draft)
+        if before.duplicate_faces or moved:
+            known = None if moved or layout.duplicates is None else layout.duplicates
+            draft, reports["duplicate"] = duplicate_step(draft, known)
         else:
             reports["duplicate"] = StepReport("duplicate", counts={"faces_removed": 0})
-    # The input's shells are the draft's while no face was removed or moved.
-    same_faces = len(draft.faces) == n and not draft.moved.any()
-    found = patches(len(draft.faces), grouped.edges, one_shell=same_faces and before.shells == 1)
-    if "orient" in steps:
-        draft, reports["orient"] = orient_step(draft, found)
-    holes_left: tuple[str, ...] = ()
-    open_faces = _open_faces(grouped, "orient" in steps)
-    if "holes" in steps:
-        draft, reports["holes"], holes = holes_step(draft, grouped, policy=fill_holes, flatness=flatness,
-                                                    max_edges=max_hole_edges)
-        holes_left = reports["holes"].notes
-        found = joined(found, holes.holes)
-        open_faces = np.union1d(_open_faces(grouped, "orient" in steps, boundary=False), holes.open_faces)
+    as_input = len(draft.faces) == n and not draft.moved.any()
+    grouped = _grouping(draft, layout, as_input)
+    if grouped is None:
+        # Every edge of the input used once each way and the same faces: its shells are the
+        # patches, consistent and closed; nothing for orient or holes.
+        found = Patches(layout.shells.labels, layout.shells.count, np.zeros(n, dtype=bool), np.zeros(0, dtype=np.int64))
+        for name, counts in (("orient", {"faces_flipped": 0, "shells": 0}),
+                             ("holes", {"holes_filled": 0, "holes_left": 0, "faces_added": 0})):
+            if name in steps:
+                reports[name] = StepReport(name, counts=counts)
+        holes_left: tuple[str, ...] = ()
+        open_faces = np.zeros(0, dtype=np.int64)
+    else:
+        found = (Patches(layout.shells.labels, layout.shells.count, np.zeros(n, dtype=bool),
+                         np.zeros(0, dtype=np.int64))
+                 if as_input and grouped.edges.misoriented.size == 0 and grouped.edges.nonmanifold.size == 0
+                 else patches(len(draft.faces), grouped.edges))
+        if "orient" in steps:
+            draft, reports["orient"] = orient_step(draft, found)
+        holes_left = ()
+        open_faces = _open_faces(grouped, "orient" in steps)
+        if "holes" in steps:
+            draft, reports["holes"], holes = holes_step(draft, grouped, policy=fill_holes, flatness=flatness,
+                                                        max_edges=max_hole_edges)
+            holes_left = reports["holes"].notes
+            found = joined(found, holes.holes)
+            open_faces = np.union1d(_open_faces(grouped, "orient" in steps, boundary=False), holes.open_faces)
     shells_left: tuple[str, ...] = ()
     out = draft.output_triangles()
     if "outward" in steps:
@@ -169,6 +178,16 @@ def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str,
         faces=tuple(range(n)), places=({"shell_first_face": 0, "faces": n, "signed_volume_before": before.volume,
                                          "cavity": False},))
     return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS), (), True)
+
+
+def _grouping(draft: Draft, layout: Layout, as_input: bool) -> Grouping | None:
+    """The draft's edges: the topology's own while its faces are the input's (None when the
+    topology grouped none: every edge used once each way), else grouped anew."""
+    if not as_input:
+        return grouping(draft)
+    if layout.edges is None:
+        return None
+    return Grouping(with_directions(layout.edges, layout.ids), draft.faces, draft.flipped.copy())
 
 
 def _open_faces(grouped: Grouping, oriented: bool, boundary: bool = True) -> np.ndarray:

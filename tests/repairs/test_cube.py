@@ -175,3 +175,10 @@ def test_a_sliver_in_the_surface_is_removed_and_its_t_junction_closed(cube):
     assert holes.places[0]["split_face"] == 0
     assert report.fixed and exact_volume(mesh.triangles) == 1
     untouched_rows_equal(mesh.triangles[1:], broken[1:13], range(12))
+
+
+def test_a_mesh_of_nothing_but_degenerate_faces_is_left_whole():
+    flat = np.array([[[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 0, 0], [0, 0, 0], [1, 1, 1]]], dtype=float)
+    mesh, report = repair(flat)
+    assert not report.fixed and not report.changed and len(mesh.triangles) == 2
+    assert "removing them would leave nothing" in report.step("degenerate").notes[0]
