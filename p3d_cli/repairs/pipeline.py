@@ -3,25 +3,25 @@
 1. The input's topology is ``p3d check``'s (``p3d_cli.mesh.topology``): a mesh it passes is
    returned untouched, whatever steps were asked for.
 2. Otherwise the faces become a ``Draft`` on ``check``'s exact vertex ids, and the steps run in
-   the order of ``p3d_cli.repairs.steps.STEPS``, each on the draft the one before left. The
-   edges are grouped by ``check``'s own edge code once the faces to remove are gone
-   (``p3d_cli.repairs.draft.grouping``), and the orientation, the holes and the shells all read
-   that one grouping.
+   the order of ``p3d_cli.repairs.steps.STEPS``, each on the draft the one before left. They
+   start from what the topology found (``topology_and_layout``: vertex ids, shells, zero-area
+   and duplicate faces, the edge grouping); the edges are grouped again, by ``check``'s own edge
+   code, only when faces were removed or moved (``p3d_cli.repairs.draft.grouping``), and the
+   orientation, the holes and the shells all read that one grouping.
 3. The output's topology is ``check``'s again: the output is *fixed* exactly when ``p3d check``
    would pass it. Whatever it still fails is listed with the reason each step left it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 
 from p3d_cli.io.source import array_source
-from p3d_cli.mesh.report import Shell, TopologyReport
 from p3d_cli.mesh.layout import Layout
+from p3d_cli.mesh.report import Shell, TopologyReport
 from p3d_cli.mesh.topology import topology, topology_and_layout
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
 from p3d_cli.repairs.draft import Draft, Grouping, grouping, with_directions
@@ -116,7 +116,7 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
     if grouped is None:
         # Every edge of the input used once each way and the same faces: its shells are the
         # patches, consistent and closed; nothing for orient or holes.
-        found = Patches(layout.shells.labels, layout.shells.count, np.zeros(n, dtype=bool), np.zeros(0, dtype=np.int64))
+        found = _as_patches(layout)
         for name, counts in (("orient", {"faces_flipped": 0, "shells": 0}),
                              ("holes", {"holes_filled": 0, "holes_left": 0, "faces_added": 0})):
             if name in steps:
@@ -124,10 +124,9 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         holes_left: tuple[str, ...] = ()
         open_faces = np.zeros(0, dtype=np.int64)
     else:
-        found = (Patches(layout.shells.labels, layout.shells.count, np.zeros(n, dtype=bool),
-                         np.zeros(0, dtype=np.int64))
-                 if as_input and grouped.edges.misoriented.size == 0 and grouped.edges.nonmanifold.size == 0
-                 else patches(len(draft.faces), grouped.edges))
+        # Without a misoriented or non-manifold edge the patches are check's shells.
+        consistent = grouped.edges.misoriented.size == 0 and grouped.edges.nonmanifold.size == 0
+        found = _as_patches(layout) if as_input and consistent else patches(len(draft.faces), grouped.edges)
         if "orient" in steps:
             draft, reports["orient"] = orient_step(draft, found)
         holes_left = ()
@@ -178,6 +177,12 @@ def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str,
         faces=tuple(range(n)), places=({"shell_first_face": 0, "faces": n, "signed_volume_before": before.volume,
                                          "cavity": False},))
     return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS), (), True)
+
+
+def _as_patches(layout: Layout) -> Patches:
+    """The topology's shells as patches wound consistently (nothing to flip)."""
+    n = len(layout.shells.labels)
+    return Patches(layout.shells.labels, layout.shells.count, np.zeros(n, dtype=bool), np.zeros(0, dtype=np.int64))
 
 
 def _grouping(draft: Draft, layout: Layout, as_input: bool) -> Grouping | None:
