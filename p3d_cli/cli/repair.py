@@ -162,6 +162,8 @@ def output_targets(inputs, items, out: str | None, output_format: str | None) ->
     names = [item for item in items if isinstance(item, str)]
     if out is None:
         return {name: None for name in names}, False
+    if out == "-":
+        raise UsageError("--output", "standard output holds the report", "give the repaired mesh a file path")
     folder = (os.path.isdir(out) or out.endswith(("/", os.sep)) or len(items) > 1
               or any(os.path.isdir(i) for i in inputs if i != "-"))
     if not folder:

@@ -161,3 +161,14 @@ def test_records_carry_the_schema_version_and_validate(tmp_path):
     lines = result.stdout.splitlines()
     assert len(lines) == 2 and all(json.loads(line)["schema_version"] == output.SCHEMA_VERSION for line in lines)
     assert json.loads(lines[1])["error"] and record_schemas.VALIDATED["repair"] == before + 2
+
+
+def test_standard_input_in_and_standard_output_refused(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    data = (tmp_path / "open.stl").read_bytes()
+    result = run("repair", "-", "-o", tmp_path / "out.stl", input=data)
+    assert result.exit_code == 0 and p3d.check(str(tmp_path / "out.stl")).ok
+    result = run("repair", tmp_path / "open.stl", "-o", "-")
+    assert result.exit_code == 2 and "standard output holds the report" in result.stderr
+    result = run("repair", "-", "--in-place", input=data)
+    assert result.exit_code == 2 and "standard input cannot be repaired in place" in result.stderr
