@@ -9,22 +9,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import p3d_cli as p3d
+from helpers.tori import grid_torus
 from p3d_cli.repairs import repair
 
 pytestmark = pytest.mark.usefixtures("oracles")
 
 
-def torus(u: int, v: int) -> np.ndarray:
-    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
-    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
-    ring = 3.0 + np.cos(phi)
-    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], axis=-1).reshape(-1, 3)
-    a, b = (i * v + j).ravel(), (((i + 1) % u) * v + j).ravel()
-    c, d = (((i + 1) % u) * v + (j + 1) % v).ravel(), (i * v + (j + 1) % v).ravel()
-    return points[np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])]
-
-
-BASE = torus(6, 5)           # 60 faces
+BASE = grid_torus(6, 5)           # 60 faces
 
 
 @st.composite
