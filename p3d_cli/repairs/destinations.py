@@ -5,7 +5,8 @@ A file found in a folder the user named keeps its place below that folder (``par
 any other file keeps the relative path it was given by (``parts/a.stl`` ->
 ``fixed/parts/a.stl``), or its name when that path is absolute or climbs out of the working
 folder. ``output_format`` changes the extension. Two inputs that would land on one output are
-an error for the second (``OutputError``), never an overwrite.
+an error for the second (``OutputError``), never an overwrite, and so is an input that lies in
+the output folder itself (a repair written by an earlier run into a folder inside the inputs').
 """
 
 from __future__ import annotations
@@ -37,12 +38,17 @@ def mirrored(items: Iterable[str], roots: Iterable[str], folder: str, extension:
         input took.
     """
     folders = sorted((os.path.join(os.path.normpath(r), "") for r in roots), key=len, reverse=True)
+    inside = os.path.join(os.path.realpath(folder), "")
     out: dict = {}
     taken: dict[str, str] = {}
     for item in items:
         if item == "-":
             out[item] = OutputError(folder, "standard input has no name to mirror",
                                     "give the mesh by path, or write it with -o FILE")
+            continue
+        if os.path.realpath(item).startswith(inside):
+            out[item] = OutputError(item, f"lies in the output folder {folder} (written by an earlier repair?)",
+                                    "write the repairs to a folder outside the ones being read")
             continue
         relative = _relative(item, folders)
         if extension is not None:

@@ -172,3 +172,13 @@ def test_standard_input_in_and_standard_output_refused(tmp_path):
     assert result.exit_code == 2 and "standard output holds the report" in result.stderr
     result = run("repair", "-", "--in-place", input=data)
     assert result.exit_code == 2 and "standard input cannot be repaired in place" in result.stderr
+
+
+def test_an_earlier_run_s_outputs_inside_the_inputs_are_not_repaired_again(tmp_path):
+    tree = tmp_path / "parts"
+    tree.mkdir()
+    write_binary_stl(tree / "open.stl", CUBE[2:])
+    assert run("repair", tree, "-o", tree / "fixed").exit_code == 0
+    result = run("repair", tree, "-o", tree / "fixed")
+    assert result.exit_code == 2 and "lies in the output folder" in result.stderr
+    assert sorted(p.relative_to(tree).as_posix() for p in tree.rglob("*.stl")) == ["fixed/open.stl", "open.stl"]
