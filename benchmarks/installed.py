@@ -40,3 +40,27 @@ def run_once(argv, env) -> tuple[float, float, float, int, str]:
         text = out.read().decode(errors="replace")
     rss = usage.ru_maxrss / (1 << 20 if sys.platform == "darwin" else 1 << 10)
     return wall, usage.ru_utime + usage.ru_stime, rss, os.waitstatus_to_exitcode(status), text
+
+
+def alternated(tools: dict, runs: int, env) -> dict:
+    """Time every tool ``runs`` times as whole processes, after one untimed warm-up run that
+    also checks its answer, run ``r`` of every tool before run ``r + 1`` of any and the order
+    rotated run by run (slow drifts of the machine hit all tools alike).
+
+    ``tools``: name -> ``(argv, ok)``, ``ok(status, stdout)`` saying whether the answer is
+    right. Returns name -> ``{"wall": [...], "cpu": [...], "rss": [...], "stdout": [...]}``.
+    """
+    results = {name: {"wall": [], "cpu": [], "rss": [], "stdout": []} for name in tools}
+    names = list(tools)
+    for name in names:
+        argv, ok = tools[name]
+        *_, status, text = run_once(argv, env)
+        if not ok(status, text):
+            raise SystemExit(f"{name}: unexpected answer (exit {status}): {text[:300]}")
+    for r in range(runs):
+        shift = r % len(names)
+        for name in names[shift:] + names[:shift]:
+            wall, cpu, rss, _, text = run_once(tools[name][0], env)
+            for key, value in (("wall", wall), ("cpu", cpu), ("rss", rss), ("stdout", text)):
+                results[name][key].append(value)
+    return results

@@ -42,7 +42,7 @@ import sys
 import tempfile
 import time
 
-from check_speed import time_all
+from installed import alternated as time_all
 from installed import cache_bytecode
 
 #: name -> torus.py flags of a 1M-triangle grid torus (u = 1000, v = 500).

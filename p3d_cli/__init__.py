@@ -28,6 +28,7 @@ _API = {
     "props": "p3d_cli.measure",
     "bounds": "p3d_cli.measure",
     "check": "p3d_cli.measure",
+    "self_intersections": "p3d_cli.measure",
     # inputs
     "load_mesh": "p3d_cli.io",
     "parse_shape": "p3d_cli.shapes",
@@ -62,6 +63,7 @@ _API = {
     "Moments": "p3d_cli.results",
     "Bounds": "p3d_cli.results",
     "CheckResult": "p3d_cli.mesh.verdicts",
+    "SelfIntersections": "p3d_cli.mesh.solidity_report",
     # repairing
     "repair": "p3d_cli.repairs",
     "repair_file": "p3d_cli.repairs",
@@ -123,7 +125,8 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.io import load_mesh
     from p3d_cli.io.formats import FORMATS
     from p3d_cli.io.source import MeshSource
-    from p3d_cli.measure import bounds, check, props
+    from p3d_cli.measure import bounds, check, props, self_intersections
+    from p3d_cli.mesh.solidity_report import SelfIntersections
     from p3d_cli.mesh.verdicts import CheckResult
     from p3d_cli.placement import Placement
     from p3d_cli.render.image import Picture

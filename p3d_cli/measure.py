@@ -28,7 +28,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
           tessellate: int | None = None, samples: int | None = None, seed: int | None = None,
           tolerance: float | None = None, format: str | None = None,
           stdin: BinaryIO | None = None, units: str | None = None,
-          output_units: str | None = None) -> PropsResult:
+          output_units: str | None = None, intersections: bool = False, shells: bool = False) -> PropsResult:
     """Volume, mass, centre of mass, inertia and principal frame of a mesh or shape.
 
     Parameters
@@ -60,6 +60,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         units, results are in SI (or ``output_units``) and ``result.units`` says which.
     output_units : str, optional
         ``"LENGTH,MASS"`` of the results, e.g. ``"mm,g"`` (default ``"m,kg"``).
+    intersections : bool
+        Also test a mesh exactly for self-intersections and for closed shells nested wound
+        alike (``p3d_cli.bodies``): warnings ``self-intersecting`` and ``nested-shells``. The
+        test also runs, without being asked, when the inertia is not a solid's.
+    shells : bool
+        Measure each closed shell of a mesh (with the cavities inside it) as a part of an
+        assembly: the bodies of a multi-body export (implies ``intersections``).
 
     A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.assembly``) or an
     ``Assembly`` gives the whole, with each part's result in ``result.parts``.
@@ -92,6 +99,10 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         solid = as_solid(thing, format=format, stdin=stdin)
         units = declared_units(solid, units, density, mass)
         found = scene_assembly(solid)
+        if shells:
+            from p3d_cli.bodies import shells_assembly
+
+            found, extra = shells_assembly(solid, found)
     if found is not None:
         from p3d_cli.assemble import assembly_props
 
@@ -99,6 +110,8 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
                                 density=density, mass=mass, about=about, method=method,
                                 tessellate=tessellate, samples=samples, seed=seed,
                                 tolerance=tolerance)
+        if shells:
+            return dataclasses.replace(result, warnings=result.warnings + tuple(extra))
         return result if solid is None else scene_record(result, solid)
     density_given = density is not None
     system, density, mass = unit_rules.resolve(units, output_units, density, mass)
@@ -111,7 +124,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     result = measure_solid(solid, placement, method=method, density=density,
                            mass=mass, about=about, tessellate=tessellate, samples=samples, seed=seed,
                            tolerance=tolerance, density_error=unit_rules.DENSITY_ROUNDING if from_unit else 0.0)
-    return finish(result, system, user_placement, density_given)
+    result = finish(result, system, user_placement, density_given)
+    if solid.mesh is not None and solid.mesh.tetrahedra is None and (
+            intersections or "self-intersecting" in result.warning_codes):
+        from p3d_cli.bodies import with_solidity_warnings
+
+        result = with_solidity_warnings(result, solid.mesh)
+    return result
 
 
 def _assembly(thing):
@@ -190,7 +209,8 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
 
 
 def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,
-          max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None):
+          max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None,
+          weld: float | None = None):
     """Is a mesh a clean solid? Closed, oriented, outward, manifold, no degenerate or duplicate faces.
 
     Parameters
@@ -206,6 +226,9 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
         Also fail a mesh with more faces than this.
     format, stdin
         As for ``props``.
+    weld : float, optional
+        Merge vertices within this distance (in the file's units) before checking; the result's
+        ``weld`` says how many were merged and the largest distance. Never done without it.
 
     Returns
     -------
@@ -231,14 +254,49 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if solid.mesh is None:
         raise UsageError("thing", f"{solid.source} is a shape spec, a clean solid by construction",
                          "check mesh files")
+    if weld is not None:
+        from p3d_cli.mesh.weld import check_tolerance
+
+        weld = check_tolerance(weld)
     # A file that declares its unit is reported in metres, as props and bounds report it.
     declared = solid.mesh.length_unit
-    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, declared)
+    whole = check_source(solid.mesh, solid.source, required, min_volume, max_faces, weld, declared)
     if not solid.mesh.objects:
         return whole
     # A multi-object file: each object is checked on its own, and the whole (where objects
     # that touch or overlap show as shared edges or duplicate faces).
-    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, declared))
+    parts = tuple((name, check_source(part, part.where, required, min_volume, max_faces, weld, declared))
                   for name, part in solid.mesh.objects)
     failed = whole.failed + tuple(f"{name}:{c}" for name, part in parts for c in part.failed)
     return dataclasses.replace(whole, failed=failed, parts=parts)
+
+
+def self_intersections(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = None):
+    """The face pairs of a mesh whose interiors cross or overlap, decided exactly.
+
+    Faces that share an edge or a vertex, or touch without crossing, are never reported;
+    crossings, coplanar overlaps and folds are, wherever the mesh sits (docs/method.md,
+    "Self-intersections"). This is ``check(thing, require=["no-self-intersection"])``'s
+    ``report.self_intersections``.
+
+    Parameters
+    ----------
+    thing, format, stdin
+        As for ``check``.
+
+    Returns
+    -------
+    SelfIntersections
+        ``count``, ``by_kind``, ``pairs`` (every pair of face indices), ``kinds`` and
+        ``samples`` (the first pairs, with a point where each meets).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import p3d_cli as p3d
+    >>> cube = p3d.Box(1, 1, 1).triangles()           # [-1, 1]^3
+    >>> p3d.self_intersections(np.concatenate([cube, cube + 1])).count
+    6
+    """
+    result = check(thing, require=["no-self-intersection"], format=format, stdin=stdin)
+    return result.report.self_intersections

@@ -17,7 +17,10 @@ CODES: dict[str, str] = {
     "open": "the mesh is not closed: an open surface has no well-defined volume",
     "inward": "the signed volume is negative: faces point into the solid",
     "flat": "the mesh encloses no volume: centre of mass and inertia are undefined",
-    "self-intersecting": "the inertia is not a solid's: the mesh probably intersects itself",
+    "self-intersecting": "the surface intersects itself: faces cross or overlap (found exactly), or the inertia "
+                         "is not a solid's (then it probably does)",
+    "nested-shells": "a closed shell lies inside another wound alike (its volume is counted twice), or a "
+                     "cavity lies in no body",
     "non-manifold": "an edge is used by more than two faces",
     "coarse-float32": "float32 coordinates far from the origin limit the accuracy "
                       "(threshold: spacing / part size, default 1e-6)",
@@ -56,7 +59,8 @@ PATTERNS: tuple[tuple[str, str], ...] = (
     ("open", r"\bmesh is not closed\b"),
     ("flat", r"encloses no volume"),
     ("inward", r"signed volume is negative"),
-    ("self-intersecting", r"inertia is not a solid's"),
+    ("self-intersecting", r"inertia is not a solid's|surface intersects itself"),
+    ("nested-shells", r"is wound alike: its volume|wound as a cavity lies in no body"),
     ("coarse-float32", r"coordinates are float32"),
     ("inverted-tetrahedra", r"tetrahedra are listed inside out"),
     ("non-manifold", r"non-manifold"),

@@ -29,7 +29,8 @@ from p3d_cli.mesh.verdicts import CHECKS, CheckResult
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
                "outward", "manifold", "boundary_edges", "nonmanifold_edges", "misoriented_edges",
                "nonmanifold_vertices", "degenerate_faces", "zero_area_faces",
-               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume")
+               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume",
+               "self_intersections")
 
 _COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
            ("nonmanifold_edges", "non-manifold edge", "nonmanifold_edge_samples"),
@@ -71,7 +72,9 @@ def failure_messages(result: CheckResult) -> tuple[tuple[str, str], ...]:
               "manifold": f"{plural(r.nonmanifold_edges, 'non-manifold edge')}, "
                           f"{plural(r.nonmanifold_vertices, 'non-manifold vertex')}",
               "no-degenerate": plural(r.degenerate_faces, "degenerate face"),
-              "no-duplicate": plural(r.duplicate_faces, "duplicate face")}
+              "no-duplicate": plural(r.duplicate_faces, "duplicate face"),
+              "no-self-intersection": plural(_crossing_count(r), "self-intersecting face pair"),
+              "nesting": _nesting_detail(r)}
     out = []
     for name in result.failed:
         if name == "min-volume":
@@ -148,7 +151,12 @@ def check_record(result: CheckResult) -> dict:
                   else {"length": "mesh unit", "volume": "mesh unit^3"}),
         "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in _COUNTS},
         "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
+        # None when the no-self-intersection check was not asked for (it is not computed then).
+        "self_intersections": None if r.self_intersections is None else r.self_intersections.to_dict(),
+        "nesting": None if r.nesting is None else r.nesting.to_dict(),
     })
+    if result.weld is not None:
+        record["weld"] = result.weld.to_dict()
     if result.parts:
         record["parts"] = [{"name": name, **check_record(part)} for name, part in result.parts]
     return record
@@ -167,6 +175,8 @@ def _sample_json(sample):
 def check_csv_line(record: dict) -> str:
     """The ``--csv`` row of a JSON record (or of an error record)."""
     row = {key: record.get(key, "") for key in CSV_COLUMNS}
+    if isinstance(row["self_intersections"], dict):
+        row["self_intersections"] = row["self_intersections"]["count"]
     if isinstance(row["failed"], list):
         row["failed"] = " ".join(row["failed"])
     return output.csv_line(row[key] for key in CSV_COLUMNS)
@@ -190,12 +200,17 @@ def check_text(result: CheckResult) -> str:
         # Break before the details when that makes the verdict fit; a name too long for any
         # layout to fit keeps its verdict on one line, which greps better.
         lines = [f"{name}: {head}", f"  {details}"]
+    if result.weld is not None:
+        w = result.weld
+        lines.append(f"  welded {w.vertices} {'vertex' if w.vertices == 1 else 'vertices'} within "
+                     f"{output.number(w.tolerance)} (largest distance {output.number(w.largest_distance)})")
     for key, noun, samples in _COUNTS:
         count = getattr(r, key)
         if count:
             head = f"  {count} {noun}{'s' if count != 1 else ''}"
             listed = [_sample_text(sample) for sample in getattr(r, samples)]
             lines += _pack(head + " (e.g. ", listed, ")") if listed else [head]
+    lines += _crossing_lines(r) + _nesting_lines(r)
     if r.volume < 0:
         lines += _fit(f"signed volume {output.number(r.volume)}{unit} is negative: faces point inward (reverse the "
                       "winding); the volume shown is the enclosed solid's, as p3d props reports it", "  ")
@@ -213,6 +228,68 @@ def check_text(result: CheckResult) -> str:
     for _, part in result.parts:
         lines += ["  " + line for line in check_text(part).splitlines()]
     return "\n".join(lines)
+
+
+def _nesting_detail(report) -> str:
+    """``volume counted twice: 1, negative: 0, crossing shells: 1`` for the failure message."""
+    n = report.nesting
+    if n is None:
+        return "not tested"
+    crossing = sum(1 for _, _, kind in n.relations if kind == "crossing")
+    return (f"volume counted twice: {output.number(n.counted_twice)}, negative: "
+            f"{output.number(n.counted_negative)}, {plural(crossing, 'pair')} of crossing shells")
+
+
+def _crossing_count(report) -> int:
+    found = report.self_intersections
+    return 0 if found is None else found.count
+
+
+def _crossing_lines(report) -> list[str]:
+    """``  3 self-intersecting face pairs (e.g. faces 2,17 cross at (x, y, z); ...)``."""
+    found = report.self_intersections
+    if found is None or not found.count:
+        return []
+    verbs = {"crossing": "cross", "overlap": "overlap", "fold": "fold"}
+    listed = [f"faces {a},{b} {verbs[c.kind]} at {_point(c.point)}" for c, (a, b) in
+              ((c, c.faces) for c in found.samples)]
+    head = f"  {plural(found.count, 'self-intersecting face pair')}"
+    return _pack(head + " (e.g. ", listed, ")")
+
+
+def _nesting_lines(report) -> list[str]:
+    """What is wrong with how the closed shells nest, and the volume it miscounts."""
+    nesting = report.nesting
+    if nesting is None or nesting.ok:
+        return []
+    places = {p.shell: p for p in nesting.shells}
+
+    def shell(s: int) -> str:
+        p = places.get(s)
+        return f"shell {s}" + (f" ({plural(p.faces, 'face')} from face {p.first_face})" if p else "")
+
+    out = []
+    for a, b, kind in nesting.relations:
+        if kind == "crossing":
+            out.append(f"{shell(a)} and {shell(b)} cross")
+        elif kind == "coincident":
+            out.append(f"{shell(a)} lies on the surface of {shell(b)}")
+    for p in nesting.shells:
+        if p.inside is not None and abs(p.winding) >= 2:
+            out.append(f"{shell(p.shell)} lies inside {shell(p.inside)} and is wound alike: "
+                       f"its volume is counted {abs(p.winding)} times")
+        elif p.winding * (1 if report.volume >= 0 else -1) < 0:
+            out.append(f"{shell(p.shell)} is wound as a cavity but lies in no body: its volume is counted negative")
+    lines = [line for text in out for line in _fit(text, "  ")]
+    miscount = []
+    if nesting.counted_twice or nesting.crossing_bound:
+        exact = output.number(nesting.counted_twice)
+        bound = (f" + at most {output.number(nesting.crossing_bound)} where shells cross"
+                 if nesting.crossing_bound else "")
+        miscount.append(f"volume counted twice: {exact}{bound}")
+    if nesting.counted_negative:
+        miscount.append(f"volume counted negative: {output.number(nesting.counted_negative)}")
+    return lines + [line for text in miscount for line in _fit(text, "  ")]
 
 
 def _fit(text: str, indent: str, width: int = 80) -> list[str]:
@@ -270,20 +347,27 @@ def _sample_text(sample) -> str:
               help="Also fail a mesh whose signed volume is below V.")
 @click.option("--max-faces", type=click.IntRange(min=0), default=None, metavar="N",
               help="Also fail a mesh with more than N faces.")
+@click.option("--weld", type=FiniteFloat(), default=None, metavar="TOL",
+              help="Merge vertices closer than TOL (in the file's units) before checking, and say how "
+                   "many and how far apart they were (never done without it).")
 @json_option
 @field_option
 @config_option
 @batch_options
-def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch):
+def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, batch, weld=None):
     """Check that meshes are clean solids: one verdict per file, and an exit status.
 
     Each mesh is checked for being closed (every edge used by exactly two faces, in
     opposite directions), consistently oriented, outward-facing (positive signed volume),
-    manifold (no edge used by more than two faces, no vertex joining separate fans), and
-    free of degenerate (zero-area or repeated-vertex) and duplicate faces. Its connected
-    shells are counted, each with its signed volume. Each problem comes with its count and a
-    few locations (face indices from 0, edge end points). Vertices are matched by exact
-    coordinates: nothing is merged within a tolerance. Every check is O(n log n).
+    manifold (no edge used by more than two faces, no vertex joining separate fans), free
+    of degenerate (zero-area or repeated-vertex) and duplicate faces, and free of
+    self-intersections (no two faces whose interiors cross or overlap, decided with exact
+    arithmetic: faces that share an edge or a vertex, or only touch, never count). Its
+    connected shells are counted, each with its signed volume. Each problem comes with its
+    count and a few locations (face indices from 0, edge end points, a point on each
+    crossing). Vertices are matched by exact coordinates: nothing is merged within a
+    tolerance. Every check is O(n log n); the self-intersection test is the costliest
+    (--require without no-self-intersection skips it).
 
     \b
     Exit statuses:
@@ -302,14 +386,18 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
       p3d check exports/ --json > verdicts.jsonl
       p3d check part.stl --require closed,outward --min-volume 1e-6 --max-faces 200000
       find . -name '*.stl' | p3d check --files-from - --csv --jobs 8
+      p3d check scan.stl --weld 1e-6
     """
     required = parse_require(require) if require else None   # None: the settings', or all
     style = output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
+    if weld is not None and not weld > 0:
+        raise UsageError("--weld", f"{weld} is not positive", "give the largest distance of vertices to merge")
     if style in ("text", "fields") and required is None:
         run.note_settings(config, "check")
     work = functools.partial(check_report, style=style, fields=fields, config=config, format=fmt,
-                             require=required, min_volume=min_volume, max_faces=max_faces)
+                             require=required, min_volume=min_volume, max_faces=max_faces,
+                             **({"weld": weld} if weld is not None else {}))
     if batch.csv:
         click.echo(output.csv_line(CSV_COLUMNS))
     run.report(work, functools.partial(error_line, style=style))

@@ -61,8 +61,15 @@ from p3d_cli.results import PropsResult
 @click.option("--emit", type=click.Choice(["urdf", "mjcf", "sdf"]), default=None,
               help="Print a ready <inertial> block for a robot description (SI with --units; "
                    "the frame convention in a comment; docs/robots.md).")
+@click.option("--intersections", is_flag=True,
+              help="Also test a mesh exactly for self-intersections and for closed shells nested wound "
+                   "alike, as p3d check does (warnings self-intersecting, nested-shells).")
+@click.option("--shells", is_flag=True,
+              help="Measure each closed shell of a mesh (with the cavities inside it) as a part of an "
+                   "assembly: the bodies of a multi-body export, and the whole (implies --intersections).")
 def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict, settings, method, samples, seed,
-          tolerance, batch, placement, tessellate, units, output_units, combine, emit=None):
+          tolerance, batch, placement, tessellate, units, output_units, combine, emit=None, intersections=False,
+          shells=False):
     """Volume, mass, centre of mass and inertia of meshes and shapes.
 
     Integrals are exact (divergence theorem, float64, about a local origin so that a part's
@@ -84,6 +91,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
       p3d props part.stl --units mm --density 7.85g/cm^3
       p3d props assembly.yaml --json
       p3d props a.stl b.stl --combine --units mm --density 2.7g/cm^3
+      p3d props export.stl --shells --json
 
     Shape specs (box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder; see p3d bounds
     --help) give exact closed forms. --scale, --rotate/--quat and --translate place the solid
@@ -94,12 +102,21 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
     carry units (7.85g/cm^3, 7850kg/m^3, 0.284lb/in^3, 2.5kg, 2.5lb, 500g); results are then
     in SI (or --output-units) and every output says its units. An assembly file (YAML with
     parts:, docs/assemblies.md) is measured part by part and as a whole.
+
+    A surface that intersects itself, or closed shells nested wound alike, count some volume
+    twice: --intersections tests for that exactly (it also runs when the inertia is not a
+    solid's), --shells measures each body of a multi-body export on its own (docs/ci.md).
     """
     style = output_style(as_json, batch.csv, fields, "table")
     style = f"emit:{emit}" if emit else style
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
                    units=units, output_units=output_units)
+    if shells and combine:
+        raise UsageError("--shells/--combine", "both given", "--shells splits one mesh into its bodies; "
+                         "--combine joins several inputs: choose one")
+    if intersections or shells:     # only when asked: the props of every other caller stay as they were
+        options.update(intersections=intersections, shells=shells)
     measure.check_props_options(method, density, mass, tessellate, samples, seed, tolerance)
     run = Batch("p3d props", inputs, batch)
     if style in ("table", "fields") or style.startswith("emit:"):

@@ -8,6 +8,7 @@ import os
 import click
 
 from p3d_cli.cli import output
+from p3d_cli.cli.check import parse_require
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import FiniteFloat, batch_options, format_option, inputs_argument, json_option
 from p3d_cli.cli.reporting import Batch, Report
@@ -202,11 +203,15 @@ def output_targets(inputs, items, out: str | None, output_format: str | None) ->
               help="Largest hole (in edges) --fill-holes flat fills.")
 @click.option("--max-volume-change", type=FiniteFloat(), default=None, metavar="R",
               help="Fail (exit 1, nothing written) when the volume changes by more than R, relative.")
+@click.option("--require", "require", multiple=True, metavar="CHECK[,CHECK...]",
+              help="The checks of p3d check that decide what needs repair and what is fixed (as p3d check "
+                   "--require; default all). Leaving out no-self-intersection,nesting skips the self-intersection "
+                   "test.")
 @format_option
 @json_option
 @batch_options
 def repair(inputs, out, in_place, dry_run, only_if_needed, output_format, steps, weld, fill_holes, flatness,
-           max_hole_edges, max_volume_change, fmt, as_json, batch):
+           max_hole_edges, max_volume_change, require, fmt, as_json, batch):
     """Repair meshes: fix what p3d check finds, change nothing else, say every change.
 
     The steps run in this order, each only where check found something: weld (only with
@@ -214,14 +219,15 @@ def repair(inputs, out, in_place, dry_run, only_if_needed, output_format, steps,
     (flip the faces that disagree with the rest of their shell), holes (fill holes bounded by
     simple, flat loops with triangles of their own corners), outward (flip whole closed
     shells outward, shells inside shells as cavities). Faces not touched are written with
-    their coordinates bit for bit; a mesh check passes is copied unchanged. What repair
-    cannot fix (non-manifold edges and vertices, holes it leaves) is listed, and the exit
-    status is 1. Each step's counts and face numbers, and the volume, centre of mass and
-    inertia before and after, are reported (--json: one record per input).
+    their coordinates bit for bit; a mesh check passes is copied unchanged; every output is
+    checked by check's own code. What repair cannot fix (non-manifold edges and vertices,
+    holes it leaves, faces that cross) is listed, and the exit status is 1. Each step's
+    counts and face numbers, and the volume, centre of mass and inertia before and after,
+    are reported (--json: one record per input).
 
     \b
     Exit statuses:
-      0  every output passes p3d check (and --max-volume-change holds)
+      0  every output passes p3d check (the --require checks; and --max-volume-change holds)
       1  some mesh is not fixed, or changed more than --max-volume-change
       2  usage error, or an input cannot be read or an output written (the batch goes on)
       3  a bug in p3d met on some input (please report it)
@@ -244,7 +250,8 @@ def repair(inputs, out, in_place, dry_run, only_if_needed, output_format, steps,
         raise UsageError("--json/--csv", "both given", "give one")
     run = Batch("p3d repair", inputs, batch)
     targets, mirror = output_targets(inputs, run.items, out, output_format)
-    work = functools.partial(repair_report, style=style, targets=targets, in_place=in_place,
+    required = parse_require(require) if require else None        # None: every check
+    work = functools.partial(repair_report, style=style, targets=targets, in_place=in_place, require=required,
                              only_if_needed=only_if_needed, output_format=output_format,
                              max_volume_change=max_volume_change, steps=steps or None, weld=weld,
                              fill_holes=fill_holes, flatness=flatness, max_hole_edges=max_hole_edges,

@@ -12,9 +12,10 @@ def solve_with_pictures(path: str, scene, steps: int, dt: float, trajectory: str
     return the ``SolveResult``."""
     from p3d_cli.constraints.motion import record_motion
     from p3d_cli.constraints.trajectory import trajectory_writer
-    from p3d_cli.render.motion import _pyplot, body_triangles, write_animation, write_plot
+    from p3d_cli.render.motion import _pyplot, body_triangles, check_picture_paths, write_animation, write_plot
 
-    _pyplot("--plot" if plot else "--animate")          # the extra's absence said before the work
+    check_picture_paths(plot, animate, inputs=[path])   # what the paths cannot be, then
+    _pyplot("--plot" if plot else "--animate")          # the extra's absence, said before the work
     with (trajectory_writer(trajectory) if trajectory else contextlib.nullcontext()) as record:
         result, motion = record_motion(scene, steps=steps, dt=dt, on_step=record)
     if plot:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from p3d_cli.mesh.solidity_report import Nesting, SelfIntersections
+
 #: Sample locations kept per kind of problem.
 SAMPLES = 5
 
@@ -84,6 +86,11 @@ class TopologyReport:
     nonmanifold_vertex_samples: tuple[VertexSample, ...] = ()
     degenerate_face_samples: tuple[int, ...] = ()
     duplicate_face_samples: tuple[tuple[int, int], ...] = ()
+    #: Face pairs whose interiors cross or overlap (``p3d_cli.mesh.intersections``); None when
+    #: the test was not asked for.
+    self_intersections: SelfIntersections | None = None
+    #: How the closed shells nest (``p3d_cli.mesh.nesting``); None when not asked for.
+    nesting: Nesting | None = None
 
     @property
     def closed(self) -> bool:
@@ -123,7 +130,10 @@ class TopologyReport:
             nonmanifold_edge_samples=edges(self.nonmanifold_edge_samples),
             misoriented_edge_samples=edges(self.misoriented_edge_samples),
             nonmanifold_vertex_samples=tuple(VertexSample(v.faces, _scaled(v.point, factor))
-                                             for v in self.nonmanifold_vertex_samples))
+                                             for v in self.nonmanifold_vertex_samples),
+            self_intersections=None if self.self_intersections is None
+            else self.self_intersections.in_length_unit(factor),
+            nesting=None if self.nesting is None else self.nesting.in_length_unit(factor))
 
 
 def _scaled(point, factor: float):

@@ -111,15 +111,7 @@ def _array_blocks(triangles: np.ndarray):
 
 
 def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyReport:
-    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()`` (see
-    ``topology_and_layout``)."""
-    return topology_and_layout(blocks, n, where)[0]
-
-
-def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
-    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()``, and the
-    vertex ids, shells and edges it found (None for no faces), for the passes that follow
-    (``p3d repair``'s steps).
+    """``topology`` of ``n`` triangles read (two or three times) from ``blocks()``.
 
     Parameters
     ----------
@@ -135,6 +127,12 @@ def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[Topol
         The volume (or a shell's) is beyond float64: coordinates past about 1e100 (a
         volume of 1e300 and more), where an infinite or NaN volume would be a wrong number.
     """
+    return topology_and_layout(blocks, n, where)[0]
+
+
+def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
+    """``topology_of_blocks``, and the vertex ids, shells and edges it found (None for no faces),
+    for the passes that follow (self-intersections, the shells' nesting, ``p3d repair``)."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
         report, layout = _topology_of_blocks(blocks, n, where)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
@@ -150,7 +148,8 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
         return _empty_report(), None
     fast = paired_topology(blocks, n, where)
     if fast is not None:
-        layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area)
+        layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area,
+                        np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
         return _paired_report(blocks, n, fast), layout
     zero_area: list[np.ndarray] = []
 
@@ -176,6 +175,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
+    layout = Layout(ids, m, found, zero, _crowded(edges, ids), _open_shells(edges, found), edges, duplicates)
     volume = _volume(blocks, corners, edges)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
@@ -185,7 +185,6 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
     boundary, nonmanifold_edges, misoriented = (
         tuple(EdgeSample(faces, (points[a], points[b])) for faces, a, b in samples)
         for samples in edge_samples)
-    layout = Layout(ids, m, found, zero, edges, duplicates)
     report = TopologyReport(
         faces=n, vertices=m, edges=edges.count,
         boundary_edges=int(edges.boundary.size), nonmanifold_edges=int(edges.nonmanifold.size),
@@ -201,6 +200,24 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
         duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
     )
     return report, layout
+
+
+def _crowded(edges: Edges, ids: np.ndarray) -> np.ndarray:
+    """Vertex ids ``(e, 2)`` of the edges used by more than two faces."""
+    side = edges.side[edges.starts[edges.nonmanifold]].astype(np.int64)
+    ends = np.stack([ids[side], ids[next_corner(side)]], axis=1).astype(np.int64)
+    return np.sort(ends, axis=1)
+
+
+def _open_shells(edges: Edges, found: Components) -> np.ndarray:
+    """The shells that hold a boundary, non-manifold or misoriented edge."""
+    groups = np.concatenate([edges.boundary, edges.nonmanifold, edges.misoriented])
+    if groups.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    counts = edges.counts[groups].astype(np.int64)
+    sides = np.repeat(edges.starts[groups].astype(np.int64), counts)
+    sides += np.arange(sides.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    return np.unique(found.labels[edges.side[sides] // 3]).astype(np.int64)
 
 
 def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from p3d_cli.mesh.report import TopologyReport
-from p3d_cli.mesh.topology import topology_of_blocks
+from p3d_cli.mesh.topology import topology_and_layout
+from p3d_cli.mesh.weld import Weld
 
 #: The checks ``p3d check --require`` can ask for, and what each needs.
 CHECKS = {
@@ -15,7 +16,13 @@ CHECKS = {
     "manifold": "no edge used by more than two faces, no vertex joining separate fans of faces",
     "no-degenerate": "no face with zero area or a repeated vertex",
     "no-duplicate": "no two faces with the same three vertices",
+    "no-self-intersection": "no two faces whose interiors cross or overlap (decided exactly)",
+    "nesting": "closed shells nest as a solid's: a shell inside another is wound opposite to it (a cavity), "
+               "so no volume is counted twice",
 }
+
+#: The checks that need the self-intersection pass (the costliest: run only when required).
+SOLIDITY = ("no-self-intersection", "nesting")
 
 
 def passes(report: TopologyReport, check: str) -> bool:
@@ -32,6 +39,10 @@ def passes(report: TopologyReport, check: str) -> bool:
         return report.degenerate_faces == 0
     if check == "no-duplicate":
         return report.duplicate_faces == 0
+    if check == "no-self-intersection":
+        return report.self_intersections is not None and report.self_intersections.count == 0
+    if check == "nesting":
+        return report.nesting is not None and report.nesting.ok
     raise KeyError(check)
 
 
@@ -51,6 +62,8 @@ class CheckResult:
         broken, then ``NAME:CHECK`` for each check an object of a multi-object file failed.
     parts : tuple of (str, CheckResult)
         For a file of several objects (glTF nodes, 3MF build items), each object's verdict.
+    weld : Weld or None
+        With a weld tolerance: what was merged before the checks (``p3d_cli.mesh.weld``).
     declared_unit : str or None
         The unit the file declares (glTF, 3MF, DAE, AMF; a key of ``p3d_cli.units.LENGTHS``):
         the report's lengths and volumes are then in metres, as ``props`` reports them; None:
@@ -63,6 +76,7 @@ class CheckResult:
     required: tuple[str, ...]
     failed: tuple[str, ...]
     parts: tuple = ()
+    weld: Weld | None = None
     declared_unit: str | None = None
 
     @property
@@ -77,7 +91,8 @@ class CheckResult:
 
 
 def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | None = None,
-                 max_faces: int | None = None, declared_unit: str | None = None) -> CheckResult:
+                 max_faces: int | None = None, weld: float | None = None,
+                 declared_unit: str | None = None) -> CheckResult:
     """Check a loaded mesh against the required checks and limits.
 
     The triangles are read block by block (twice, and once more for the volumes of several
@@ -94,6 +109,9 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
         Fail when the total signed volume is below this.
     max_faces : int, optional
         Fail when the mesh has more faces than this.
+    weld : float, optional
+        Merge vertices within this distance (the file's units) before the checks; never done
+        without it (``p3d_cli.mesh.weld``).
     declared_unit : str, optional
         The unit the file declares (``MeshSource.length_unit``): lengths and volumes (and
         ``min_volume``'s comparison) are then in metres.
@@ -111,16 +129,40 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
                          "export the boundary surface")
     if mesh.face_count == 0:
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
-    report = topology_of_blocks(mesh.read_blocks, mesh.face_count, where)
+    welded = None
+    if weld is not None:
+        from p3d_cli.io.source import array_source
+        from p3d_cli.mesh.weld import weld_triangles
+
+        triangles, welded = weld_triangles(_finite(mesh, where), weld)
+        mesh = array_source(mesh.format, triangles, "float64")
+    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, where)
+    required = tuple(required)
+    if any(name in required for name in SOLIDITY) and layout is not None:
+        from p3d_cli.mesh.solidity import with_solidity
+
+        report = with_solidity(report, mesh.read_blocks, layout)
     if declared_unit is not None:
         from p3d_cli.units import LENGTHS
 
         report = report.in_length_unit(LENGTHS[declared_unit])
-    required = tuple(required)
     failed = [name for name in required if not passes(report, name)]
     if min_volume is not None and not report.volume >= min_volume:
         failed.append("min-volume")
     if max_faces is not None and report.faces > max_faces:
         failed.append("max-faces")
-    return CheckResult(source, mesh.format, report, required, tuple(failed),
+    return CheckResult(source, mesh.format, report, required, tuple(failed), weld=welded,
                        declared_unit=declared_unit)
+
+
+def _finite(mesh, where: str):
+    """All of ``mesh``'s triangles, refusing a NaN or infinite coordinate (``InputError``)."""
+    import numpy as np
+
+    from p3d_cli.io.source import first_nonfinite, nonfinite_error
+
+    triangles = mesh.triangles()
+    bad = first_nonfinite(triangles)
+    if bad is not None:
+        raise nonfinite_error(where, bad)
+    return np.asarray(triangles, dtype=np.float64)

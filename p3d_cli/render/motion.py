@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import io
 import os
+import shutil
 import tempfile
 from typing import Iterable
 
@@ -91,14 +92,49 @@ def motion_plot(motion, title: str = "", size=(10.0, 7.5)):
     return fig
 
 
-def write_plot(motion, path: str, *, title: str = "", inputs: Iterable[str] = ()) -> None:
-    """Write ``motion_plot`` to ``path`` (.png, .svg or .pdf), whole or not at all."""
-    from p3d_cli.io.atomic import write_bytes
+def check_picture_paths(plot: str | None, animate: str | None, inputs: Iterable[str] = ()) -> None:
+    """Refuse, before any work and before matplotlib is needed, what ``write_plot`` and
+    ``write_animation`` would refuse of their paths: an unknown extension, a path that would
+    replace an input, an MP4 without ffmpeg on PATH.
 
+    Raises
+    ------
+    UsageError, MissingExtraError, OutputError
+    """
+    from p3d_cli.io.atomic import destination
+
+    inputs = list(inputs)
+    if plot:
+        _plot_extension(plot)
+        destination(plot, inputs=inputs, what="the plot")
+    if animate:
+        if _animation_extension(animate) == ".mp4" and shutil.which("ffmpeg") is None:
+            raise MissingExtraError("animate", "writing MP4 needs ffmpeg on PATH, which is not available",
+                                    "install ffmpeg (e.g. apt-get install ffmpeg), or write a .gif")
+        destination(animate, inputs=inputs, what="the animation")
+
+
+def _plot_extension(path: str) -> str:
     ext = os.path.splitext(path)[1].lower()
     if ext not in PLOT_FORMATS:
         raise UsageError("plot", f"{path}: cannot write a plot as {ext or 'no extension'!r}",
                          "name a .png, .svg or .pdf file")
+    return ext
+
+
+def _animation_extension(path: str) -> str:
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in ANIMATION_FORMATS:
+        raise UsageError("animate", f"{path}: cannot write an animation as {ext or 'no extension'!r}",
+                         "name a .gif or .mp4 file")
+    return ext
+
+
+def write_plot(motion, path: str, *, title: str = "", inputs: Iterable[str] = ()) -> None:
+    """Write ``motion_plot`` to ``path`` (.png, .svg or .pdf), whole or not at all."""
+    from p3d_cli.io.atomic import write_bytes
+
+    ext = _plot_extension(path)
     plt = _pyplot("plot")
     figure = motion_plot(motion, title)
     data = io.BytesIO()
@@ -178,10 +214,7 @@ def write_animation(motion, bodies: list[np.ndarray], path: str, *, inputs: Iter
     """
     from p3d_cli.io.atomic import destination, write_bytes
 
-    ext = os.path.splitext(path)[1].lower()
-    if ext not in ANIMATION_FORMATS:
-        raise UsageError("animate", f"{path}: cannot write an animation as {ext or 'no extension'!r}",
-                         "name a .gif or .mp4 file")
+    ext = _animation_extension(path)
     destination(path, inputs=inputs, what="the animation")          # refuse before the work
     plt = _pyplot("animate")
     from matplotlib import animation

@@ -26,11 +26,7 @@ _BLOCK = 1 << 14
 
 def weld_step(draft: Draft, tolerance: float) -> tuple[Draft, StepReport]:
     """Merge vertices closer than ``tolerance`` (see the module docstring)."""
-    try:
-        groups, _ = solidity.weld_points(draft.points.astype(np.float64), tolerance)
-    except solidity.Unavailable:
-        return draft, StepReport("weld", ran=False, notes=(
-            "not done: this build of p3d lacks the weld of p3d check (p3d_cli.mesh.weld)",))
+    groups, _ = solidity.weld_points(draft.points.astype(np.float64), tolerance)
     target = _most_used(np.asarray(groups, dtype=np.int64), draft.faces)
     welded = draft.renamed(target)
     moved = np.flatnonzero(welded.moved & ~draft.moved)

@@ -11,7 +11,7 @@ A loop is filled when it is flat enough and simple seen along its normal:
 2. **A simple projection.** The corners are projected on the coordinate plane most nearly
    parallel to the loop (dropping the normal's largest axis): the projection keeps the
    coordinates exact, so every test after it is an exact orientation sign
-   (``p3d_cli.repairs.solidity.orient2d``). The projected polygon must be simple (no two edges
+   (``p3d_cli.geometry.predicates.orient2d``). The projected polygon must be simple (no two edges
    meet except neighbours at their shared corner); then its triangles, lifted back, are a graph
    over that plane and cannot cross each other.
    A loop too bent for any coordinate plane (``fill_holes="any"`` only) is seen in its own
@@ -35,7 +35,7 @@ import numpy as np
 
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.repairs.solidity import in_safe_range, orient2d
+from p3d_cli.geometry.predicates import in_safe_range, orient2d
 
 
 @dataclass(frozen=True)

@@ -83,10 +83,10 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
                 has_edge.add(hole.replaced[1].reshape(1, 3))
         found.append((hole, face[loop]))
     start = len(draft.faces)
-    found, note = _refuse_crossings(_applied(draft, found), found, start)
+    found = _refuse_crossings(_applied(draft, found), found, start)
     result = Holes(tuple(found), face[stray])
     draft = _applied(draft, found)
-    return draft, _report(draft, result, start, note), result
+    return draft, _report(draft, result, start), result
 
 
 def _applied(draft: Draft, found) -> Draft:
@@ -146,28 +146,26 @@ class _EdgeSet:
                 self.keys.add(min(x, y) * self.m + max(x, y))
 
 
-def _refuse_crossings(draft: Draft, found: list, start: int) -> tuple[list, str | None]:
-    """The holes, with those whose filling crosses another face left; and a note when the test
-    is not available."""
+def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
+    """The holes, with those whose filling crosses or overlaps another face left."""
     if len(draft.faces) == start:
-        return found, None
-    try:
-        crossing = solidity.new_face_crossings(draft.points, draft.faces, np.arange(start, len(draft.faces)))
-    except solidity.Unavailable:
-        return found, ("the filled holes were not tested for crossing other faces: this build of p3d lacks "
-                       "the self-intersection test")
+        return found
+    crossing = solidity.new_face_crossings(draft.points, draft.faces, np.arange(start, len(draft.faces)))
+    if crossing.size == 0:
+        return found
     out, position = [], start
     for hole, around in found:
         if hole.filled:
             own = np.arange(position, position + len(hole.triangles))
             position += own.size
             if np.isin(own, crossing).any():
-                hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces")
+                hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces",
+                                           replaced=None)
         out.append((hole, around))
-    return out, None
+    return out
 
 
-def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepReport:
+def _report(draft: Draft, result: Holes, start: int) -> StepReport:
     places, notes = [], []
     position = start
     for hole, around in result.holes:
@@ -186,8 +184,6 @@ def _report(draft: Draft, result: Holes, start: int, note: str | None) -> StepRe
     if result.stray.size:
         notes.append(f"{result.stray.size} boundary edges do not close into a loop (faces "
                      + ", ".join(str(int(f)) for f in np.unique(draft.origin[result.stray])[:SHOWN]) + "): left")
-    if note:
-        notes.append(note)
     filled = sum(1 for hole, _ in result.holes if hole.filled)
     split = sorted(int(draft.origin[hole.replaced[0]]) for hole, _ in result.holes
                    if hole.filled and hole.replaced is not None)

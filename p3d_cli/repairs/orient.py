@@ -212,12 +212,7 @@ def outward_step(draft: Draft, triangles: np.ndarray, found: Patches,
         notes.append(f"{open_count} open {pieces} of surface (bounded by a hole left or a non-manifold edge, or "
                      "without a consistent winding): outward is undefined for an open surface; left as "
                      f"{'they were' if open_count != 1 else 'it was'}")
-    try:
-        depth = solidity.nesting_depths(draft.points, draft.faces, labels, count, closed)
-    except solidity.Unavailable:
-        notes.append(f"{closed.size} closed shells: which lie inside which needs the exact nesting test, "
-                     "which this build of p3d lacks; left as they were")
-        return draft, StepReport("outward", ran=False, notes=tuple(notes)), np.zeros(0, dtype=np.int64)
+    depth = solidity.nesting_depths(draft.points, draft.faces, labels, count, closed)
     wrong = [p for p in closed.tolist() if (volume[p] > 0) != (depth[p] % 2 == 0)]
     flip = np.isin(labels, np.array(wrong, dtype=np.int64))
     flipped = np.flatnonzero(flip)

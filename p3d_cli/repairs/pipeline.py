@@ -14,15 +14,16 @@
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.layout import Layout
-from p3d_cli.mesh.report import Shell, TopologyReport
-from p3d_cli.mesh.topology import topology, topology_and_layout
+from p3d_cli.mesh.report import TopologyReport
+from p3d_cli.mesh.solidity import with_solidity
+from p3d_cli.mesh.topology import topology_and_layout
+from p3d_cli.mesh.verdicts import CHECKS, SOLIDITY
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
 from p3d_cli.repairs.draft import Draft, Grouping, grouping, with_directions
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
@@ -62,7 +63,7 @@ class Outcome:
 
 def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: str = "<array>",
                      weld: float | None = None, fill_holes: str = "flat", flatness: float = FLATNESS,
-                     max_hole_edges: int = MAX_EDGES) -> Outcome:
+                     max_hole_edges: int = MAX_EDGES, required: tuple[str, ...] = tuple(CHECKS)) -> Outcome:
     """Repair a triangle soup.
 
     Parameters
@@ -75,6 +76,9 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         The input's name in messages (a NaN or infinite coordinate is an ``InputError`` there).
     weld, fill_holes, flatness, max_hole_edges
         As for ``p3d_cli.repairs.repair``.
+    required : tuple of str
+        The checks of ``p3d check`` that decide whether the mesh needs repair and whether the
+        output is fixed (keys of ``p3d_cli.mesh.verdicts.CHECKS``; default all).
     """
     if fill_holes not in POLICIES:
         from p3d_cli.errors import UsageError
@@ -84,13 +88,17 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
     # In blocks, as a file is read (the topology's passes are tuned to cache-sized blocks).
     blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
     before, layout = topology_and_layout(blocks, n, where)
-    if not failed_checks(before):
+    assert layout is not None                   # n > 0
+    if any(name in SOLIDITY for name in required) and not failed_checks(before, required):
+        # Its topology passes: whether it crosses itself decides whether it needs repair. (An
+        # input failing a topology check is repaired first; its output's crossings are tested.)
+        before = with_solidity(before, blocks, layout)
+    if not failed_checks(before, required):
         clean = tuple(StepReport(name, ran=False, notes=("the mesh passes p3d check: nothing to do",)
                                    if name in steps else ()) for name in STEPS)
         return Outcome(None, triangles, before, before, clean, (), False)
     if _only_inward(before, steps):
-        return _turned_out(triangles, before, steps)
-    assert layout is not None                   # n > 0
+        return _turned_out(triangles, before, steps, required)
     # check's exact vertex ids, shells, zero-area and duplicate faces and edges: the steps
     # start from what the topology found, and group again only faces it did not see.
     points = np.empty((layout.vertex_count, 3), dtype=triangles.dtype)
@@ -144,10 +152,21 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         draft, reports["outward"], turned = outward_step(draft, out, found, open_patches)
         out[turned] = out[turned][:, [0, 2, 1]]
         shells_left = reports["outward"].notes
-    after = topology(out)
+    after = checked(out, required)
     ordered = tuple(reports[name] for name in STEPS)
-    return Outcome(draft, out, before, after, ordered, unfixed(after, steps, holes_left, shells_left),
+    return Outcome(draft, out, before, after, ordered, unfixed(after, steps, required, holes_left, shells_left),
                    draft.changed)
+
+
+def checked(triangles: np.ndarray, required: tuple[str, ...]) -> TopologyReport:
+    """``p3d check``'s report of the output: its topology, and its self-intersections and
+    shells' nesting when those are required (``p3d_cli.mesh.solidity``), in the blocks a file
+    of it would be read in."""
+    blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
+    report, layout = topology_and_layout(blocks, len(triangles))
+    if any(name in SOLIDITY for name in required) and layout is not None:
+        report = with_solidity(report, blocks, layout)
+    return report
 
 
 def _only_inward(before: TopologyReport, steps: tuple[str, ...]) -> bool:
@@ -157,15 +176,13 @@ def _only_inward(before: TopologyReport, steps: tuple[str, ...]) -> bool:
             and before.closed and before.degenerate_faces == 0 and before.duplicate_faces == 0)
 
 
-def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str, ...]) -> Outcome:
+def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str, ...],
+                required: tuple[str, ...]) -> Outcome:
     """One closed shell wound inward: every face turned round, with no vertex ids or edges
-    needed. Turning every face negates every signed term of ``check``'s sums exactly (the
-    cross product of the swapped sides is the negated one, bit for bit, and so are the sums),
-    so the output's topology is the input's with its volumes negated: nothing to check again."""
+    needed; the output checked as any other."""
     n = len(triangles)
     out = triangles[:, [0, 2, 1]]
-    after = dataclasses.replace(before, volume=-before.volume,
-                                shell_list=tuple(Shell(s.faces, s.first_face, -s.volume) for s in before.shell_list))
+    after = checked(out, required)
     reports = {name: StepReport(name, ran=name in steps) for name in STEPS}
     for name, counts in (("degenerate", {"faces_removed": 0}), ("duplicate", {"faces_removed": 0}),
                          ("orient", {"faces_flipped": 0, "shells": 0}),
@@ -176,7 +193,8 @@ def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str,
         "outward", counts={"shells_flipped": 1, "faces_flipped": n, "closed_shells": 1, "cavities": 0},
         faces=tuple(range(n)), places=({"shell_first_face": 0, "faces": n, "signed_volume_before": before.volume,
                                          "cavity": False},))
-    return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS), (), True)
+    return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS),
+                   unfixed(after, steps, required, (), ()), True)
 
 
 def _as_patches(layout: Layout) -> Patches:
@@ -214,16 +232,16 @@ def _open_faces(grouped: Grouping, oriented: bool, boundary: bool = True) -> np.
     return np.unique(edges.side[positions].astype(np.int64) // 3)
 
 
-def unfixed(after: TopologyReport, steps: tuple[str, ...], holes_left: tuple[str, ...],
+def unfixed(after: TopologyReport, steps: tuple[str, ...], required: tuple[str, ...], holes_left: tuple[str, ...],
             shells_left: tuple[str, ...]) -> tuple[str, ...]:
-    """Why each check the output still fails was left."""
+    """Why each required check the output still fails was left."""
     out = []
 
     def because(reasons, step: str) -> str:
         reasons = list(reasons) or ([f"the {step} step was not asked for"] if step not in steps else [])
         return f" ({'; '.join(reasons[:SHOWN])})" if reasons else ""
 
-    for name in failed_checks(after):
+    for name in failed_checks(after, required):
         if name == "closed":
             out.append(f"closed: {after.boundary_edges} boundary edges remain" + because(holes_left, "holes"))
         elif name == "manifold":
@@ -239,6 +257,25 @@ def unfixed(after: TopologyReport, steps: tuple[str, ...], holes_left: tuple[str
                        + because((), "degenerate"))
         elif name == "no-duplicate":
             out.append(f"no-duplicate: {after.duplicate_faces} duplicate faces remain" + because((), "duplicate"))
+        elif name == "no-self-intersection" and after.self_intersections is not None:
+            found = after.self_intersections
+            example = ""
+            if found.samples:
+                c = found.samples[0]
+                example = f" (e.g. faces {c.faces[0]} and {c.faces[1]}, {c.kind}, at {_point(c.point)})"
+            out.append(f"no-self-intersection: {found.count} face pairs cross or overlap{example}; repair moves "
+                       "no face, so it cannot part them")
+        elif name == "nesting" and after.nesting is not None:
+            nesting = after.nesting
+            kinds = sorted({kind for _, _, kind in nesting.relations if kind != "inside"})
+            counts = f"counted twice {nesting.counted_twice:.6g}, negative {nesting.counted_negative:.6g}"
+            out.append(f"nesting: the closed shells do not nest as a solid's ({counts}"
+                       + (f"; shells {', '.join(kinds)}" if kinds else "")
+                       + "); repair winds shells by their nesting but does not move them")
         else:
             out.append(f"{name}: fails")
     return tuple(out)
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(f"{x:.7g}" for x in p) + ")"

@@ -18,7 +18,7 @@ from p3d_cli.repairs.draft import Draft
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES
 from p3d_cli.repairs.pipeline import repair_triangles
 from p3d_cli.repairs.report import MassChange, RepairReport
-from p3d_cli.repairs.solidity import check_tolerance
+from p3d_cli.mesh.weld import check_tolerance
 from p3d_cli.repairs.steps import resolve_steps
 
 
@@ -69,7 +69,8 @@ class RepairedMesh:
 
 def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | None = None, *,
            fill_holes: str = "flat", flatness: float = FLATNESS, max_hole_edges: int = MAX_EDGES,
-           format: str | None = None, stdin: BinaryIO | None = None) -> tuple[RepairedMesh, RepairReport]:
+           require: Iterable[str] | None = None, format: str | None = None,
+           stdin: BinaryIO | None = None) -> tuple[RepairedMesh, RepairReport]:
     """Fix what ``p3d check`` finds in a mesh, change nothing else, and say every change.
 
     A mesh that ``check`` passes comes back unchanged. Otherwise the steps run in their order
@@ -93,6 +94,10 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
         loop that is simple seen along its normal.
     flatness, max_hole_edges
         The limits of ``flat``.
+    require : iterable of str, optional
+        The checks of ``p3d check`` that decide whether the mesh needs repair and whether the
+        output is fixed (``p3d_cli.mesh.verdicts.CHECKS``; default all). Leaving out
+        ``no-self-intersection`` and ``nesting`` skips the exact self-intersection test.
     format, stdin
         As for ``p3d_cli.measure.props``.
 
@@ -125,6 +130,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     if weld is not None:
         weld = check_tolerance(weld)
     chosen = resolve_steps(steps, weld)
+    required = _required(require)
     if not (float(flatness) >= 0):
         raise UsageError("flatness", f"{flatness!r} is not a non-negative number", "give a fraction such as 1e-3")
     if int(max_hole_edges) < 3:
@@ -141,7 +147,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
     triangles = np.ascontiguousarray(mesh.triangles())
     outcome = repair_triangles(triangles, chosen, where=where, weld=weld, fill_holes=fill_holes,
-                               flatness=float(flatness), max_hole_edges=int(max_hole_edges))
+                               flatness=float(flatness), max_hole_edges=int(max_hole_edges), required=required)
     out = outcome.triangles
     before = measure.props(triangles).properties
     after = measure.props(out).properties if outcome.changed else before
@@ -153,8 +159,21 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
         notes.append(f"coordinates and mass properties are in the file's unit ({mesh.length_unit})")
     report = RepairReport(solid.source, mesh.format, outcome.steps, outcome.before, outcome.after,
                           MassChange(before, after), changed=outcome.changed,
-                          unfixed=outcome.unfixed, notes=tuple(notes))
+                          unfixed=outcome.unfixed, notes=tuple(notes), required=required)
     return RepairedMesh(out, mesh.coordinate_dtype, outcome.draft), report
+
+
+def _required(require: Iterable[str] | None) -> tuple[str, ...]:
+    """The required checks, validated (``UsageError`` naming ``require``)."""
+    from p3d_cli.mesh.verdicts import CHECKS
+
+    if require is None:
+        return tuple(CHECKS)
+    names = tuple(dict.fromkeys([require] if isinstance(require, str) else require))
+    unknown = [name for name in names if name not in CHECKS]
+    if unknown:
+        raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
+    return names
 
 
 def _what_is_not_carried(report: RepairReport, source: str, in_place: bool) -> RepairReport:
@@ -185,7 +204,7 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
                 only_if_needed: bool = False, output_format: str | None = None,
                 max_volume_change: float | None = None, steps: Iterable[str] | str | None = None,
                 weld: float | None = None, fill_holes: str = "flat", flatness: float = FLATNESS,
-                max_hole_edges: int = MAX_EDGES, format: str | None = None,
+                max_hole_edges: int = MAX_EDGES, require: Iterable[str] | None = None, format: str | None = None,
                 stdin: BinaryIO | None = None, create_folders: bool = False) -> RepairReport:
     """Repair one file and write the result: what ``p3d repair`` does for each input.
 
@@ -212,7 +231,7 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
         ``stl`` (binary), ``ply``, ``obj`` or ``off``.
     max_volume_change : float, optional
         The largest relative volume change allowed (``|after - before| / |before|``).
-    steps, weld, fill_holes, flatness, max_hole_edges, format, stdin
+    steps, weld, fill_holes, flatness, max_hole_edges, require, format, stdin
         As for ``repair``.
     create_folders : bool
         Create the output's missing folders (a batch mirroring its inputs' tree).
@@ -253,7 +272,7 @@ def repair_file(source: str | os.PathLike, output: str | os.PathLike | None = No
             os.makedirs(os.path.dirname(os.path.abspath(output)), exist_ok=True)
         destination(output, inputs=inputs, in_place=in_place, what="the repaired mesh")
     mesh, report = repair(source, steps, weld, fill_holes=fill_holes, flatness=flatness,
-                          max_hole_edges=max_hole_edges, format=format, stdin=stdin)
+                          max_hole_edges=max_hole_edges, require=require, format=format, stdin=stdin)
     if in_place and target_format is None:
         # In place: the input's own format (its extension may name none).
         family = report.format.split("-")[0]

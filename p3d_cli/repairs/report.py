@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from p3d_cli.mesh.report import TopologyReport
-from p3d_cli.mesh.verdicts import CHECKS, passes
+from p3d_cli.mesh.verdicts import CHECKS, SOLIDITY, passes
 from p3d_cli.results import MassProperties
 
 #: Locations listed per step in the text report (the record lists every face).
@@ -149,18 +149,28 @@ class MassChange:
                 "center_shift": self.center_shift, "relative_inertia_change": finite(self.relative_inertia_change)}
 
 
-def check_summary(report: TopologyReport) -> dict:
-    """The counts of ``p3d check`` for one mesh, and the checks it fails."""
-    return {"failed": list(failed_checks(report)), "faces": report.faces, "vertices": report.vertices,
+def check_summary(report: TopologyReport, required=tuple(CHECKS)) -> dict:
+    """The counts of ``p3d check`` for one mesh, the required checks it fails, and those not
+    tested (the self-intersection tests of an input that fails others already)."""
+    crossing = report.self_intersections.count if report.self_intersections is not None else None
+    return {"failed": list(failed_checks(report, required)), "not_tested": list(untested(report, required)),
+            "faces": report.faces, "vertices": report.vertices, "self_intersections": crossing,
             "boundary_edges": report.boundary_edges, "nonmanifold_edges": report.nonmanifold_edges,
             "misoriented_edges": report.misoriented_edges, "nonmanifold_vertices": report.nonmanifold_vertices,
             "degenerate_faces": report.degenerate_faces, "duplicate_faces": report.duplicate_faces,
             "shells": report.shells, "signed_volume": report.volume}
 
 
-def failed_checks(report: TopologyReport) -> tuple[str, ...]:
-    """The checks of ``p3d check`` (all of them) that ``report`` fails."""
-    return tuple(name for name in CHECKS if not passes(report, name))
+def untested(report: TopologyReport, required=tuple(CHECKS)) -> tuple[str, ...]:
+    """The required checks ``report`` holds no answer to (self-intersections not computed)."""
+    return tuple(name for name in required if name in SOLIDITY and report.self_intersections is None)
+
+
+def failed_checks(report: TopologyReport, required=tuple(CHECKS)) -> tuple[str, ...]:
+    """The required checks of ``p3d check`` (default: all) that ``report`` fails; a check it
+    holds no answer to (``untested``) is not counted failed."""
+    skip = untested(report, required)
+    return tuple(name for name in required if name not in skip and not passes(report, name))
 
 
 @dataclass(frozen=True)
@@ -193,6 +203,8 @@ class RepairReport:
         limit was broken), ``dry run``; empty for ``repair``.
     max_volume_change : float or None
         The limit ``repair_file`` held the relative volume change to.
+    required : tuple of str
+        The checks of ``p3d check`` the output must pass to be called fixed (default: all).
     """
 
     source: str
@@ -207,19 +219,21 @@ class RepairReport:
     output: str | None = None
     written: str = ""
     max_volume_change: float | None = None
+    required: tuple[str, ...] = tuple(CHECKS)
 
     @property
     def failed_before(self) -> tuple[str, ...]:
-        return failed_checks(self.before)
+        return failed_checks(self.before, self.required)
 
     @property
     def failed_after(self) -> tuple[str, ...]:
-        return failed_checks(self.after)
+        return failed_checks(self.after, self.required)
 
     @property
     def fixed(self) -> bool:
-        """The output passes every check of ``p3d check`` (the input did, or repair made it)."""
-        return not self.failed_after
+        """The output passes every required check of ``p3d check`` (the input did, or repair
+        made it)."""
+        return not self.failed_after and not untested(self.after, self.required)
 
     @property
     def within_limit(self) -> bool:
@@ -240,7 +254,8 @@ class RepairReport:
         return {"source": self.source, "format": self.format, "ok": self.ok, "fixed": self.fixed,
                 "changed": self.changed, "output": self.output, "written": self.written,
                 "max_volume_change": self.max_volume_change, "within_limit": self.within_limit,
-                "before": check_summary(self.before), "after": check_summary(self.after),
+                "required": list(self.required), "before": check_summary(self.before, self.required),
+                "after": check_summary(self.after, self.required),
                 "steps": [s.to_dict() for s in self.steps], "mass": self.mass.to_dict(),
                 "unfixed": list(self.unfixed), "notes": list(self.notes),
                 "units": {"length": "mesh unit", "volume": "mesh unit^3"},

@@ -20,6 +20,7 @@ import p3d_cli as p3d
 from exact import exact_moments
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import FormatError, InputError
+from p3d_cli.mesh.verdicts import CHECKS, SOLIDITY
 
 RTOL = 1e-12
 
@@ -436,7 +437,14 @@ def test_kuka_links_are_closed_meshes_placed_in_metres(robots):
         result = p3d.props(path)
         assert result.facts.closed is True and result.units["mesh_length"] == "m", path.name
         assert not result.warnings, (path.name, result.warnings)
-        assert p3d.check(path).ok, path.name
+        topology = [name for name in CHECKS if name not in SOLIDITY]
+        assert p3d.check(path, require=topology).ok, path.name
+        # Two links intersect themselves (issue 29's exact test, the independent Fraction
+        # oracle and MeshLab's filter agree on the crossings; MeshLab misses link_3's coplanar
+        # overlaps): link_1's body is crossed by its motors and crosses itself in 3 face pairs,
+        # link_3 has 6 crossing and 62 overlapping pairs (docs/intersections.md).
+        found = p3d.check(path).report.self_intersections
+        assert found.count == {"link_1.dae": 27, "link_3.dae": 68}.get(path.name, 0), path.name
     link = p3d.props(folder / "link_3.dae")
     assert [p.details["name"] for p in link.parts] == ["Link_3", "Link_3_Motor1", "Link_3_Motor2", "Link_3_Motor3",
                                                        "Link_3_Motor4"]

@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 import p3d_cli as p3d
+from p3d_cli.errors import UsageError
 from p3d_cli.repairs import repair
-
-pytestmark = pytest.mark.usefixtures("oracles")
 
 
 def exact_volume(triangles: np.ndarray) -> Fraction:
@@ -182,3 +181,27 @@ def test_a_mesh_of_nothing_but_degenerate_faces_is_left_whole():
     mesh, report = repair(flat)
     assert not report.fixed and not report.changed and len(mesh.triangles) == 2
     assert "removing them would leave nothing" in report.step("degenerate").notes[0]
+
+
+def test_a_filling_that_would_cross_another_face_is_left(cube):
+    """An open-topped box with a spike standing through the opening's plane: the filling of the
+    top would cross the spike, so the hole is left, and said."""
+    open_box = np.delete(cube, [2, 3], axis=0)                    # the z = 1 side missing
+    spike = np.array([[0.4, 0.4, 0.5], [0.6, 0.4, 0.5], [0.5, 0.6, 0.5], [0.5, 0.5, 1.5]])
+    tetra = spike[[[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]]
+    mesh, report = repair(np.concatenate([open_box, tetra]))
+    holes = report.step("holes")
+    assert holes.counts["holes_filled"] == 0
+    assert holes.places[0]["reason"] == "its filling would cross other faces"
+    assert not report.changed and not report.fixed
+
+
+def test_require_picks_the_checks_that_decide(cube):
+    crossing = np.concatenate([cube, cube + 0.5])                  # two boxes through each other
+    _, report = repair(crossing)
+    assert report.failed_before == ("no-self-intersection", "nesting") and not report.fixed
+    assert report.unfixed[0].startswith("no-self-intersection: ")
+    _, report = repair(crossing, require=["closed", "oriented", "outward", "manifold"])
+    assert report.fixed and report.after.self_intersections is None
+    with pytest.raises(UsageError, match="no check named 'watertight'"):
+        repair(cube, require=["watertight"])

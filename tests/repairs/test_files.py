@@ -12,8 +12,6 @@ from p3d_cli.errors import OutputError
 from p3d_cli.repairs import repair_file
 from p3d_cli.io.writers import write_mesh
 
-pytestmark = pytest.mark.usefixtures("oracles")
-
 
 @pytest.mark.parametrize("ext", [".stl", ".ply", ".obj", ".off"])
 def test_outputs_read_back_by_p3d_and_trimesh_give_the_reported_numbers(tmp_path, cube, ext):

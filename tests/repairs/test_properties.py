@@ -12,8 +12,6 @@ import p3d_cli as p3d
 from helpers.tori import grid_torus
 from p3d_cli.repairs import repair
 
-pytestmark = pytest.mark.usefixtures("oracles")
-
 
 BASE = grid_torus(6, 5)           # 60 faces
 
