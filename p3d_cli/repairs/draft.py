@@ -158,8 +158,12 @@ def grouping(draft: Draft) -> Grouping:
 
 def with_directions(edges: Edges, ids: np.ndarray) -> Edges:
     """``edges`` with ``forward`` (which the topology lets go) from the vertex ids ``(3n,)``:
-    side ``3 f + k`` runs forward when its start's id is below its end's."""
-    if edges.forward is not None:
+    side ``3 f + k`` runs forward when its start's id is below its end's.
+
+    Only the orient step reads ``forward``, to tell which two sides of an edge disagree, and
+    only when the topology found misoriented edges: without them ``forward`` stays None (its
+    two gathers of ``3n`` ids took 1.3 s of the open 1M torus's repair)."""
+    if edges.forward is not None or edges.misoriented.size == 0:
         return edges
     side = edges.side.astype(np.int64)
     ids = np.asarray(ids).ravel()

@@ -59,14 +59,17 @@ class Patches:
     nonorientable: np.ndarray
 
 
-def pair_groups(edges: Edges) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The two sides of every edge used by exactly two faces, and whether they disagree
-    (run the same way)."""
+def pair_groups(edges: Edges) -> tuple[np.ndarray, np.ndarray]:
+    """The two sides of every edge used by exactly two faces."""
     two = np.flatnonzero(edges.counts == 2)
     start = edges.starts[two].astype(np.int64)
-    first, second = edges.side[start].astype(np.int64), edges.side[start + 1].astype(np.int64)
-    same = edges.forward[start] == edges.forward[start + 1]
-    return first, second, same
+    return edges.side[start].astype(np.int64), edges.side[start + 1].astype(np.int64)
+
+
+def disagreeing(edges: Edges) -> np.ndarray:
+    """Whether the two sides of each edge of ``pair_groups`` run the same way (disagree)."""
+    start = edges.starts[np.flatnonzero(edges.counts == 2)].astype(np.int64)
+    return edges.forward[start] == edges.forward[start + 1]
 
 
 def patches(face_count: int, edges: Edges, one_shell: bool = False) -> Patches:
@@ -82,9 +85,9 @@ def patches(face_count: int, edges: Edges, one_shell: bool = False) -> Patches:
         found = shells(face_count, edges) if edges.nonmanifold.size == 0 else _pair_components(face_count, edges)
         none = np.zeros(face_count, dtype=bool)
         return Patches(found.labels, found.count, none, np.zeros(0, dtype=np.int64))
-    first, second, same = pair_groups(edges)
+    first, second = pair_groups(edges)
     a, b = first // 3, second // 3
-    flipped = same.astype(np.int64)
+    flipped = disagreeing(edges).astype(np.int64)
 
     def arcs():
         for lo in range(0, a.size, _STEP):
@@ -111,7 +114,7 @@ def patches(face_count: int, edges: Edges, one_shell: bool = False) -> Patches:
 
 def _pair_components(face_count: int, edges: Edges):
     """Faces joined across the edges exactly two faces use."""
-    first, second, _ = pair_groups(edges)
+    first, second = pair_groups(edges)
     a, b = first // 3, second // 3
 
     def arcs():

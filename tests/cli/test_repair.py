@@ -125,6 +125,16 @@ def test_steps_and_weld_options(tmp_path):
     assert result.exit_code == 2 and "--steps: no repair step named 'bogus'" in result.output
     result = run("repair", tmp_path / "open.stl", "--dry-run", "--steps", "weld")
     assert result.exit_code == 2 and "--steps: the weld step needs a tolerance; give --weld TOL" in result.output
+    write_binary_stl(tmp_path / "split.stl", split)          # vertex 0 of face 0 off by 1e-9
+    result = run("repair", tmp_path / "split.stl", "-o", tmp_path / "exact.stl", "--json")
+    record = json.loads(result.output)
+    assert result.exit_code == 1 and not record["fixed"]
+    assert [s["ran"] for s in record["steps"] if s["step"] == "weld"] == [False]
+    result = run("repair", tmp_path / "split.stl", "-o", tmp_path / "welded.stl", "--weld", "1e-6", "--json")
+    assert result.exit_code == 0, result.output
+    weld = [s for s in json.loads(result.output)["steps"] if s["step"] == "weld"][0]
+    assert weld["counts"]["vertices_merged"] == 1
+    assert p3d.check(str(tmp_path / "welded.stl")).ok
 
 
 def test_help_has_examples_and_every_step():
