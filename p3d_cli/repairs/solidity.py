@@ -78,12 +78,15 @@ def new_face_crossings(points: np.ndarray, faces: np.ndarray, new: np.ndarray) -
     faces = np.asarray(faces)
     corners = points[faces[new]]
     lo, hi = corners.min(axis=(0, 1)), corners.max(axis=(0, 1))
-    near = []
-    for start in range(0, len(faces), 1 << 16):
-        block = points[faces[start:start + (1 << 16)]]
-        meets = ((block.min(axis=1) <= hi) & (block.max(axis=1) >= lo)).all(axis=1)
-        near.append(np.flatnonzero(meets) + start)
-    chosen = np.concatenate(near)
+    # A face's box misses the new faces' box when, along some axis, all three of its corners
+    # lie beyond it on one side: decided per vertex once, then per face on booleans.
+    below, above = points < lo, points > hi
+    away = np.zeros(len(faces), dtype=bool)
+    for axis in range(3):
+        for side in (below[:, axis], above[:, axis]):
+            on = side[faces]
+            away |= on[:, 0] & on[:, 1] & on[:, 2]
+    chosen = np.flatnonzero(~away)
     found = self_intersections(points, faces[chosen])
     hit = np.unique(chosen[found.pairs].ravel()) if len(found.pairs) else np.zeros(0, dtype=np.int64)
     return np.intersect1d(hit, new)
