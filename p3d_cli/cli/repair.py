@@ -165,13 +165,15 @@ def output_targets(inputs, items, out: str | None, output_format: str | None) ->
         return {name: None for name in names}, False
     if out == "-":
         raise UsageError("--output", "standard output holds the report", "give the repaired mesh a file path")
+    if not out:
+        raise UsageError("--output", "an empty path", "give a file path, or a folder for several inputs")
     folder = (os.path.isdir(out) or out.endswith(("/", os.sep)) or len(items) > 1
               or any(os.path.isdir(i) for i in inputs if i != "-"))
     if not folder:
         return {name: out for name in names}, False
     if os.path.exists(out) and not os.path.isdir(out):
-        raise UsageError("--output", f"{out} is a file, but there are several inputs",
-                         "give a folder to mirror them into")
+        many = "there are several inputs" if len(items) > 1 else "the input is a folder"
+        raise UsageError("--output", f"{out} is a file, but {many}", "give a folder to mirror them into")
     extension = None
     if output_format is not None:
         from p3d_cli.io.writers import output_format as format_of

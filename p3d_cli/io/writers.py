@@ -70,7 +70,7 @@ def output_format(path: str | os.PathLike, override: str | None = None) -> str:
     if name is None or not FORMATS[name].writer:
         what = f"extension {ext!r}" if ext else "a name without an extension"
         raise UsageError(os.fspath(path), f"cannot write a mesh to {what}",
-                         f"name the output .stl, .ply, .obj or .off, or give output_format ({names})")
+                         f"name the output .stl, .ply, .obj or .off, or give an output format ({names})")
     return name
 
 

@@ -192,3 +192,46 @@ def test_an_earlier_run_s_outputs_inside_the_inputs_are_not_repaired_again(tmp_p
     result = run("repair", tree, "-o", tree / "fixed")
     assert result.exit_code == 2 and "lies in the output folder" in result.stderr
     assert sorted(p.relative_to(tree).as_posix() for p in tree.rglob("*.stl")) == ["fixed/open.stl", "open.stl"]
+
+
+def test_bad_input_and_output_paths_get_one_error_line_and_status_2(tmp_path):
+    """Each: exit 2, one ``p3d: error: <where>: ...`` line on stderr, no traceback, nothing written."""
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    (tmp_path / "garbage.stl").write_bytes(b"\x01" * 500)
+    (tmp_path / "a-file").write_text("")
+    (tmp_path / "tree").mkdir()
+    write_binary_stl(tmp_path / "tree" / "open.stl", CUBE[2:])
+    cases = {
+        "no such file": (tmp_path / "missing.stl", "-o", tmp_path / "o1.stl"),
+        "is truncated or not an STL": (tmp_path / "garbage.stl", "-o", tmp_path / "o2.stl"),
+        "cannot be read (Not a directory)": (tmp_path / "a-file" / "x.stl", "-o", tmp_path / "o3.stl"),
+        "would overwrite the input": (tmp_path / "open.stl", "-o", tmp_path / "." / "open.stl"),
+        "the folder": (tmp_path / "open.stl", "-o", tmp_path / "nowhere" / "o4.stl"),
+        "an empty path": (tmp_path / "open.stl", "-o", ""),
+        "is a file, but the input is a folder": (tmp_path / "tree", "-o", tmp_path / "a-file"),
+        "cannot write a mesh to extension '.md'": (tmp_path / "open.stl", "-o", tmp_path / "o5.md"),
+    }
+    for what, args in cases.items():
+        result = run("repair", *args)
+        lines = result.stderr.strip().splitlines()
+        assert result.exit_code == 2, (what, result.output)
+        assert len(lines) == 1 and lines[0].startswith("p3d: error: ") and what in lines[0], (what, lines)
+        assert lines[0].split(": ")[2] != "", lines              # a <where> before the message
+        assert "output_format" not in lines[0]                   # the library's name, not an option
+        assert "Traceback" not in result.output and result.exception is None or isinstance(
+            result.exception, SystemExit)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file", "garbage.stl", "open.stl", "tree"]
+
+
+def test_an_output_slot_taken_by_a_folder_loses_only_that_file(tmp_path):
+    tree = tmp_path / "parts"
+    tree.mkdir()
+    write_binary_stl(tree / "a.stl", CUBE[2:])
+    write_binary_stl(tree / "b.stl", CUBE[:, [0, 2, 1]])
+    (tmp_path / "out" / "a.stl").mkdir(parents=True)                # where a.stl's repair would go
+    result = run("repair", tree, "-o", tmp_path / "out")
+    assert result.exit_code == 2
+    assert f"p3d: error: {tmp_path / 'out' / 'a.stl'}: cannot write the repaired mesh: it exists and is not a " \
+           "regular file" in result.stderr
+    assert p3d.check(str(tmp_path / "out" / "b.stl")).ok
+    assert "2 files: 1 ok, 1 error" in result.stderr
