@@ -25,7 +25,10 @@ for a user):
 - meshio: ``meshio.read(path)`` then the same tetrahedron sums as p3d, in plain numpy;
 - numpy-stl (STL only): ``stl.mesh.Mesh.from_file(path).get_mass_properties()``. It takes
   ~30 s per million triangles, so by default it runs only up to 100k triangles
-  (``--numpy-stl-max``).
+  (``--numpy-stl-max``);
+- the streaming numpy floor, ``benchmarks/floor.py`` (binary STL, binary PLY, ASCII STL): read
+  in blocks, integrate, accumulate, no checks; the least a numpy tool does (issue 32);
+- admesh (STL only, from the system's packages; up to ``--admesh-max`` triangles).
 
 Usage::
 
@@ -204,6 +207,7 @@ def child_env(workdir: str) -> dict:
 
 
 ENV: dict | None = None
+ADMESH: str | None = None
 
 
 def run_once(argv, log_dir: str) -> tuple[float, float, float, str]:
@@ -224,6 +228,17 @@ def run_once(argv, log_dir: str) -> tuple[float, float, float, str]:
     # ru_maxrss is in kilobytes on Linux (bytes on macOS).
     rss = usage.ru_maxrss / (1 << 20 if sys.platform == "darwin" else 1 << 10)
     return wall, usage.ru_utime + usage.ru_stime, rss, stdout
+
+
+FLOOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "floor.py")
+#: Formats the numpy floor (floor.py) reads, and admesh (STL only).
+FLOOR_FORMATS = ("stl-binary", "stl-ascii", "ply-binary")
+
+
+def admesh_volume(stdout: str) -> None:
+    """admesh prints its float32 volume (about 1e-4 off): read nothing, check nothing."""
+    if "Number of facets" not in stdout:
+        raise RuntimeError("admesh printed no results")
 
 
 def p3d_volume(stdout: str) -> float:
@@ -320,10 +335,14 @@ def main(argv=None) -> int:
                         help="formats generated and timed at 4M triangles (default stl-binary)")
     parser.add_argument("--numpy-stl-max", type=int, default=100_000,
                         help="largest size numpy-stl is timed at (default 100000: it takes ~30 s per 1M)")
+    parser.add_argument("--admesh-max", type=int, default=1_000_000,
+                        help="largest size admesh is timed at (default 1000000; its edge hash table is slower "
+                        "than linear beyond)")
     parser.add_argument("--output", default=None, help="also write the markdown table here "
                         "(default bench_props.md in the work directory)")
     parser.add_argument("--generate", nargs=3, metavar=("WORKDIR", "SIZES", "FORMATS"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    command_line = " ".join(sys.argv[1:] if argv is None else argv)
     if args.generate:
         workdir, sizes, formats = args.generate
         generate(workdir, [int(x) for x in sizes.split(",")], formats.split(","),
@@ -363,8 +382,12 @@ def main(argv=None) -> int:
             subprocess.run([python, os.path.abspath(__file__), "--generate", workdir, str(size), ",".join(wanted)],
                            check=True)
 
-    global ENV
+    global ENV, ADMESH
     ENV = child_env(workdir)
+    ENV.pop("P3D_PURE_NUMPY", None)
+    ADMESH = shutil.which("admesh")
+    if ADMESH is None:
+        log("admesh not found: its column is left empty")
     log_dir = tempfile.mkdtemp(prefix="p3d-bench-out-")
     tiny = os.path.join(workdir, "tiny.stl")
     # Warm-up, untimed: fills the bytecode cache of every tool and the page cache.
@@ -383,7 +406,8 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = []
     lines.append(f"Whole-process medians, {time.strftime('%Y-%m-%d %H:%M %Z')}; {machine()}; "
-                 f"load average {load:.1f} at the start.")
+                 f"load average {load:.1f} at the start. Command: `python benchmarks/bench_props.py "
+                 f"{command_line}`.")
     lines.append(f"{versions()}.")
     lines.append("")
 
@@ -417,14 +441,18 @@ def main(argv=None) -> int:
     lines.append("**Size sweep.** Medians over *runs* whole processes per tool, alternated. Times in "
                  "seconds, wall clock unless marked cpu (user+sys, which other load on the machine "
                  "disturbs less); *×trimesh* = trimesh's time / p3d's; *×fastest* = the fastest peer's "
-                 "wall time / p3d's; *ns/tri* = p3d's marginal CPU time per triangle, from the next "
+                 "wall time / p3d's; *floor* = benchmarks/floor.py, a numpy program that only reads the "
+                 "file in blocks and integrates (no checks: the least a numpy tool does), and *p3d / floor* "
+                 "p3d's CPU time over it; *admesh* = `admesh FILE` (STL, up to `--admesh-max` triangles); "
+                 "*ns/tri* = p3d's marginal CPU time per triangle, from the next "
                  "smaller size of the same format: flat when the cost grows linearly (noisy at "
                  "100k, where it is a small difference of two start-up-dominated runs); RSS = peak "
                  "resident memory.")
     lines.append("")
     lines.append("| format | triangles | file MB | runs | p3d | trimesh | meshio | numpy-stl | ×trimesh "
-                 "| ×fastest | p3d cpu | trimesh cpu | ×trimesh cpu | ns/tri | p3d RSS MB | trimesh RSS MB |")
-    lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                 "| ×fastest | p3d cpu | trimesh cpu | ×trimesh cpu | floor cpu | p3d / floor cpu | admesh cpu "
+                 "| ns/tri | p3d RSS MB | trimesh RSS MB |")
+    lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     memory_rows, failures = [], []
     previous: dict[str, tuple[int, float]] = {}
     for fmt in formats:
@@ -437,6 +465,10 @@ def main(argv=None) -> int:
             tools = {"p3d": ([p3d, "props", path, "--json"], p3d_volume),
                      "trimesh": ([python, "-c", TRIMESH, path], peer_volume),
                      "meshio": ([python, "-c", MESHIO, path], peer_volume)}
+            if fmt in FLOOR_FORMATS:
+                tools["floor"] = ([python, FLOOR, path], peer_volume)
+            if fmt.startswith("stl") and size <= args.admesh_max and ADMESH:
+                tools["admesh"] = ([ADMESH, path], admesh_volume)
             if fmt.startswith("stl") and size <= args.numpy_stl_max:
                 # numpy-stl takes seconds from 100k triangles up: two runs there.
                 tools["numpy-stl"] = ([python, "-c", NUMPY_STL, path], peer_volume,
@@ -447,8 +479,9 @@ def main(argv=None) -> int:
             failures += [f"{name} on {fmt} {size:,}: {r.error}" for name, r in got.items() if r.error]
             reference = ok["p3d"].volume if "p3d" in ok else None
             for name, r in ok.items():
-                # Every tool must find the same volume, or the timing may be of skipped work.
-                if reference is not None and abs(r.volume - reference) > 1e-6 * abs(reference):
+                # Every tool must find the same volume, or the timing may be of skipped work
+                # (admesh's float32 volume is not checked).
+                if reference is not None and r.volume is not None and abs(r.volume - reference) > 1e-6 * abs(reference):
                     raise RuntimeError(f"{name} on {path}: volume {r.volume} differs from p3d's {reference}")
 
             def cell(name, what="wall"):
@@ -456,7 +489,7 @@ def main(argv=None) -> int:
                     return "–"
                 return "failed" if got[name].error else fmt_s(got[name].median(what))
 
-            peers = [r for name, r in ok.items() if name != "p3d"]
+            peers = [r for name, r in ok.items() if name not in ("p3d", "floor")]
             mb = os.path.getsize(path) / 1e6
             x_trimesh = x_trimesh_cpu = "–"
             if "p3d" in ok and peers:
@@ -476,9 +509,12 @@ def main(argv=None) -> int:
             else:
                 x_wall = ns = "–"
             rss = {name: f"{r.median('rss_mb'):.0f}" if name in ok else "–" for name, r in got.items()}
+            x_floor = (f"{ok['p3d'].median('cpu') / ok['floor'].median('cpu'):.2f}×"
+                       if "p3d" in ok and "floor" in ok else "–")
             lines.append(f"| {fmt} | {size:,} | {mb:.1f} | {runs} | {cell('p3d')} | {cell('trimesh')} "
                          f"| {cell('meshio')} | {cell('numpy-stl')} | {x_trimesh} | {x_wall} | {cell('p3d', 'cpu')} "
-                         f"| {cell('trimesh', 'cpu')} | {x_trimesh_cpu} | {ns} | {rss['p3d']} | {rss['trimesh']} |")
+                         f"| {cell('trimesh', 'cpu')} | {x_trimesh_cpu} | {cell('floor', 'cpu')} | {x_floor} "
+                         f"| {cell('admesh', 'cpu')} | {ns} | {rss['p3d']} | {rss['trimesh']} |")
             if "p3d" in ok and (size >= 4_000_000 or (size == max(sizes) and fmt == "stl-binary")):
                 memory_rows.append((fmt, size, mb, ok["p3d"].median("rss_mb")))
     lines.append("")
@@ -493,7 +529,8 @@ def main(argv=None) -> int:
         lines.append("")
         lines.append(f"Failed: {text}")
     lines.append("")
-    lines.append(f"Benchmark wall time {time.perf_counter() - t_all:.0f} s (mesh generation included).")
+    lines.append(f"Benchmark wall time {time.perf_counter() - t_all:.0f} s (mesh generation included); "
+                 f"load average {os.getloadavg()[0]:.1f} at the end.")
 
     table = "\n".join(lines) + "\n"
     sys.stdout.write(table)

@@ -16,7 +16,9 @@ What it does:
 3. Checks the answers (the closed torus passes ``p3d check``, the open one fails it with the
    six boundary edges of its two holes; ``p3d props`` calls the open torus not closed;
    admesh reads every facet) and prints a markdown table of medians and the ratios the
-   targets are about, with the machine's load average before and after.
+   targets are about, with the machine's load average before and after. ``admesh`` runs both
+   with ``-e`` (exact edge checks only) and plain (its default repairs), and the streaming
+   numpy floor (``floor.py``) is timed on the closed 1M torus beside ``p3d props``.
 
 Usage::
 
@@ -46,6 +48,7 @@ MESHES = {"closed-1m": (1000, 500, False), "open-1m": (1000, 500, True),
           "closed-70k": (250, 140, False), "open-70k": (250, 140, True)}
 
 TORUS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "torus.py")  # the mesh writer, run as a child
+FLOOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "floor.py")
 
 
 def commands(paths: dict, admesh: str | None) -> dict:
@@ -75,6 +78,10 @@ def commands(paths: dict, admesh: str | None) -> dict:
     if admesh:
         out["admesh -e 1M"] = ([admesh, "-e", paths["closed-1m"]],
                                lambda status, text: status == 0 and "1000000" in text)
+        out["admesh 1M"] = ([admesh, paths["closed-1m"]], lambda status, text: status == 0 and "1000000" in text)
+    # The streaming numpy floor (issue 32): reading and integrating only, no checks.
+    out["numpy floor 1M"] = ([sys.executable, FLOOR, paths["closed-1m"]],
+                             lambda status, text: status == 0 and float(text) > 0)
     return out
 
 
@@ -86,7 +93,8 @@ def time_all(tools: dict, runs: int, env) -> dict:
 def table(medians: dict, runs: int, sizes: dict, load: tuple) -> str:
     lines = [f"Whole-process medians of {runs} alternated runs, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
              f"{platform.processor() or platform.machine()}, {os.cpu_count()} logical CPUs, "
-             f"Python {platform.python_version()}; load average {load[0]:.2f} before, {load[1]:.2f} after.",
+             f"Python {platform.python_version()}; load average {load[0]:.2f} before, {load[1]:.2f} after. "
+             f"Command: `python benchmarks/check_speed.py {' '.join(sys.argv[1:])}`.",
              "", "| command | wall s | user+sys s | peak RSS MB |", "|---|---:|---:|---:|"]
     for name, m in medians.items():
         lines.append(f"| `{name}` | {m['wall']:.3f} | {m['cpu']:.3f} | {m['rss']:.0f} |")
@@ -98,6 +106,8 @@ def table(medians: dict, runs: int, sizes: dict, load: tuple) -> str:
                          f"{medians[a]['cpu'] / medians[b]['cpu']:.2f}× | {target} |")
 
     ratio("check / admesh -e (1M)", "p3d check 1M", "admesh -e 1M", "≤ 1")
+    ratio("check / admesh (1M)", "p3d check 1M", "admesh 1M", "≤ 1")
+    ratio("props / numpy floor (1M)", "p3d props 1M", "numpy floor 1M", "≤ 1.5")
     ratio("check / props (1M)", "p3d check 1M", "p3d props 1M", "≤ 1.5")
     ratio("props open / closed (1M)", "p3d props 1M open", "p3d props 1M", "≤ 1.3")
     ratio("props open / closed (70k)", "p3d props 70k open", "p3d props 70k", "≤ 1.3")

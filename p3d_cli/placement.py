@@ -314,7 +314,9 @@ def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Ca
             return None
         return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
 
-    return dataclasses.replace(mesh, read_blocks=blocks), bounds
+    # indexed=None: the blocks must stream past the projection, so the kernels' indexed road
+    # (which reads the vertices and faces, not read_blocks) is not taken for a placed mesh.
+    return dataclasses.replace(mesh, read_blocks=blocks, indexed=None), bounds
 
 
 def then(first: Placement, second: Placement) -> Placement:

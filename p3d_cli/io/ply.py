@@ -83,7 +83,11 @@ def _faces(where: str, corners: np.ndarray, sizes: np.ndarray, vertex_count: int
     if small.size:
         raise FormatError(where, f"face {int(small[0])} has {int(sizes[small[0]])} vertices (at least 3 needed)",
                           "remove degenerate faces or export the mesh again")
-    corners = corners.astype(np.int64, copy=False)
+    # Indices of 32 bits or fewer, signed, stay int32 (a binary PLY's usual ``int``): half the
+    # memory and time of widening every corner to int64; the triangles are the same.
+    kind, size = corners.dtype.kind, corners.dtype.itemsize
+    narrow = kind in "iu" and (size < 4 or (size == 4 and kind == "i"))
+    corners = corners.astype(np.int32 if narrow else np.int64, copy=False)
     _check_range(where, corners, vertex_count, "face", sizes)
     return fan_triangles(corners, sizes)
 

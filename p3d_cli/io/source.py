@@ -46,6 +46,11 @@ class MeshSource:
         placed; the source itself yields all of them. Empty for a single object.
     object_kind : str
         What the file calls those objects (``nodes``, ``build items``), for the record.
+    indexed : tuple or None
+        For an indexed mesh (``indexed_source``): its ``(vertices, face pieces)``, so that a
+        reader of the indices (the compiled kernels) need not gather ``vertices[faces]``. A
+        copy whose ``read_blocks`` yields anything else (or must see every block, as placed
+        bounds do) sets it to None, or the kernels would read the stale indexed mesh instead.
     """
 
     format: str
@@ -58,6 +63,14 @@ class MeshSource:
     length_unit: str | None = None
     objects: tuple[tuple[str, "MeshSource"], ...] = field(default_factory=tuple)
     object_kind: str = ""
+    indexed: tuple | None = None
+
+    def index_blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """``(vertices, faces)`` of every block of an indexed mesh: ``vertices[faces]`` is
+        the block ``read_blocks`` yields."""
+        vertices, pieces = self.indexed
+        for block in _blocks_of(list(pieces), BLOCK):
+            yield vertices, block
 
     def _repr_png_(self) -> bytes:
         """In a notebook: a picture of the mesh (``p3d_cli.render``)."""
@@ -116,7 +129,8 @@ def indexed_source(fmt: str, vertices: np.ndarray, faces, dtype: str, warnings=(
         for block in _blocks_of(pieces, BLOCK):
             yield vertices[block]
 
-    return MeshSource(fmt, sum(len(piece) for piece in pieces), dtype, read_blocks, None, tuple(warnings))
+    return MeshSource(fmt, sum(len(piece) for piece in pieces), dtype, read_blocks, None, tuple(warnings),
+                      indexed=(vertices, tuple(pieces)))
 
 
 def _blocks_of(pieces: list[np.ndarray], size: int) -> Iterator[np.ndarray]:

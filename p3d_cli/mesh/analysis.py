@@ -8,6 +8,7 @@ test and dropped. A streamed binary STL is therefore never held in memory whole.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -17,6 +18,8 @@ from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
+from p3d_cli.mesh.kernels import Buckets, compiled, key_buffer
+from p3d_cli.mesh.kernels import takes as kernel_takes
 from p3d_cli.results import Bounds, Moments
 
 
@@ -91,11 +94,44 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         raise InputError(where, "the mesh has no faces", "export it again with its faces")
     sums = None
     lo = hi = None
-    keys = np.empty(3 * source.face_count, dtype=np.uint64) if closed else None
+    fast = compiled()
+    buckets = None
+    if closed and fast is not None and 3 * source.face_count >= 1 << 16:
+        # The compiled pass deals the keys to buckets as it makes them: the sort then needs
+        # no pass over all of them (p3d_cli.mesh.kernels.Buckets).
+        buckets = Buckets(3 * source.face_count)
+        keys = None
+    else:
+        keys = key_buffer(3 * source.face_count) if closed else None
     filled = seen = 0
     factor = 1.0
     exponent = 0
-    for block in source.read_blocks():
+    # An indexed mesh goes to the kernels as (vertices, faces) blocks, not gathered first.
+    pairs = source.index_blocks() if fast is not None and _indexed(source) else None
+    item: Any
+    for item in (pairs if pairs is not None else source.read_blocks()):
+        block = item
+        if pairs is not None:
+            vertices, faces = item
+            target, size, single = item, len(faces), vertices.dtype == np.float32
+        else:
+            target, size = block, len(block)
+            single = isinstance(block, np.ndarray) and block.dtype == np.float32
+        if fast is not None and exponent == 0 and size and (pairs is not None or kernel_takes(block)):
+            # The compiled pass: the same bounds, keys and sums, bit for bit, from the file's
+            # own records (no float64 copy); None leaves the block to the numpy code below.
+            done = _compiled_block(fast, target, size, single, sums, keys, filled, rescale, buckets)
+            if done is not None:
+                block_lo, block_hi, written, sums = done
+                if lo is None:
+                    lo, hi = block_lo, block_hi
+                else:
+                    lo, hi = np.minimum(lo, block_lo), np.maximum(hi, block_hi)
+                filled += written
+                seen += size
+                continue
+        if pairs is not None:
+            block = vertices[faces]
         # One widening copy per block, in the layout the integrals want; everything else
         # (finite check, bounds, hashes, sums) reads that contiguous copy, never the strided
         # file records.
@@ -123,6 +159,8 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
             block_keys = column_edge_keys(cols)     # before the sums shift cols in place
             keys[filled:filled + block_keys.size] = block_keys
             filled += block_keys.size
+        elif buckets is not None and not buckets.overflow:
+            buckets.add(column_edge_keys(cols))
         if exponent:
             cols *= factor
         sums.add_columns(cols)
@@ -133,9 +171,18 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     is_closed = bounding = None
     boundary = 0
     moments = None
+    presorted = False
+    if buckets is not None:
+        if buckets.overflow:                        # keys crowding one bucket: made again in order
+            del buckets
+            keys = _keys_in_order(source)
+        else:
+            keys, presorted = buckets.sorted_keys(), True
+            del buckets
+        filled = keys.size
     if keys is not None:
         keys = keys[:filled]
-        is_closed = bounding = keys_pair_up(keys)
+        is_closed = bounding = keys_pair_up(keys, presorted)
         if not is_closed:
             unbalanced = unbalanced_groups(keys)
             # A 64-bit hash collision can only make a closed mesh look open: most failures
@@ -157,6 +204,60 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         moments = sums.moments()
     return MeshAnalysis(moments, bounds, is_closed, seen, bounding=bounding, boundary_edges=boundary,
                         scale_exponent=exponent)
+
+
+def _keys_in_order(source: MeshSource) -> np.ndarray:
+    """The edge keys of every block, one after the other (a second pass over the file)."""
+    keys = key_buffer(3 * source.face_count)
+    filled = 0
+    for block in source.read_blocks():
+        block_keys = column_edge_keys(columns(block))
+        keys[filled:filled + block_keys.size] = block_keys
+        filled += block_keys.size
+    return keys[:filled]
+
+
+def _indexed(source: MeshSource) -> bool:
+    """Whether the kernels read the source's ``(vertices, faces)`` as they are."""
+    if source.indexed is None:
+        return False
+    vertices, pieces = source.indexed
+    return (isinstance(vertices, np.ndarray) and vertices.ndim == 2 and vertices.shape[1] == 3
+            and vertices.dtype in (np.float32, np.float64) and vertices.dtype.isnative
+            and all(isinstance(p, np.ndarray) and p.ndim == 2 and p.shape[1] == 3 and p.dtype.isnative
+                    and p.dtype in (np.int32, np.int64) for p in pieces))
+
+
+def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | None, keys: np.ndarray | None,
+                    filled: int, rescale: bool, buckets: Buckets | None = None):
+    """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
+    ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
+    code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
+    sign numpy's min and max decide; the first block of a part to be rescaled)."""
+    if sums is None:
+        box, finite = fast.bounds(block)
+        box = np.array(box)
+        if not finite or not box.all():
+            return None
+        if rescale and _exponent(float((box[3:] - box[:3]).max())):
+            return None
+        sums = MomentSums(origin_from_bounds(box[:3], box[3:], single))
+    if buckets is not None and not buckets.overflow:
+        before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
+        box, finite, totals, magnitude, weighted, written = fast.block(
+            block, *sums.origin, buckets.keys, 0, buckets.fill, buckets.cap, buckets.shift)
+    else:
+        box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
+    box = np.array(box)
+    if not finite or not box.all():
+        if buckets is not None and not buckets.overflow:
+            buckets.fill[:] = before
+        return None
+    if written < 0:                                 # a bucket overflowed
+        buckets.overflow = True
+        written = 0
+    sums.add_sums(np.array(totals), magnitude, np.array(weighted), size)
+    return box[:3], box[3:], written, sums
 
 
 def _exponent(extent: float) -> int:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.kernels import compiled, sort
 
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
@@ -106,6 +107,22 @@ def _side_keys(h: np.ndarray, scratch: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return key.reshape(-1), keep
 
 
+def side_keys(columns: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """``_side_keys`` of triangles given as ``(3, 3, n)`` columns: the keys of the sides with
+    two distinct ends, in (slot, face) order, and the mask of those sides (None when all
+    are). The compiled kernels make the same keys in one pass when built."""
+    kernels = compiled()
+    n = columns.shape[2]
+    if kernels is None:
+        scratch = np.empty((3, n), dtype=np.uint64)
+        return _side_keys(_column_hashes(columns, scratch), scratch)
+    keys = np.empty(3 * n, dtype=np.uint64)
+    keep = np.empty((3, n), dtype=bool)
+    if kernels.side_keys(columns.transpose(2, 0, 1), keys, keep.view(np.uint8)):
+        return keys[keep.reshape(-1)], keep
+    return keys, None
+
+
 def column_edge_keys(columns: np.ndarray) -> np.ndarray:
     """Keys of the directed edges (0→1, 1→2, 2→0) of triangles given as columns.
 
@@ -127,12 +144,13 @@ def column_edge_keys(columns: np.ndarray) -> np.ndarray:
     return _side_keys(_column_hashes(columns, scratch), scratch)[0]
 
 
-def keys_pair_up(keys: np.ndarray) -> bool:
+def keys_pair_up(keys: np.ndarray, presorted: bool = False) -> bool:
     """True when the sorted keys come in (direction 0, direction 1) pairs of one edge each.
 
-    Sorts ``keys`` in place.
+    Sorts ``keys`` in place (unless ``presorted``: they are sorted already).
     """
-    keys.sort()
+    if not presorted:
+        sort(keys)
     if keys.size == 0 or keys.size % 2:
         return False
     pairs = keys.reshape(-1, 2)
@@ -157,6 +175,10 @@ def doubtful_edges(keys: np.ndarray) -> np.ndarray:
     whatever the hash did. Only a group of 4, 6, ... balanced sides can be two or more
     closed edges whose 64-bit keys collided; those need the exact test.
     """
+    kernels = compiled()
+    if kernels is not None and keys.flags.c_contiguous:
+        doubtful = kernels.groups(keys)[3]
+        return keys[:0] if doubtful is None else np.frombuffer(doubtful, dtype=np.uint64).copy()
     found = []
     for edge, counts, forward in key_groups(keys):
         bad = ~((counts == 2) & (forward == 1))
@@ -235,9 +257,7 @@ def sides_of_edges(source_blocks, edges: np.ndarray) -> tuple[np.ndarray, np.nda
         cols = columns(block)
         if cols.shape[2] == 0:
             continue
-        scratch = np.empty((3, cols.shape[2]), dtype=np.uint64)
-        h = _column_hashes(cols, scratch)
-        keys, keep = _side_keys(h, scratch)
+        keys, keep = side_keys(cols)
         hit = np.isin(keys >> _ONE, edges)
         if not hit.any():
             continue

@@ -184,6 +184,17 @@ class MomentSums:
         terms, magnitude, weighted = tetra_terms(columns[0], columns[1], columns[2])
         self._add(terms, _abs_bounds(float(magnitude.sum()), weighted))
 
+    def add_sums(self, totals: np.ndarray, magnitude: float, weighted: np.ndarray, n: int) -> None:
+        """Add a block of ``n`` triangles summed elsewhere (``p3d_cli.mesh.kernels``): its row
+        totals, the sum of its ``magnitude`` and its ``weighted`` sums, as ``add_columns``
+        computes them from ``tetra_terms``."""
+        if n == 0:
+            return
+        self._totals.append(totals)
+        self._abs_totals.append(_abs_bounds(magnitude, weighted))
+        self.count += n
+        self._longest_block = max(self._longest_block, n)
+
     def add_tetrahedra(self, tetrahedra: np.ndarray) -> None:
         """Add tetrahedra ``(n, 4, 3)``: each contributes its own signed volume integrals."""
         local = _local_columns(tetrahedra, self.origin)

@@ -44,9 +44,12 @@ from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
 from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
 from p3d_cli.mesh.volume import SignedVolume
+from p3d_cli.mesh.kernels import Buckets, NotTaken, compiled, confirm_fans, key_buffer, sort
+from p3d_cli.mesh.kernels import takes as kernel_takes
 
 #: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
 _NEXT = np.array([1, 1, -2], dtype=np.int64)
+_ONE = np.uint64(1)
 
 
 @dataclass
@@ -97,9 +100,10 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
     first = _keyed_pass(blocks, n, bits, where, hasher)
     if first is None:
         return None
-    keys, zero, volume = first
+    keys, presorted, zero, volume = first
     del first                           # memory: the keys go as soon as they are read
-    keys.sort()
+    if not presorted:
+        sort(keys)  # radix, when compiled: the same order
     pi = _orbit_map(keys, bits, blocks)
     del keys
     if pi is None:
@@ -118,12 +122,20 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
     """Pass 1: the side keys ``edge hash | direction << bits | side``, zero-area faces and the
     volume; None as soon as a side's two ends hash alike (the general path's case), or when
     the edge keys do not balance."""
-    keys = np.empty(3 * n, dtype=np.uint64)
     low = np.uint64((1 << (bits + 1)) - 1)
     shift = np.uint64(bits)
     zero: list[np.ndarray] = []
     volume = None
     done = balance = 0
+    fast = compiled() if hasher is None else None
+    buckets = None
+    if fast is not None and 3 * n >= 1 << 16:
+        # The compiled pass deals the keys to buckets by their top bits (the edge hash): the
+        # sort then needs no pass over all of them (p3d_cli.mesh.kernels.Buckets).
+        buckets = Buckets(3 * n)
+        keys = None
+    else:
+        keys = key_buffer(3 * n)        # ordinary pages: see kernels.key_buffer
     for block in blocks():
         cols = columns(block)
         k = cols.shape[2]
@@ -137,19 +149,37 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
             volume = SignedVolume(origin_from_bounds(lo, hi, np.asarray(block).dtype == np.float32),
                                   block=None)
         zero.append(zero_area_faces(cols) + done)
+        if buckets is not None and kernel_takes(block):
+            degenerate, forward_sum, total, written = fast.paired_keys(
+                block, bits, done, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
+            if degenerate or written < 0:
+                return None             # a side that may bound nothing, or crowded keys: the general path
+            balance += 2 * forward_sum - total
+            _, _, totals, magnitude, _, _ = fast.block(block, *volume.origin, None, 0)
+            volume.add_sums(totals[0], magnitude, k)
+            done += k
+            continue
         scratch = np.empty((3, k), dtype=np.uint64)
-        h = _column_hashes(cols, scratch) if hasher is None else np.asarray(hasher(cols), np.uint64)
-        start, end = h, h[[1, 2, 0]]
-        if (start == end).any():
-            return None                 # a side that may bound nothing: the general path
-        forward = np.less(start, end).view(np.uint8).astype(np.uint64)
-        # Computed in its place in ``keys``: where a key sits does not matter (they are sorted),
-        # so the block's keys are stored in (slot, face) order and carry their side number.
-        key = np.minimum(start, end, out=keys[3 * done:3 * (done + k)].reshape(3, k))
-        key *= _GOLDEN
-        key += np.maximum(start, end, out=end)
-        _mix(key, scratch)
-        key &= ~low
+        key = np.empty((3, k), dtype=np.uint64) if keys is None else keys[3 * done:3 * (done + k)].reshape(3, k)
+        if fast is not None:
+            # The compiled side keys are (edge hash & ~1) | direction: the same hash bits.
+            if fast.side_keys(cols.transpose(2, 0, 1), key.reshape(-1), scratch.view(np.uint8)[0, :3 * k]):
+                return None             # a side that may bound nothing: the general path
+            forward = key & _ONE
+            key &= ~low
+        else:
+            h = _column_hashes(cols, scratch) if hasher is None else np.asarray(hasher(cols), np.uint64)
+            start, end = h, h[[1, 2, 0]]
+            if (start == end).any():
+                return None             # a side that may bound nothing: the general path
+            forward = np.less(start, end).view(np.uint8).astype(np.uint64)
+            # Computed in its place in ``keys``: where a key sits does not matter (they are
+            # sorted), so the block's keys are stored in (slot, face) order and carry their side.
+            np.minimum(start, end, out=key)
+            key *= _GOLDEN
+            key += np.maximum(start, end, out=end)
+            _mix(key, scratch)
+            key &= ~low
         # Edge keys used once each way cancel in (sum forward - sum backward) mod 2^64; a
         # sum that does not cancel proves some edge is not, before any sort.
         balance += 2 * int(np.multiply(key, forward, out=scratch).sum()) - int(key.sum())
@@ -157,14 +187,28 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
         key |= forward
         key += _side_numbers(k)
         key += np.uint64(3 * done)
-        volume.add_columns(cols)
+        if buckets is not None:
+            buckets.add(key.reshape(-1))
+            if buckets.overflow:
+                return None
+        if fast is not None:
+            # The compiled sums about the same origin: row 0 and the magnitudes are the bits
+            # SignedVolume would sum (p3d_cli.mesh.kernels).
+            _, _, totals, magnitude, _, _ = fast.block(cols.transpose(2, 0, 1), *volume.origin, None, 0)
+            volume.add_sums(totals[0], magnitude, k)
+        else:
+            volume.add_columns(cols)
         done += k
     if done != n:
         count_error(where, n, str(done))
     if balance % 2**64:
         return None
     assert volume is not None
-    return keys, np.concatenate(zero), volume.volume()
+    if buckets is not None:
+        keys = buckets.sorted_keys()
+        del buckets
+        return keys, True, np.concatenate(zero), volume.volume()
+    return keys, False, np.concatenate(zero), volume.volume()
 
 
 _SIDES: list[np.ndarray] = []
@@ -188,7 +232,10 @@ def _orbit_map(keys: np.ndarray, bits: int, blocks):
     pairs = keys.reshape(-1, 2) if keys.size % 2 == 0 else None
     step = CHUNK
     clean = pairs is not None
-    if clean:
+    fast = compiled()
+    if clean and fast is not None and keys.flags.c_contiguous:
+        clean = fast.pairs(keys, bits, pi)          # the loop below, in one compiled pass
+    elif clean:
         for lo in range(0, len(pairs), step):
             a, b = pairs[lo:lo + step, 0], pairs[lo:lo + step, 1]
             # One edge per pair, direction 0 then 1: the keys agree above the direction bit
@@ -311,6 +358,12 @@ def _gather(source: np.ndarray, index: np.ndarray, out: np.ndarray | None = None
 def _confirm(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
     """Pass 2: every corner against its fan's first corner, exactly. Returns the fans'
     coordinates ``(count, 3)`` (the input's dtype), or None when some corner differs."""
+    fast = compiled()
+    if fast is not None:
+        try:
+            return confirm_fans(blocks, fan, count, is_first)
+        except NotTaken:
+            pass
     axes = None
     done = 0
     for block in blocks():

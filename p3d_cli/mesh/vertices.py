@@ -21,6 +21,7 @@ import numpy as np
 from p3d_cli.mesh.closed import _column_hashes, corner_hashes
 from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.volume import SignedVolume
+from p3d_cli.mesh.kernels import key_buffer, sort
 
 #: Corners handled per vectorised step of the passes over the sorted keys (cache-sized).
 CHUNK = 1 << 16
@@ -92,7 +93,7 @@ def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None 
     """
     bits = max(int(3 * n - 1).bit_length(), 1)
     keys, lo, hi, float32 = _hashed_keys(blocks, n, bits, on_block, hasher, where)
-    keys.sort()
+    sort(keys)  # radix, when compiled: the same order
     ids, first = _ids_from_sorted(keys, n, bits)
     # The origin ``p3d props`` sums about (the first block's bounding-box centre), so that both
     # commands report one number (docs/method.md, "Open and non-manifold meshes").
@@ -106,7 +107,7 @@ def group_corners(blocks, n: int, on_block=None, hasher=None, where: str | None 
 def _hashed_keys(blocks, n: int, bits: int, on_block, hasher, where):
     """Pass 1: the packed keys ``(hash high bits) | corner index``, and the first block's
     bounds and dtype (the local origin's, as in ``p3d_cli.mesh.analysis``)."""
-    keys = np.empty(3 * n, dtype=np.uint64)
+    keys = key_buffer(3 * n)            # ordinary pages: see kernels.key_buffer
     high = np.uint64(((1 << 64) - 1) ^ ((1 << bits) - 1))
     lo = hi = None
     float32 = False

@@ -70,6 +70,16 @@ class SignedVolume:
             if self._filled == self._block:
                 self._flush()
 
+    def add_sums(self, det: float, magnitude: float, k: int) -> None:
+        """Add a block of ``k`` faces summed elsewhere (``p3d_cli.mesh.kernels``): the pairwise
+        sums of its ``D`` and of their magnitudes, as ``block=None`` sums a fed block."""
+        self._flush()
+        if k:
+            self._totals.append(float(det))
+            self._abs_totals.append(float(magnitude) * 1.01)
+            self._count += k
+            self._longest = max(self._longest, k)
+
     def _flush(self) -> None:
         k = self._filled
         if k:

@@ -1,0 +1,154 @@
+"""The compiled kernels, when they are built: ``p3d_cli.mesh._kernels`` (C, optional).
+
+``pip install`` compiles ``_kernels.c`` when a C compiler is there and skips it otherwise; every
+caller then runs the numpy code it replaces, which gives the same results bit for bit (the
+kernels replay the same IEEE operations in the same order, numpy's pairwise sums included:
+docs/performance.md, "The compiled kernels"). ``P3D_PURE_NUMPY=1`` in the environment switches
+them off, for comparisons and for the tests of the numpy code.
+"""
+
+from __future__ import annotations
+
+import os
+from types import ModuleType
+
+import numpy as np
+
+
+def _load() -> ModuleType | None:
+    if os.environ.get("P3D_PURE_NUMPY", "") not in ("", "0"):
+        return None
+    try:
+        from p3d_cli.mesh import _kernels  # type: ignore[attr-defined]  # the built extension
+    except ImportError:
+        return None
+    return _kernels
+
+
+#: The compiled module, or None (not built, or switched off). Tests set it to None to run the
+#: numpy code in process.
+KERNELS: ModuleType | None = _load()
+
+
+def compiled() -> ModuleType | None:
+    """The compiled kernels, or None when p3d runs on numpy alone."""
+    return KERNELS
+
+
+def takes(block) -> bool:
+    """Whether the kernels read ``block`` as it is: a ``(k, 3, 3)`` numpy array of native
+    float32 or float64 (any strides, such as a binary STL's 50-byte records)."""
+    return (isinstance(block, np.ndarray) and block.ndim == 3 and block.shape[1:] == (3, 3)
+            and block.dtype.isnative and block.dtype in (np.float32, np.float64))
+
+
+def sort(keys: np.ndarray) -> None:
+    """Sort a contiguous uint64 array in place: the compiled radix sort when there is one (its
+    time per key stays flat with size; numpy's grows), else ``ndarray.sort``. Same result."""
+    kernels = KERNELS
+    if kernels is not None and keys.dtype == np.uint64 and keys.flags.c_contiguous and keys.flags.writeable:
+        kernels.sort(keys)
+    else:
+        keys.sort()
+
+
+def key_buffer(count: int) -> np.ndarray:
+    """An uninitialised ``(count,)`` uint64 array for edge keys, in ordinary pages.
+
+    numpy asks the kernel for transparent huge pages for large arrays, and where the kernel
+    compacts memory to find them (``defrag`` = ``madvise``, common in VMs) a 24 MB array took
+    0.05-0.2 s of system time to appear, more than filling it (measured for issue 32). So the
+    keys are allocated with that request off: from the C heap, where they reuse memory a
+    reader has freed (a binary PLY's), or, past glibc's mmap threshold, in fresh pages whose
+    untouched parts (the buckets' slack) take no memory.
+    """
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage  # type: ignore[attr-defined]
+    except ImportError:                     # numpy < 2, or a build without the switch
+        return np.empty(count, dtype=np.uint64)
+    before = _set_madvise_hugepage(False)
+    try:
+        return np.empty(count, dtype=np.uint64)
+    finally:
+        _set_madvise_hugepage(before)
+
+
+class Buckets:
+    """Edge keys dealt by the compiled pass to buckets of their top bits as they are made, so
+    that sorting them needs no pass over all of them (a bucket is sorted in cache, then moved
+    down beside the one before: ``sorted_keys``).
+
+    A bucket holds ``cap`` keys: the mean plus eight standard deviations of the count a bucket
+    gets when the keys are hashes (the two sides of an edge share a bucket, so the count is
+    twice a Poisson count of edges). Pages never written take no memory (``key_buffer``): the
+    slack costs address space, not resident memory. A mesh whose keys crowd
+    one bucket (the same edge thousands of times) overflows it: ``overflow`` is then set and
+    the caller makes the keys again, one after the other.
+    """
+
+    #: Keys per bucket on average: a bucket and the sort's buffer of its size stay in a 1 MB
+    #: L2 cache.
+    MEAN = 1 << 15
+
+    def __init__(self, count: int) -> None:
+        import math
+
+        # 2**k buckets by the top k bits (at least two: the sort takes the bits below them).
+        bits = max(1, (count // self.MEAN).bit_length() - 1)
+        self.shift = 64 - bits
+        buckets = 1 << bits
+        mean = count / buckets
+        self.cap = int(math.ceil(mean + 8 * math.sqrt(2 * mean) + 64))
+        self.keys = key_buffer(buckets * self.cap)
+        self.fill = np.zeros(buckets, dtype=np.int64)
+        self.overflow = False
+
+    def add(self, block_keys: np.ndarray) -> None:
+        """Deal keys made by the numpy code (a block the compiled pass left to it)."""
+        bucket = (block_keys >> np.uint64(self.shift)).astype(np.int64)
+        counts = np.bincount(bucket, minlength=self.fill.size)
+        if (self.fill + counts > self.cap).any():
+            self.overflow = True
+            return
+        order = np.argsort(bucket, kind="stable")
+        bucket = bucket[order]
+        rank = np.arange(bucket.size) - (np.cumsum(counts) - counts)[bucket]
+        self.keys[bucket * self.cap + self.fill[bucket] + rank] = block_keys[order]
+        self.fill += counts
+
+    def sorted_keys(self) -> np.ndarray:
+        """All the keys, sorted (a view of the start of the buffer)."""
+        kernels = KERNELS
+        assert kernels is not None and not self.overflow  # noqa: S101 - made only with the kernels
+        return self.keys[:kernels.finish(self.keys, self.fill, self.cap, self.shift)]
+
+
+class NotTaken(Exception):
+    """A block the kernels do not read as it is (another dtype or byte order)."""
+
+
+def confirm_fans(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
+    """``p3d_cli.mesh.paired._confirm`` by the compiled kernels (the same comparisons, block by
+    block): the fans' coordinates ``(count, 3)`` as stored, or None when some corner differs
+    from its fan's first corner. Raises ``NotTaken`` for a block the kernels do not read."""
+    fast = KERNELS
+    assert fast is not None  # noqa: S101 - called only with the kernels
+    axes = np.zeros((3, count))
+    dtype = None
+    done = 0
+    for block in blocks():
+        block = np.asarray(block)
+        k = len(block)
+        if k == 0:
+            continue
+        if not takes(block):
+            raise NotTaken                          # the numpy code compares in the stored dtype
+        if dtype is None:
+            dtype = block.dtype
+        if not fast.confirm(block, fan[3 * done:3 * (done + k)], is_first[3 * done:3 * (done + k)].view(np.uint8),
+                            axes):
+            return None                             # colliding keys paired two edges
+        done += k
+    assert dtype is not None
+    # The coordinates as stored (float32 values are exact in float64 and back).
+    return np.ascontiguousarray(axes.T).astype(dtype, copy=False)
