@@ -57,7 +57,7 @@ def _stl(path) -> list[str]:
 
 
 def _ply(path) -> list[str]:
-    from p3d_cli.io.ply_header import FACE_LISTS, parse_header
+    from p3d_cli.io.ply.header import FACE_LISTS, parse_header
     from p3d_cli.io.raw import RawInput
 
     header = parse_header(RawInput(os.fspath(path), os.fspath(path), None, os.path.getsize(path)))

@@ -81,7 +81,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     Parameters
     ----------
     thing : str, os.PathLike, array_like, (vertices, faces) or MeshSource
-        The mesh (``p3d_cli.solid.as_solid``); a file of several objects is repaired as one mesh.
+        The mesh (``p3d_cli.measure.as_solid``); a file of several objects is repaired as one mesh.
     steps : iterable of str or str, optional
         The steps to run (default: all but ``weld``, which runs with a tolerance); ``-name``
         leaves one out (``"-holes"``).
@@ -125,7 +125,7 @@ def repair(thing: Any, steps: Iterable[str] | str | None = None, weld: float | N
     (True, 1, 1.0)
     """
     from p3d_cli import measure
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure import as_solid
 
     if weld is not None:
         weld = check_tolerance(weld)
