@@ -2,12 +2,13 @@
 
 The benchmarks run this as a child process, so that their timing parent never imports numpy:
 
-    python benchmarks/torus.py stl U V PATH --at X Y Z [--open]   # binary STL, float32
+    python benchmarks/torus.py stl U V PATH --at X Y Z [--open] [--inward]   # binary STL, float32
     python benchmarks/torus.py ply U V PATH --at X Y Z [--soup]   # binary PLY, float64
 
 ``--at`` moves the torus's centre. ``--open`` removes the first two faces, which meet at a
 corner: two holes, six boundary edges. ``--holes 0.01`` removes every 100th face (1 % of the
-faces open: thousands of holes). ``--soup`` gives every triangle its own three vertices,
+faces open: thousands of holes). ``--inward`` winds every face the other way. ``--soup`` gives
+every triangle its own three vertices,
 shrunk by 2^-20 towards its centroid, so that no two triangles share an edge.
 """
 
@@ -68,6 +69,7 @@ def main(argv=None) -> None:
     parser.add_argument("--at", type=float, nargs=3, default=(0.0, 0.0, 0.0))
     parser.add_argument("--open", action="store_true", help="remove the first two faces")
     parser.add_argument("--soup", action="store_true", help="no two triangles share an edge")
+    parser.add_argument("--inward", action="store_true", help="wind every face inward")
     parser.add_argument("--holes", type=float, default=0.0,
                         help="remove this fraction of the faces, evenly spread (0.01: every 100th face)")
     args = parser.parse_args(argv)
@@ -78,6 +80,8 @@ def main(argv=None) -> None:
         keep = np.ones(len(faces), dtype=bool)
         keep[::max(1, round(1 / args.holes))] = False
         faces = faces[keep]
+    if args.inward:
+        faces = faces[:, ::-1]
     if args.format == "stl":
         write_stl(args.path, vertices.astype(np.float32)[faces])
         return

@@ -1,7 +1,7 @@
 """p3d: exact mass properties, bounds and constraint solves for meshes and shapes.
 
-The command line (``p3d props``, ``p3d bounds``, ``p3d check``, ``p3d solve``) calls exactly these
-functions::
+The command line (``p3d props``, ``p3d bounds``, ``p3d check``, ``p3d repair``, ``p3d solve``) calls
+exactly these functions::
 
     import p3d_cli as p3d
 
@@ -9,6 +9,7 @@ functions::
     result.properties.mass, result.properties.inertia
     p3d.bounds("box:1,2,3", p3d.Placement(rotation=p3d.rotation_from_axis_degrees("z", 30)))
     p3d.check("part.stl").ok
+    mesh, report = p3d.repair("part.stl")                # fixed, with every change said
 
 Names are imported on first use (as scikit-image's ``lazy.attach`` does), so ``import p3d_cli``
 costs almost nothing and ``p3d props tiny.stl`` starts as fast as before. See docs/api.md.
@@ -63,6 +64,11 @@ _API = {
     "Bounds": "p3d_cli.results",
     "CheckResult": "p3d_cli.mesh.verdicts",
     "SelfIntersections": "p3d_cli.mesh.solidity_report",
+    # repairing
+    "repair": "p3d_cli.repairs",
+    "repair_file": "p3d_cli.repairs",
+    "RepairReport": "p3d_cli.repairs",
+    "RepairedMesh": "p3d_cli.repairs",
     # robot descriptions (URDF, MJCF, SDF)
     "load_robot": "p3d_cli.robots",
     "check_robot": "p3d_cli.robots",
@@ -132,5 +138,6 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.mesh.verdicts import CheckResult
     from p3d_cli.render.image import Picture
     from p3d_cli.render.picture import picture
+    from p3d_cli.repairs import RepairedMesh, RepairReport, repair, repair_file
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
     from p3d_cli.shapes import SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge, parse_shape

@@ -25,7 +25,7 @@ LOOSE = LEAVES | {"__init__", "__main__"}
 #: Each folder's floor: a module may import from its own floor and the floors below, never above.
 FLOORS = {
     "cli": 5,
-    "robots": 4, "constraints": 4, "render": 4, "batch": 4,
+    "robots": 4, "constraints": 4, "render": 4, "batch": 4, "repairs": 4,
     "measure": 3,
     "mesh": 2, "io": 2, "shapes": 2,
     "geometry": 1,

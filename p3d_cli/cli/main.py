@@ -74,6 +74,8 @@ FLAGS = {
     "root": "--root",
     "size": "--size", "show": "--show", "view": "--view", "up": "--up", "azimuth": "--azimuth",
     "elevation": "--elevation", "output": "--output", "plot": "--plot", "animate": "--animate",
+    "weld": "--weld", "fill_holes": "--fill-holes", "flatness": "--flatness", "max_hole_edges": "--max-hole-edges",
+    "max_volume_change": "--max-volume-change", "output_format": "--output-format", "in_place": "--in-place",
 }
 
 
@@ -142,6 +144,7 @@ SUMMARIES = {
     "diff": "Compare meshes with a baseline of their mass properties; exit 1 if anything changed.",
     "props": "Volume, mass, centre of mass and inertia of meshes and shapes.",
     "render": "Draw a shaded picture of a mesh, shape or assembly: PNG or SVG, no display needed.",
+    "repair": "Repair meshes: fix what p3d check finds, change nothing else, say every change.",
     "robot": "Check and fill the <inertial> of every link of a URDF, MJCF or SDF description.",
     "solve": "Solve ball, hinge and bar constraints between rigid bodies.",
 }
@@ -283,6 +286,7 @@ cli.commands = _Commands({
     "diff": "p3d_cli.cli.diff",
     "props": "p3d_cli.cli.props",
     "render": "p3d_cli.cli.render",
+    "repair": "p3d_cli.cli.repair",
     "robot": "p3d_cli.cli.robot",
     "solve": "p3d_cli.cli.solve",
 })

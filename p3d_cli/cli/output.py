@@ -29,7 +29,7 @@ def jsonable(value):
 SCHEMA_VERSION = 1
 
 #: The kinds of record, each with its schema file.
-RECORD_KINDS = ("props", "bounds", "check", "diff", "solve", "summary", "config")
+RECORD_KINDS = ("props", "bounds", "check", "diff", "solve", "summary", "config", "repair")
 
 
 def record_line(kind: str, record: dict) -> str:

@@ -68,6 +68,9 @@ class Format:
     sniff : callable, optional
         ``sniff(raw: RawInput, ext: str) -> str | None``: the format name (this one's, or a
         sub-format such as ``meshio:vtu``) when the content or extension suggests it.
+    writer : str, optional
+        The function of ``p3d_cli.io.writers`` that writes this format (``p3d repair``'s
+        outputs); None for formats p3d only reads.
     """
 
     name: str
@@ -77,6 +80,7 @@ class Format:
     aliases: tuple[str, ...] = ()
     header: Callable[[bytes], bool] | None = None
     sniff: Callable[[RawInput, str], str | None] | None = None
+    writer: str | None = None
 
     def reader(self) -> ModuleType:
         """The reader module, imported on first use."""
@@ -156,11 +160,12 @@ def _sniff_obj(raw: RawInput, ext: str) -> str | None:
 
 #: Every format, in sniffing order. ``meshio`` stands for every other format meshio reads.
 FORMATS: dict[str, Format] = {f.name: f for f in (
-    Format("stl", (".stl",), "p3d_cli.io.stl", "STL, binary or ASCII", sniff=_sniff_stl),
+    Format("stl", (".stl",), "p3d_cli.io.stl", "STL, binary or ASCII", sniff=_sniff_stl,
+           writer="write_stl"),
     Format("ply", (".ply",), "p3d_cli.io.ply", "PLY, ASCII or binary",
-           header=lambda head: head.lstrip().startswith(b"ply")),
+           header=lambda head: head.lstrip().startswith(b"ply"), writer="write_ply"),
     Format("off", (".off",), "p3d_cli.io.off", "OFF and its variants (COFF, NOFF, ...)",
-           header=lambda head: _OFF_KEYWORD.fullmatch(_first_word(head)) is not None),
+           header=lambda head: _OFF_KEYWORD.fullmatch(_first_word(head)) is not None, writer="write_off"),
     Format("gltf", (".glb", ".gltf"), "p3d_cli.io.gltf", "glTF 2.0 (.gltf with its buffers, .glb), in metres",
            aliases=("glb", "gltf2"), header=lambda head: head[:4] == b"glTF"),
     Format("3mf", (".3mf",), "p3d_cli.io.threemf", "3MF packages, in their declared unit", aliases=("threemf",)),
@@ -172,7 +177,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            aliases=("vtk-polydata",), header=_is_polydata),
     Format("meshio", (), "p3d_cli.io.meshio_backend", "any other format meshio reads (VTU, Gmsh, ...)",
            sniff=_sniff_meshio),
-    Format("obj", (".obj",), "p3d_cli.io.obj", "Wavefront OBJ", sniff=_sniff_obj),
+    Format("obj", (".obj",), "p3d_cli.io.obj", "Wavefront OBJ", sniff=_sniff_obj, writer="write_obj"),
 )}
 
 #: Extension -> the format p3d reads it with itself.

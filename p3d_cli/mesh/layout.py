@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from p3d_cli.mesh.edges import Edges
 from p3d_cli.mesh.shells import Components
 
 
@@ -27,6 +28,12 @@ class Layout:
         Vertex ids of the edges used by more than two faces.
     open_shells : (s,) int64
         Shells with a boundary, non-manifold or misoriented edge (the others are closed).
+    edges : Edges or None
+        The sides grouped by edge (``p3d_cli.mesh.edges``; ``forward`` not kept: a side's
+        direction is ``ids[side] < ids[next side]``), or None when every edge is used once
+        each way (``p3d_cli.mesh.paired``'s path, which groups no edges). For ``p3d repair``.
+    duplicates : (k, 2) int64 or None
+        ``(first face, later duplicate)`` rows (``faces.duplicate_faces``), when ``edges`` is.
     """
 
     ids: np.ndarray
@@ -35,6 +42,8 @@ class Layout:
     zero_area: np.ndarray
     crowded_edges: np.ndarray
     open_shells: np.ndarray
+    edges: Edges | None = None
+    duplicates: np.ndarray | None = None
 
     @property
     def faces(self) -> np.ndarray:

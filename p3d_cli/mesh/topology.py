@@ -131,8 +131,8 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
 
 
 def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
-    """``topology_of_blocks``, and the vertex ids and shells it found (None for no faces), for
-    the passes that follow (self-intersections, the shells' nesting)."""
+    """``topology_of_blocks``, and the vertex ids, shells and edges it found (None for no faces),
+    for the passes that follow (self-intersections, the shells' nesting, ``p3d repair``)."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
         report, layout = _topology_of_blocks(blocks, n, where)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
@@ -175,7 +175,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
     repeated = repeated_vertex_faces(faces)
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
-    layout = Layout(ids, m, found, zero, _crowded(edges, ids), _open_shells(edges, found))
+    layout = Layout(ids, m, found, zero, _crowded(edges, ids), _open_shells(edges, found), edges, duplicates)
     volume = _volume(blocks, corners, edges)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]

@@ -1,0 +1,259 @@
+"""Filling one hole: a triangulation of its loop that uses only the loop's own corners.
+
+A loop is filled when it is flat enough and simple seen along its normal:
+
+1. **Its plane.** The loop's normal is Newell's (the sum of ``p_i × p_(i+1)``, twice its
+   vector area; M. E. Newell's method, in F. S. Hill, *Computer Graphics*, 1990): exact for a
+   planar polygon, the best-fitting direction for a nearly planar one. Its *flatness* is the
+   largest distance of a corner from the plane through the corners' centroid, over the loop's
+   size (the largest extent of its box). A loop with no area (collinear corners: a slit or a
+   T-junction) is left.
+2. **A simple projection.** The corners are projected on the coordinate plane most nearly
+   parallel to the loop (dropping the normal's largest axis): the projection keeps the
+   coordinates exact, so every test after it is an exact orientation sign
+   (``p3d_cli.geometry.predicates.orient2d``). The projected polygon must be simple (no two edges
+   meet except neighbours at their shared corner); then its triangles, lifted back, are a graph
+   over that plane and cannot cross each other.
+   A loop too bent for any coordinate plane (``fill_holes="any"`` only) is seen in its own
+   plane instead, with rounded coordinates: the triangulation is then only a choice, and its
+   faces are tested exactly after (non-zero area here, no crossing in ``p3d_cli.repairs.holes``).
+3. **Ear clipping** on the projected polygon (an ear: a strictly convex corner whose triangle,
+   closed, holds no other corner; G. H. Meisters, "Polygons have ears", *Amer. Math.
+   Monthly* 82, 1975): every triangle has non-zero area, so none is degenerate, and an ear whose
+   new edge the mesh already has (it would make that edge non-manifold) is passed over.
+
+Each triangle is wound like the loop, which runs against the faces around the hole, so the
+filled patch is oriented with them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.faces import zero_area_faces
+from p3d_cli.geometry.predicates import in_safe_range, orient2d
+
+
+@dataclass(frozen=True)
+class Hole:
+    """One loop of boundary edges and what became of it.
+
+    Attributes
+    ----------
+    vertices : (k,) int64
+        Vertex ids of the loop's corners, in its winding.
+    edges : int
+        Number of boundary edges (``k``).
+    centre : (float, float, float)
+        The centroid of its corners (where to find it).
+    size : float
+        The largest extent of its box.
+    flatness : float
+        Largest distance of a corner from the corners' mean plane, over ``size`` (0: planar; nan
+        for a loop with no area).
+    triangles : (t, 3) int64 or None
+        The filling triangles (vertex ids), or None when the hole is left.
+    reason : str or None
+        Why it was left.
+    replaced : (int, (3,) int64) or None
+        A hole of no area closed by splitting the face across it
+        (``p3d_cli.repairs.junctions``): that face, and the triangle that takes its place
+        (``triangles`` are then the split's other triangles).
+    """
+
+    vertices: np.ndarray
+    edges: int
+    centre: tuple[float, float, float]
+    size: float
+    flatness: float
+    triangles: np.ndarray | None = None
+    reason: str | None = None
+    replaced: tuple[int, np.ndarray] | None = None
+
+    @property
+    def filled(self) -> bool:
+        return self.triangles is not None
+
+
+#: Why a loop of collinear corners is left (``p3d_cli.repairs.holes`` tries a face split then).
+NO_AREA = "it encloses no area (its edges are collinear: a slit or a T-junction)"
+#: Fill policies: ``flat`` fills loops within the flatness limit, ``any`` every simple loop.
+POLICIES = ("flat", "any")
+#: Default flatness limit: a corner at most this fraction of the loop's size off its plane
+#: (float32 rounding of a planar loop is ~1e-7 of its size; a scan's holes are 1e-2 and more).
+FLATNESS = 1e-3
+#: Default largest hole filled, in edges (larger openings are usually meant: the mouth of a
+#: vessel; their triangulation also costs the square of the edges).
+MAX_EDGES = 1000
+
+
+def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat", flatness: float = FLATNESS,
+              max_edges: int = MAX_EDGES, has_edge: Callable[[int, int], bool] = lambda u, v: False) -> Hole:
+    """Triangulate one loop (see the module docstring), or say why not.
+
+    Parameters
+    ----------
+    points : (m, 3) float
+        Coordinates by vertex id.
+    vertices : (k,) int
+        The loop's vertex ids in its winding (against the faces around it).
+    policy : {"flat", "any"}
+        ``any`` also fills loops beyond the flatness and size limits.
+    flatness : float
+        The flatness limit of ``flat``.
+    max_edges : int
+        The largest loop ``flat`` fills.
+    has_edge : callable
+        ``has_edge(u, v)``: whether the mesh (or a hole filled before) already has the edge;
+        such an edge is never added again.
+    """
+    vertices = np.asarray(vertices, dtype=np.int64)
+    k = vertices.size
+    corners = np.asarray(points, dtype=np.float64)[vertices]
+    centre = corners.mean(axis=0)
+    size = float((corners.max(axis=0) - corners.min(axis=0)).max())
+    relative = corners - centre
+    normal = np.cross(relative, np.roll(relative, -1, axis=0)).sum(axis=0)
+    length = float(np.sqrt(normal @ normal))
+    where = (float(centre[0]), float(centre[1]), float(centre[2]))
+
+    def left(reason: str, flat: float = float("nan")) -> Hole:
+        return Hole(vertices, k, where, size, flat, None, reason)
+
+    if k < 3 or length == 0 or size == 0:
+        return left(NO_AREA)
+    deviation = float(np.abs(relative @ (normal / length)).max())
+    flat = deviation / size
+    if policy == "flat" and flat > flatness:
+        return left(f"not flat: a corner lies {deviation:.3g} ({flat:.2g} of its size) off the loop's plane, "
+                    f"over the limit {flatness:g}", flat)
+    if policy == "flat" and k > max_edges:
+        return left(f"larger than the limit: {k} edges, over {max_edges}", flat)
+    axis = int(np.argmax(np.abs(normal)))
+    plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
+    safe = in_safe_range(plane)
+    if not _simple(plane, safe):
+        if policy != "any":
+            return left("seen along its normal the loop crosses itself", flat)
+        # A loop bent far from any coordinate plane (a hole across a fold) can still be simple
+        # seen along its own normal: take coordinates in that plane (rounded, so the
+        # triangulation is only a choice, and its faces are tested exactly in 3-D after).
+        plane = _in_own_plane(relative, normal / length)
+        safe = in_safe_range(plane)
+        if not _simple(plane, safe):
+            return left("seen along its normal the loop crosses itself", flat)
+    triangles = _ear_clipping(plane, vertices, safe, has_edge)
+    if triangles is not None and zero_area_faces(columns(np.asarray(points, dtype=np.float64)[triangles])).size:
+        triangles = None
+    if triangles is None:
+        return left("every triangulation of it would repeat an edge the mesh already has "
+                    "(making it non-manifold) or make a face of zero area", flat)
+    return Hole(vertices, k, where, size, flat, triangles, None)
+
+
+def _in_own_plane(relative: np.ndarray, unit_normal: np.ndarray) -> np.ndarray:
+    """``(k, 2)`` coordinates of points (relative to their centroid) in the plane normal to
+    ``unit_normal``, in a right-handed frame (so the loop keeps its winding)."""
+    helper = np.eye(3)[int(np.argmin(np.abs(unit_normal)))]
+    u = np.cross(unit_normal, helper)
+    u /= np.sqrt(u @ u)
+    w = np.cross(unit_normal, u)
+    return np.ascontiguousarray(np.stack([relative @ u, relative @ w], axis=1))
+
+
+def _simple(plane: np.ndarray, safe: bool) -> bool:
+    """Whether the closed polygon ``plane`` ``(k, 2)`` is simple: no two edges meet except
+    consecutive ones at their shared corner (and those do not fold back on each other)."""
+    k = len(plane)
+    a, b = plane, np.roll(plane, -1, axis=0)
+    after = np.roll(plane, -2, axis=0)
+    # Consecutive edges a->b, b->after fold back when collinear and turning round.
+    turn = orient2d(a, b, after, safe)
+    back = ((b - a) * (after - b)).sum(axis=1) <= 0
+    if ((turn == 0) & back).any():
+        return False
+    for i in range(k - 2):
+        j = np.arange(i + 2, k if i > 0 else k - 1)
+        if j.size == 0:
+            continue
+        if _segments_meet(a[i], b[i], a[j], b[j], safe).any():
+            return False
+    return True
+
+
+def _segments_meet(p: np.ndarray, q: np.ndarray, r: np.ndarray, s: np.ndarray, safe: bool) -> np.ndarray:
+    """Whether closed segment ``p q`` meets each closed segment ``r[i] s[i]``."""
+    n = len(r)
+    p_, q_ = np.broadcast_to(p, (n, 2)), np.broadcast_to(q, (n, 2))
+    d1, d2 = orient2d(p_, q_, r, safe), orient2d(p_, q_, s, safe)
+    d3, d4 = orient2d(r, s, p_, safe), orient2d(r, s, q_, safe)
+    proper = (d1 * d2 < 0) & (d3 * d4 < 0)
+
+    def on(a, b, c):    # c on the closed segment a b, given the three are collinear
+        return ((np.minimum(a[:, 0], b[:, 0]) <= c[:, 0]) & (c[:, 0] <= np.maximum(a[:, 0], b[:, 0]))
+                & (np.minimum(a[:, 1], b[:, 1]) <= c[:, 1]) & (c[:, 1] <= np.maximum(a[:, 1], b[:, 1])))
+
+    touch = (((d1 == 0) & on(p_, q_, r)) | ((d2 == 0) & on(p_, q_, s))
+             | ((d3 == 0) & on(r, s, p_)) | ((d4 == 0) & on(r, s, q_)))
+    return proper | touch
+
+
+def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge) -> np.ndarray | None:
+    """Triangles ``(k - 2, 3)`` of vertex ids wound like the loop, or None when clipping gets
+    stuck (every remaining ear would repeat an existing edge)."""
+    k = len(plane)
+    # The polygon's winding in the plane: the sign at its lowest corner (lexicographic), which
+    # a simple polygon always turns strictly at.
+    low = int(np.lexsort((plane[:, 1], plane[:, 0]))[0])
+    sign = int(orient2d(plane[[low - 1]], plane[[low]], plane[[(low + 1) % k]], safe)[0])
+    following = list(range(1, k)) + [0]
+    before = [k - 1] + list(range(k - 1))
+    alive = np.ones(k, dtype=bool)
+    out: list[tuple[int, int, int]] = []
+    added: set[tuple[int, int]] = set()
+
+    def ear(v: int) -> bool:
+        u, w = before[v], following[v]
+        if int(orient2d(plane[[u]], plane[[v]], plane[[w]], safe)[0]) != sign:
+            return False
+        others = np.flatnonzero(alive)
+        others = others[(others != u) & (others != v) & (others != w)]
+        if others.size:
+            tri = [np.broadcast_to(plane[x], (others.size, 2)) for x in (u, v, w)]
+            c = plane[others]
+            s1 = orient2d(tri[0], tri[1], c, safe) * sign
+            s2 = orient2d(tri[1], tri[2], c, safe) * sign
+            s3 = orient2d(tri[2], tri[0], c, safe) * sign
+            if ((s1 >= 0) & (s2 >= 0) & (s3 >= 0)).any():
+                return False
+        a, b = int(vertices[u]), int(vertices[w])
+        return (min(a, b), max(a, b)) not in added and not has_edge(a, b)
+
+    remaining = k
+    v = 0
+    stuck = 0
+    while remaining > 3:
+        if ear(v):
+            u, w = before[v], following[v]
+            out.append((int(vertices[u]), int(vertices[v]), int(vertices[w])))
+            a, b = int(vertices[u]), int(vertices[w])
+            added.add((min(a, b), max(a, b)))
+            following[u], before[w] = w, u
+            alive[v] = False
+            remaining -= 1
+            stuck = 0
+            v = u
+        else:
+            stuck += 1
+            if stuck > remaining:
+                return None
+            v = following[v]
+    u, w = before[v], following[v]
+    if int(orient2d(plane[[u]], plane[[v]], plane[[w]], safe)[0]) != sign:
+        return None
+    out.append((int(vertices[u]), int(vertices[v]), int(vertices[w])))
+    return np.array(out, dtype=np.int64)

@@ -1,0 +1,199 @@
+"""The ``holes`` step: every boundary loop filled with triangles of its own corners, or left
+with the reason.
+
+The boundary sides come from ``p3d check``'s edge grouping (edges used by one face), turned
+against their faces and joined into simple loops (``p3d_cli.repairs.loops``); each loop is
+triangulated on its own (``p3d_cli.repairs.fill``), never repeating an edge the mesh or an
+earlier fill already has. The filled faces are then tested exactly against crossing the faces
+near them (``p3d_cli.repairs.solidity``): a hole whose filling would cross another face is left.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from p3d_cli.repairs import solidity
+from p3d_cli.repairs.draft import Draft, Grouping
+from p3d_cli.repairs.fill import NO_AREA, Hole, fill_hole
+from p3d_cli.repairs.junctions import junction_split
+from p3d_cli.repairs.loops import boundary_loops
+from p3d_cli.repairs.report import SHOWN, StepReport
+
+
+@dataclass(frozen=True)
+class Holes:
+    """What the step found and did.
+
+    Attributes
+    ----------
+    holes : tuple of (Hole, (k,) int64)
+        Every loop, with the faces (draft numbers) around it.
+    stray : (s,) int64
+        Draft faces of boundary sides on no closed loop.
+    """
+
+    holes: tuple[tuple[Hole, np.ndarray], ...]
+    stray: np.ndarray
+
+    @property
+    def open_faces(self) -> np.ndarray:
+        """Draft faces still on a boundary: around a hole left, or on a stray side."""
+        left = [around for hole, around in self.holes if not hole.filled]
+        return np.unique(np.concatenate(left + [self.stray])).astype(np.int64)
+
+
+def boundary_sides(grouping: Grouping, draft: Draft) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Faces, start and end vertices of every boundary side, in the faces' current winding."""
+    edges, faces = grouping.edges, grouping.faces
+    side = edges.side[edges.starts[edges.boundary]].astype(np.int64)
+    face = side // 3
+    slot = side % 3
+    u, v = faces[face, slot], faces[face, (slot + 1) % 3]
+    turned = draft.flipped[face] != grouping.flipped[face]     # flipped since the grouping
+    return face, np.where(turned, v, u), np.where(turned, u, v)
+
+
+def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float,
+               max_edges: int) -> tuple[Draft, StepReport, Holes]:
+    """Fill the holes of ``draft`` (see the module docstring)."""
+    if grouping.edges.boundary.size == 0:
+        return draft, StepReport("holes", counts={"holes_filled": 0, "holes_left": 0, "faces_added": 0}), \
+            Holes((), np.zeros(0, dtype=np.int64))
+    face, u, v = boundary_sides(grouping, draft)
+    loops, stray = boundary_loops(v, u)              # each side u -> v walked as v -> u
+    loops.sort(key=lambda loop: int(face[loop].min()))     # the report lists holes in file order
+    has_edge = _EdgeSet(grouping.faces, v, len(draft.points))
+    found: list[tuple[Hole, np.ndarray]] = []
+    for loop in loops:
+        if loop.size == 3 and np.unique(face[loop]).size == 1:
+            # All three sides are one face's: the "hole" is the back of a lone triangle, and
+            # filling it would give that face's reverse, enclosing nothing.
+            hole = lone_face(draft, v[loop], int(face[loop[0]]))
+        else:
+            hole = fill_hole(draft.points, v[loop], policy=policy, flatness=flatness, max_edges=max_edges,
+                             has_edge=has_edge)
+            if not hole.filled and hole.reason == NO_AREA:
+                hole = _split_junction(draft, hole, face[loop], has_edge)
+        if hole.filled:
+            has_edge.add(hole.triangles)
+            if hole.replaced is not None:
+                has_edge.add(hole.replaced[1].reshape(1, 3))
+        found.append((hole, face[loop]))
+    start = len(draft.faces)
+    found = _refuse_crossings(_applied(draft, found), found, start)
+    result = Holes(tuple(found), face[stray])
+    draft = _applied(draft, found)
+    return draft, _report(draft, result, start), result
+
+
+def _applied(draft: Draft, found) -> Draft:
+    """The draft with the holes' fillings: split faces replaced, new faces after the others."""
+    split = [hole.replaced for hole, _ in found if hole.filled and hole.replaced is not None]
+    if split:
+        draft = draft.replaced(np.array([f for f, _ in split]), np.array([t for _, t in split]))
+    new = [hole.triangles for hole, _ in found if hole.filled]
+    return draft.add(np.concatenate(new)) if new else draft
+
+
+def _split_junction(draft: Draft, hole: Hole, around: np.ndarray, has_edge) -> Hole:
+    """A hole of no area closed by splitting the face across its long side, if it is a
+    T-junction (``p3d_cli.repairs.junctions``); else the hole as it was."""
+    found = junction_split(draft.points, draft.faces, hole.vertices, around, has_edge)
+    if found is None:
+        return hole
+    face, triangles = found
+    return dataclasses.replace(hole, triangles=triangles[1:], replaced=(face, triangles[0]), reason=None)
+
+
+def lone_face(draft: Draft, vertices: np.ndarray, face: int) -> Hole:
+    """The outline of a face no other face shares an edge with, left as it is."""
+    corners = draft.points[vertices].astype(np.float64)
+    centre = tuple(float(x) for x in corners.mean(axis=0))
+    size = float((corners.max(axis=0) - corners.min(axis=0)).max())
+    origin = int(draft.origin[face])
+    where = f"face {origin}" if origin >= 0 else f"new face {face}"
+    return Hole(vertices, 3, centre, size, 0.0, None,  # type: ignore[arg-type]
+                f"it is the outline of a lone triangle ({where}): filling it would add that face's reverse, "
+                "enclosing nothing")
+
+
+class _EdgeSet:
+    """``has_edge(a, b)``: whether the grouped faces, or a fill made so far, have edge ``a b``.
+
+    Only edges between two corners of holes can be asked about (a fill joins a hole's own
+    corners), so only those are gathered: one pass over the sides, no sort of them all.
+    """
+
+    def __init__(self, faces: np.ndarray, corners: np.ndarray, m: int):
+        on_hole = np.zeros(m, dtype=bool)
+        on_hole[corners] = True
+        a = np.asarray(faces, dtype=np.int64)
+        b = np.roll(a, -1, axis=1)
+        both = on_hole[a] & on_hole[b]
+        lo, hi = np.minimum(a[both], b[both]), np.maximum(a[both], b[both])
+        self.m = m
+        self.keys: set[int] = set((lo * m + hi).tolist())
+
+    def __call__(self, a: int, b: int) -> bool:
+        return min(a, b) * self.m + max(a, b) in self.keys
+
+    def add(self, triangles: np.ndarray) -> None:
+        for a, b, c in triangles.tolist():
+            for x, y in ((a, b), (b, c), (c, a)):
+                self.keys.add(min(x, y) * self.m + max(x, y))
+
+
+def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
+    """The holes, with those whose filling crosses or overlaps another face left."""
+    if len(draft.faces) == start:
+        return found
+    crossing = solidity.new_face_crossings(draft.points, draft.faces, np.arange(start, len(draft.faces)))
+    if crossing.size == 0:
+        return found
+    out, position = [], start
+    for hole, around in found:
+        if hole.filled:
+            own = np.arange(position, position + len(hole.triangles))
+            position += own.size
+            if np.isin(own, crossing).any():
+                hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces",
+                                           replaced=None)
+        out.append((hole, around))
+    return out
+
+
+def _report(draft: Draft, result: Holes, start: int) -> StepReport:
+    places, notes = [], []
+    position = start
+    for hole, around in result.holes:
+        place = {"edges": hole.edges, "centre": list(hole.centre), "size": hole.size, "flatness": hole.flatness,
+                 "filled": hole.filled, "faces_around": [int(f) for f in draft.origin[around]]}
+        if hole.filled:
+            count = len(hole.triangles)
+            place["new_faces"] = list(range(position, position + count))
+            position += count
+            if hole.replaced is not None:
+                place["split_face"] = int(draft.origin[hole.replaced[0]])
+        else:
+            place["reason"] = hole.reason
+            notes.append(f"hole of {hole.edges} edges at {_point(hole.centre)} left: {hole.reason}")
+        places.append(place)
+    if result.stray.size:
+        notes.append(f"{result.stray.size} boundary edges do not close into a loop (faces "
+                     + ", ".join(str(int(f)) for f in np.unique(draft.origin[result.stray])[:SHOWN]) + "): left")
+    filled = sum(1 for hole, _ in result.holes if hole.filled)
+    split = sorted(int(draft.origin[hole.replaced[0]]) for hole, _ in result.holes
+                   if hole.filled and hole.replaced is not None)
+    counts = {"holes_filled": filled, "holes_left": len(result.holes) - filled, "faces_added": position - start,
+              "boundary_edges_not_in_loops": int(result.stray.size)}
+    if split:
+        counts["faces_split"] = len(split)
+    return StepReport("holes", counts=counts, faces=tuple(split), new_faces=tuple(range(start, position)),
+                      places=tuple(places), notes=tuple(notes))
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(f"{x:.7g}" for x in p) + ")"
