@@ -102,14 +102,18 @@ def open_input(source: str, stdin=None) -> RawInput:
 
 def _mode(source: str) -> int:
     """``st_mode`` of ``source``, with errors that say what is wrong with the path."""
+    if source == "":
+        raise InputError("''", "an empty path names no file", "give the mesh's path or a shape spec")
     try:
         return os.stat(source).st_mode
     except FileNotFoundError:
         if os.path.islink(source):
             raise InputError(source, f"a broken symbolic link (to {os.readlink(source)!r})",
                              "point the link at the mesh, or name the mesh itself") from None
+        from p3d_cli.shapes import SHAPES
+
         raise InputError(source, "no such file",
-                         "check the path (primitive specs are box, wedge, corner, cylinder, sphere)") from None
+                         f"check the path (shape specs are {', '.join(SHAPES)})") from None
     except PermissionError:
         raise InputError(source, "permission denied", "check the permissions of the file and its folders") from None
     except OSError as exc:

@@ -174,8 +174,8 @@ def test_batch_directory_files_from_and_csv(tmp_path, jobs):
     assert [os.path.basename(r["source"]) for r in rows] == ["p0.stl", "p1.stl", "p2.stl", "box:1,2,3", "missing.stl"]
     assert [(r["max_x"], r["max_z"]) for r in rows[:3]] == [("1.0", "1.0"), ("2.0", "2.0"), ("3.0", "3.0")]
     assert (rows[3]["min_y"], rows[3]["max_z"], rows[3]["error"]) == ("-2.0", "3.0", "")
-    assert rows[4]["error"].endswith("missing.stl: no such file; check the path (primitive specs are box, "
-                                     "wedge, corner, cylinder, sphere)") and rows[4]["min_x"] == ""
+    assert rows[4]["error"].endswith("missing.stl: no such file; check the path (shape specs are box, "
+                                     "wedge, corner, cylinder, sphere, ellipsoid, ecylinder, capsule)") and rows[4]["min_x"] == ""
     assert "p3d: 5 files: 4 ok, 1 error" in result.stderr
 
 

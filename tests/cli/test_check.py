@@ -143,7 +143,7 @@ def test_unreadable_inputs_exit_2_with_error_records(tmp_path):
     assert [r["source"] for r in records] == [str(good), str(corrupt), str(missing)]
     assert records[0]["ok"] is True and "error" not in records[0]
     assert set(records[1]) == {"schema_version", "source", "ok", "error"} and records[1]["ok"] is False
-    assert records[2]["error"] == f"{missing}: no such file; check the path (primitive specs are box, wedge, corner, cylinder, sphere)"
+    assert records[2]["error"] == f"{missing}: no such file; check the path (shape specs are box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder, capsule)"
     assert f"p3d: error: {missing}: no such file" in result.stderr
     assert result.stderr.rstrip().endswith("p3d: 3 files: 1 ok, 2 errors")
 
@@ -200,3 +200,16 @@ def test_help_documents_checks_and_exit_statuses():
                  "--require", "--min-volume", "--max-faces", "--files-from", "--jobs", "--dask", "--csv",
                  "exact", "coordinates"):
         assert text in result.stdout, text
+
+
+@pytest.mark.parametrize("command", ["props", "bounds", "check"])
+def test_an_empty_path_is_named_and_the_shapes_listed(command, tmp_path):
+    """An empty argument (an unset shell variable) is said to be one, with a location; a
+    missing file's hint lists every shape spec the registry has, not a fixed few."""
+    from p3d_cli.shapes import SHAPES
+
+    result = CliRunner().invoke(cli, [command, ""])
+    assert result.exit_code == 2
+    assert result.stderr == "p3d: error: '': an empty path names no file; give the mesh's path or a shape spec\n"
+    result = CliRunner().invoke(cli, [command, str(tmp_path / "gone.stl")])
+    assert result.exit_code == 2 and f"shape specs are {', '.join(SHAPES)})" in result.stderr
