@@ -133,6 +133,15 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
                     f"over the limit {flatness:g}", flat)
     if policy == "flat" and k > max_edges:
         return left(f"larger than the limit: {k} edges, over {max_edges}", flat)
+    if k == 3:
+        # A loop of three corners is its own triangulation (what ear clipping gives it, in its
+        # winding), simple whenever it has an area: only the exact area test is left. The many
+        # one-face holes of a scan or a damaged file are filled without the polygon's machinery.
+        triangles = vertices[[2, 0, 1]].reshape(1, 3)
+        if zero_area_faces(columns(corners[[2, 0, 1]].reshape(1, 3, 3))).size:
+            return left("every triangulation of it would repeat an edge the mesh already has "
+                        "(making it non-manifold) or make a face of zero area", flat)
+        return Hole(vertices, k, where, size, flat, triangles, None)
     axis = int(np.argmax(np.abs(normal)))
     plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
     safe = in_safe_range(plane)
