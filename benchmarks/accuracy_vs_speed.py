@@ -35,9 +35,9 @@ sys.path.insert(0, str(REPO / "tests"))
 
 from exact import exact_moments  # noqa: E402
 
-from p3d_cli.inertia import inertia_from_second_moments, mass_properties  # noqa: E402
+from p3d_cli.geometry.inertia import inertia_from_second_moments, mass_properties  # noqa: E402
+from p3d_cli.measure.montecarlo import sample, triangles_inside  # noqa: E402
 from p3d_cli.mesh.integrals import tetra_terms, triangle_moments  # noqa: E402
-from p3d_cli.montecarlo import sample, triangles_inside  # noqa: E402
 from p3d_cli.results import Bounds  # noqa: E402
 from p3d_cli.shapes import Cylinder, Sphere  # noqa: E402
 

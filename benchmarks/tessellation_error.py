@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.inertia import inertia_from_second_moments
+from p3d_cli.geometry.inertia import inertia_from_second_moments
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.shapes import Cylinder, Sphere
 

@@ -31,8 +31,8 @@ _API = {
     # inputs
     "load_mesh": "p3d_cli.io",
     "parse_shape": "p3d_cli.shapes",
-    "as_solid": "p3d_cli.solid",
-    "Solid": "p3d_cli.solid",
+    "as_solid": "p3d_cli.measure.solid",
+    "Solid": "p3d_cli.measure.solid",
     "MeshSource": "p3d_cli.io.source",
     "FORMATS": "p3d_cli.io.formats",
     "SHAPES": "p3d_cli.shapes",
@@ -47,13 +47,13 @@ _API = {
     "picture": "p3d_cli.render.picture",
     "Picture": "p3d_cli.render.image",
     # placing
-    "Placement": "p3d_cli.placement",
-    "rotation_from_axis_degrees": "p3d_cli.rotation",
-    "rotation_from_quaternion": "p3d_cli.rotation",
-    "quaternion_matrix": "p3d_cli.rotation",
-    "compose_rotations": "p3d_cli.rotation",
+    "Placement": "p3d_cli.geometry.placement",
+    "rotation_from_axis_degrees": "p3d_cli.geometry.rotation",
+    "rotation_from_quaternion": "p3d_cli.geometry.rotation",
+    "quaternion_matrix": "p3d_cli.geometry.rotation",
+    "compose_rotations": "p3d_cli.geometry.rotation",
     # from moments to mass properties
-    "mass_properties": "p3d_cli.inertia",
+    "mass_properties": "p3d_cli.geometry.inertia",
     # results
     "PropsResult": "p3d_cli.results",
     "BoundsResult": "p3d_cli.results",
@@ -68,7 +68,7 @@ _API = {
     "check_robot": "p3d_cli.robots",
     "fill_robot": "p3d_cli.robots",
     # assemblies
-    "load_assembly": "p3d_cli.assembly",
+    "load_assembly": "p3d_cli.measure.assembly.parts",
     # constraint scenes
     "load_scene": "p3d_cli.constraints",
     "parse_scene": "p3d_cli.constraints",
@@ -117,22 +117,22 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
         UnknownFormatError,
         UsageError,
     )
-    from p3d_cli.inertia import mass_properties
-    from p3d_cli.io import load_mesh
-    from p3d_cli.io.formats import FORMATS
-    from p3d_cli.io.source import MeshSource
-    from p3d_cli.measure import bounds, check, props, self_intersections
-    from p3d_cli.mesh.solidity_report import SelfIntersections
-    from p3d_cli.mesh.verdicts import CheckResult
-    from p3d_cli.placement import Placement
-    from p3d_cli.render.image import Picture
-    from p3d_cli.render.picture import picture
-    from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
-    from p3d_cli.rotation import (
+    from p3d_cli.geometry.inertia import mass_properties
+    from p3d_cli.geometry.placement import Placement
+    from p3d_cli.geometry.rotation import (
         compose_rotations,
         quaternion_matrix,
         rotation_from_axis_degrees,
         rotation_from_quaternion,
     )
+    from p3d_cli.io import load_mesh
+    from p3d_cli.io.formats import FORMATS
+    from p3d_cli.io.source import MeshSource
+    from p3d_cli.measure import bounds, check, props, self_intersections
+    from p3d_cli.measure.solid import Solid, as_solid
+    from p3d_cli.mesh.solidity_report import SelfIntersections
+    from p3d_cli.mesh.verdicts import CheckResult
+    from p3d_cli.render.image import Picture
+    from p3d_cli.render.picture import picture
+    from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
     from p3d_cli.shapes import SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge, parse_shape
-    from p3d_cli.solid import Solid, as_solid

@@ -146,7 +146,7 @@ class MassProperties:
         is MJCF's ``<inertial quat=...>``, and ``I = R diag(principal_moments) Rᵀ``)."""
         if self.principal_axes is None:
             return None
-        from p3d_cli.rotation import matrix_quaternion
+        from p3d_cli.geometry.rotation import matrix_quaternion
 
         return matrix_quaternion(self.principal_axes.T)
 
@@ -155,7 +155,7 @@ class MassProperties:
         """The same rotation as ``principal_quaternion`` as URDF roll, pitch, yaw (radians)."""
         if self.principal_axes is None:
             return None
-        from p3d_cli.rotation import matrix_rpy
+        from p3d_cli.geometry.rotation import matrix_rpy
 
         return matrix_rpy(self.principal_axes.T)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import strategies as st
 
-from p3d_cli.rotation import rotation_from_quaternion
+from p3d_cli.geometry.rotation import rotation_from_quaternion
 
 
 @st.composite

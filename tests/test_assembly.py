@@ -14,10 +14,10 @@ import p3d_cli as p3d
 from conftest import write_ascii_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
-from p3d_cli.inertia import implausibilities
+from p3d_cli.geometry.inertia import implausibilities
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.results import Bounds, MassProperties
-from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_rpy
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_rpy
 
 MM = 1e-3
 #: The base plate's triangles (mm): a box 100 x 80 x 10 centred below the origin.
@@ -121,7 +121,7 @@ def test_assembly_equals_the_parallel_axis_sum_of_exact_parts(files):
     # Principal frame as quaternion reproduces the inertia.
     frame = p3d.quaternion_matrix(p.principal_quaternion) if hasattr(p3d, "quaternion_matrix") else None
     if frame is None:
-        from p3d_cli.rotation import quaternion_matrix
+        from p3d_cli.geometry.rotation import quaternion_matrix
         frame = quaternion_matrix(p.principal_quaternion)
     np.testing.assert_allclose(frame @ np.diag(p.principal_moments) @ frame.T, p.inertia,
                                atol=1e-12 * np.abs(p.inertia).max())

@@ -10,10 +10,10 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from p3d_cli.assembly import MAX_NESTING, MAX_PARTS, Assembly, Part, expanded_parts
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.measure.assembly.parts import MAX_NESTING, MAX_PARTS, Assembly, Part, expanded_parts
 
 
 def run(*args):

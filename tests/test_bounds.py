@@ -14,10 +14,10 @@ from hypothesis import strategies as st
 
 from strategies import rotations, scales
 
-from p3d_cli.bounding import triangles_bounds
-from p3d_cli.placement import placed_bounds
+from p3d_cli.geometry.bounding import triangles_bounds
+from p3d_cli.geometry.placement import placed_bounds
 from p3d_cli.errors import UsageError
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import SHAPES, Box, Cylinder, Sphere
 
 GRID = 181          # samples per angle: spacing 2π/180 around, π/180 from pole to pole

@@ -17,13 +17,14 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hypothesis import given, note, strategies as st
+from helpers.exact_assembly import EXACT_LENGTHS, ExactPart, combine, error_ratios, whole_of
+from hypothesis import given, note
+from hypothesis import strategies as st
 
 import p3d_cli as p3d
-from helpers.exact_assembly import EXACT_LENGTHS, ExactPart, combine, error_ratios, whole_of
-from p3d_cli.assembly import Assembly, Part
-from p3d_cli.placement import Placement
-from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_quaternion
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_quaternion
+from p3d_cli.measure.assembly.parts import Assembly, Part
 
 CUBE = p3d.parse_shape("box:1,1,1").triangles()
 #: Every error/bound ratio per quantity over the run (summarised at the end with -s).
@@ -224,7 +225,7 @@ def test_links_placed_through_a_chain_of_frames_stay_within_their_bounds(frames,
     # A robot link's geom: its own scale (a mirrored mesh: scale="1 1 -1"), then the frames of
     # the bodies above it, innermost first, composed one by one as the robot readers do
     # (``then(own, frame)``), then measured as the link's assembly of geoms.
-    from p3d_cli.placement import then
+    from p3d_cli.geometry.placement import then
 
     placement = Placement(None if mesh_scale is None else np.array(mesh_scale))
     exact = ExactPart.of_triangles(triangles).placed(placement.scale)

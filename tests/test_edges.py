@@ -19,7 +19,7 @@ from p3d_cli.io.source import array_source
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.boundary import boundary_of
 from p3d_cli.mesh.verdicts import check_source
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
 _FACES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
           (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]

@@ -14,23 +14,23 @@ set of meshes; observed 10-300).
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
-import math
 import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from conftest import write_ascii_stl, write_binary_stl
+from exact import exact_moments
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import write_ascii_stl, write_binary_stl
-from exact import exact_moments
-from p3d_cli.cli.main import cli
-from p3d_cli.inertia import mass_properties
-from p3d_cli.mesh.integrals import triangle_moments
 import p3d_cli as p3d
-from p3d_cli.exact import exact_uncertainty
+from p3d_cli.cli.main import cli
+from p3d_cli.geometry.inertia import mass_properties
+from p3d_cli.measure.exact import exact_uncertainty
+from p3d_cli.mesh.integrals import triangle_moments
 
 DOCUMENTED = 1e-13
 #: Rotated thin parts: relative error per aspect² (docs/accuracy.md).
@@ -321,7 +321,7 @@ def test_a_tetrahedron_of_size_1e40_prints_json():
 
 
 def test_triangle_inequality_check_at_the_ends_of_float64(recwarn):
-    from p3d_cli.inertia import breaks_triangle_inequality
+    from p3d_cli.geometry.inertia import breaks_triangle_inequality
 
     assert not breaks_triangle_inequality([1e308, 1.5e308, 1.7e308])      # the sum overflows: no break
     assert not breaks_triangle_inequality([5e-324, 5e-324, 1e-323])       # subnormal, exactly equal

@@ -151,7 +151,7 @@ def clean_error(result, *parts):
 @pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_samples_over_the_limit_are_refused_before_the_input_is_read():
     from p3d_cli.errors import UsageError
-    from p3d_cli.montecarlo import MAX_SAMPLES
+    from p3d_cli.measure.montecarlo import MAX_SAMPLES
 
     clean_error(run("props", "no-such-file.stl", "--method", "montecarlo", "--samples", "10000000000000"),
                 "--samples", "over the limit of 100,000,000 samples")
@@ -162,7 +162,7 @@ def test_samples_over_the_limit_are_refused_before_the_input_is_read():
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_a_tiny_tolerance_is_exact_for_a_full_box_and_capped_with_a_warning_otherwise(monkeypatch):
-    import p3d_cli.montecarlo as mc
+    import p3d_cli.measure.montecarlo as mc
 
     # Every sample of a box is inside: the indicator's variance is 0, so no tolerance needs more
     # than the points that give standard errors (main divided 0 by 0 here).

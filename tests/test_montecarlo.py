@@ -15,20 +15,19 @@ import json
 
 import numpy as np
 import pytest
-
-import p3d_cli as p3d
 import trimesh
 from click.testing import CliRunner
+from conftest import cube_triangles, write_ascii_stl, write_binary_stl
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+import p3d_cli as p3d
 from p3d_cli.cli.main import cli
-from p3d_cli.inertia import inertia_from_second_moments, mass_properties
+from p3d_cli.geometry.inertia import inertia_from_second_moments, mass_properties
+from p3d_cli.measure.montecarlo import sample, samples_for_tolerance, triangles_inside
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.mesh.winding import face_grid, inside
-from p3d_cli.montecarlo import sample, samples_for_tolerance, triangles_inside
 from p3d_cli.results import Bounds
 from p3d_cli.shapes import parse_spec
 
@@ -307,7 +306,7 @@ def test_cli_refuses_sampling_options_without_montecarlo():
 
 @pytest.mark.parametrize("source", ["wedge:1,2,3", "cylinder:1,1,2", "mesh"])
 def test_placed_inputs_agree_with_the_exact_placed_result(tmp_path, source):
-    from p3d_cli.placement import Placement
+    from p3d_cli.geometry.placement import Placement
 
     if source == "mesh":
         source = str(tmp_path / "part.stl")

@@ -19,11 +19,11 @@ from click.testing import CliRunner
 from scipy import stats
 
 import p3d_cli as p3d
-import p3d_cli.montecarlo as mc
+import p3d_cli.measure.montecarlo as mc
 from p3d_cli.cli.main import cli
-from p3d_cli.montecarlo import ALPHA, MIN_INSIDE, clopper_pearson
-from p3d_cli.placement import Placement
-from p3d_cli.rotation import rotation_from_quaternion
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.geometry.rotation import rotation_from_quaternion
+from p3d_cli.measure.montecarlo import ALPHA, MIN_INSIDE, clopper_pearson
 
 SEEDS = 300
 MISS_RATE = 0.005

@@ -15,8 +15,8 @@ from conftest import cube_triangles, write_ascii_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.placement import Placement
-from p3d_cli.rotation import (
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.geometry.rotation import (
     matrix_quaternion,
     matrix_rpy,
     parse_rpy,

@@ -17,7 +17,7 @@ import pytest
 from conftest import REAL_MESHES
 from exact import exact_moments
 from p3d_cli.io import load_mesh
-from p3d_cli.inertia import mass_properties
+from p3d_cli.geometry.inertia import mass_properties
 from p3d_cli.mesh.integrals import triangle_moments
 import p3d_cli as p3d
 

@@ -8,8 +8,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from p3d_cli.errors import UsageError
-from p3d_cli.rotation import (compose_rotations, cos_sin_degrees, parse_quaternion, parse_turn,
-                              rotation_from_axis_degrees, rotation_from_quaternion)
+from p3d_cli.geometry.rotation import (
+    compose_rotations,
+    cos_sin_degrees,
+    parse_quaternion,
+    parse_turn,
+    rotation_from_axis_degrees,
+    rotation_from_quaternion,
+)
 
 EX, EY, EZ = np.eye(3)
 
@@ -105,7 +111,7 @@ def test_a_scene_turn_and_a_rotate_turn_are_one_rotation(axis, degrees):
     # Rodrigues; quarter turns about the named axes are exact both ways (the scene used to be
     # off by 2e-16).
     from p3d_cli.constraints.values import rotation as scene_rotation
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     q = scene_rotation({"axis": list(np.eye(3)["xyz".index(axis)]) if isinstance(axis, str) else axis,
                         "degrees": degrees}, "scene.yaml: bodies.a.rotation")

@@ -14,8 +14,8 @@ import p3d_cli as p3d
 from helpers.exact_assembly import ExactPart, error_ratios, whole_of
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import RangeError
-from p3d_cli.placement import Placement
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
 WEDGE = p3d.parse_shape("wedge:1,2,3").triangles() + [0.25, -0.5, 0.125]
 

@@ -21,7 +21,7 @@ from p3d_cli.cli.options import (
 from p3d_cli.cli.output import plural
 from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
-from p3d_cli.config import Config
+from p3d_cli.cli.settings_file import Config
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.verdicts import CHECKS, SAMPLED_COUNTS as _COUNTS, CheckResult, check_record
 

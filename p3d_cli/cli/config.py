@@ -26,7 +26,7 @@ def config(inputs, show, as_json):
       p3d config --show
       p3d config --show parts/bracket.stl --json
     """
-    from p3d_cli.config import load_config
+    from p3d_cli.cli.settings_file import load_config
 
     settings = load_config()
     record = {"file": settings.path, "settings": settings.settings,

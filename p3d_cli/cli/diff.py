@@ -9,7 +9,7 @@ import os
 
 import click
 
-from p3d_cli import baseline as bl
+from p3d_cli.cli import baseline as bl
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import batch_options, density_options, format_option, json_option, warning_options
@@ -126,11 +126,11 @@ def gate_report(work, require: tuple[str, ...], source) -> Report:
     """``work`` (the props record of ``source``) and ``p3d check``'s verdict on the same read of
     the file: the mesh is loaded once and both are measured from it. Failed checks come back
     as the report's ``failures``. A shape spec is a clean solid by construction (not checked);
-    an assembly file is checked part by part (``p3d_cli.assembly_check``)."""
+    an assembly file is checked part by part (``p3d_cli.measure.assembly.check``)."""
     from p3d_cli import measure
     from p3d_cli.cli.check import failure_messages
+    from p3d_cli.measure import names_assembly_file
     from p3d_cli.shapes import parse_spec
-    from p3d_cli.solid import names_assembly_file
 
     fmt = work.keywords.get("format")
     thing = source

@@ -203,7 +203,7 @@ PLACEMENT_HELP = ("Placement order: --scale (in the solid's own frame), then the
 
 def placement_options(f):
     """``--scale``, ``--rotate``, ``--quat``, ``--translate``, ``--tessellate``, handed to the
-    command as ``placement: p3d_cli.placement.Placement`` and ``tessellate: int | None``."""
+    command as ``placement: p3d_cli.geometry.placement.Placement`` and ``tessellate: int | None``."""
     import functools
 
     @functools.wraps(f)
@@ -249,7 +249,7 @@ def make_placement(scale, turns, quat, translate, rpy=None):
     UsageError
         A malformed turn, quaternion or rpy, a zero scale, or two ways of giving the rotation.
     """
-    from p3d_cli.placement_text import make_placement as placement
+    from p3d_cli.io.placements import make_placement as placement
 
     return placement(scale=scale, turns=turns or None, quat=quat, rpy=rpy, translate=translate,
                      names=("--rotate", "--quat", "--rpy"))
@@ -302,7 +302,7 @@ def make_warning_filter(ignore, thresholds, no_config: bool):
     UsageError, FormatError
     """
     from p3d_cli.cli.settings import WarningFilter, parse_thresholds
-    from p3d_cli.config import Config, load_config
+    from p3d_cli.cli.settings_file import Config, load_config
 
     config = Config() if no_config else load_config()
     limits = parse_thresholds((f"{k}={v}" for k, v in config.settings.get("warning-thresholds", {}).items()),
@@ -333,7 +333,7 @@ def config_option(f):
 
     @functools.wraps(f)
     def command(*args, no_config, **kwargs):
-        from p3d_cli.config import Config, load_config
+        from p3d_cli.cli.settings_file import Config, load_config
 
         return f(*args, config=Config() if no_config else load_config(), **kwargs)
 

@@ -137,7 +137,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
 
 def combined(run: Batch, work) -> int:
     """``--combine``: the inputs as one assembly, one report (an unreadable input ends it)."""
-    from p3d_cli.assembly import combine
+    from p3d_cli.measure import combine
 
     bad = [item for item in run.items if not isinstance(item, str)]
     if bad:

@@ -1,11 +1,11 @@
 """What the command line resolves once per input: which warnings count, and the project
-settings (``p3d_cli.config``) that apply to the input."""
+settings (``p3d_cli.cli.settings_file``) that apply to the input."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from p3d_cli.config import Config
+from p3d_cli.cli.settings_file import Config
 from p3d_cli.warning_codes import THRESHOLDS, check_codes, code_of, is_ignored
 
 

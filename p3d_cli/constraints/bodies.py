@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.errors import P3DError, RangeError, SceneError
-from p3d_cli.inertia import mass_properties
+from p3d_cli.geometry.inertia import mass_properties
 from p3d_cli.results import Moments
 
 
@@ -66,21 +66,20 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
     SceneError
         Unreadable or corrupt mesh, or a solid with no positive volume.
     """
-    from p3d_cli.moments import shape_moments as closed_form
+    from p3d_cli.geometry.moments import shape_moments as closed_form
 
     shape = parse_shape_spec(spec_or_path, where)
     # Out-of-range moments end in one RangeError (checked where they are made), as for p3d props:
     # numpy's overflow warnings on the way would only repeat it.
     with np.errstate(all="ignore"):
         if shape is not None:
-            try:   # closed forms: p3d_cli.exact (and the mesh readers it imports) is not needed
+            try:   # closed forms: p3d_cli.measure.exact (and the mesh readers it imports) is not needed
                 moments = closed_form(shape, spec_or_path)
             except RangeError as exc:      # named by the body that gives the shape
                 raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
         else:
             path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
-            from p3d_cli.exact import solid_moments
-            from p3d_cli.solid import as_solid
+            from p3d_cli.measure import as_solid, solid_moments
 
             try:
                 moments = solid_moments(as_solid(path))
@@ -158,20 +157,18 @@ NOT_A_SOLID = frozenset({"open", "inward", "flat", "self-intersecting", "implaus
 
 
 def _parts_inertial(body) -> Inertial:
-    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.assemble``).
+    """A body made of parts, measured as an assembly in the body's frame (``p3d_cli.measure.props``).
 
     The body's ``density`` is the default of the parts that give none, its ``mass`` the
     whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
     """
-    from p3d_cli.assemble import assembly_props
-    from p3d_cli.placement import IDENTITY
-
+    from p3d_cli.measure import props
     from p3d_cli.warning_codes import code_of
 
     where = f"{body.where}.parts"
     try:
         with np.errstate(all="ignore"):     # an overflow is one RangeError, as for a shape
-            result = assembly_props(body.parts, IDENTITY, density=body.density, mass=body.mass)
+            result = props(body.parts, density=body.density, mass=body.mass)
     except SceneError:
         raise
     except P3DError as exc:

@@ -115,7 +115,7 @@ def conjugate(r, m) -> list[float]:
 
 def turn(q, rx: float, ry: float, rz: float, column: int | None = None):
     """``(q', R(q'))`` with ``q' = exp(θ) ⊗ q`` renormalised (``rotation.rotate_by_many`` for one
-    body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.rotation.quaternion_matrix``
+    body) and ``R`` its matrix in the homogeneous form of ``p3d_cli.geometry.rotation.quaternion_matrix``
     (exact at quarter turns), the two always wanted together, in one call. With ``column``,
     only that column of ``R`` (3 floats; the same numbers), for a body nothing reads more of.
 

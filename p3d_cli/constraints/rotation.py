@@ -3,15 +3,15 @@
 A body's orientation ``q`` maps body-frame vectors to world-frame ones: ``v_world = R(q) v_body``.
 A world-frame angular velocity ``ω`` rotates the body by ``exp(ω dt)`` applied on the left
 (``q ← exp(ω dt / 2) ⊗ q``), because ``ω`` is expressed in the world frame. The rotation
-matrix of a quaternion is ``p3d_cli.rotation.quaternion_matrix`` (here as ``quat_to_matrix``).
+matrix of a quaternion is ``p3d_cli.geometry.rotation.quaternion_matrix`` (here as ``quat_to_matrix``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.rotation import quaternion_matrix as quat_to_matrix  # noqa: F401 - the one copy
-from p3d_cli.rotation import quaternion_matrix as quat_to_matrix_many  # noqa: F401 - (n, 4) at once
+from p3d_cli.geometry.rotation import quaternion_matrix as quat_to_matrix  # noqa: F401 - the one copy
+from p3d_cli.geometry.rotation import quaternion_matrix as quat_to_matrix_many  # noqa: F401 - (n, 4) at once
 
 
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -76,7 +76,7 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 # -- the same operations over many bodies in a few numpy calls (stepping's inner loop) ----------
 # ``p ⊗ q = L(p) q`` with ``L(p)`` linear in ``p``: a constant linear map of the outer product.
-# (Rotation matrices of many quaternions: ``quat_to_matrix``, vectorised in p3d_cli.rotation.)
+# (Rotation matrices of many quaternions: ``quat_to_matrix``, vectorised in p3d_cli.geometry.rotation.)
 _P_TO_L = np.zeros((4, 16))
 for _row, _signs in enumerate((((0, 1), (1, -1), (2, -1), (3, -1)), ((1, 1), (0, 1), (3, -1), (2, 1)),
                                ((2, 1), (3, 1), (0, 1), (1, -1)), ((3, 1), (2, -1), (1, 1), (0, 1)))):

@@ -14,8 +14,8 @@ import numpy as np
 
 from p3d_cli.constraints import values
 from p3d_cli.constraints.rotation import quat_to_matrix
-from p3d_cli.constraints.yaml_loader import read_yaml
 from p3d_cli.errors import InputError, SceneError
+from p3d_cli.io.yaml_loader import read_yaml
 
 TOP_KEYS = ("gravity", "bodies", "constraints")
 BODY_KEYS = ("shape", "parts", "density", "mass", "inertia", "center_of_mass", "fixed", "position",
@@ -253,7 +253,7 @@ def _body(name, spec, where: str, directory: str) -> BodySpec:
 
 def _parts(value, place: str, directory: str):
     """A body made of parts: the assembly-file syntax, in the body's frame."""
-    from p3d_cli.assembly import parts_assembly
+    from p3d_cli.measure import parts_assembly
 
     try:
         parts = parts_assembly(value, place, f"{place}.parts", directory)
@@ -265,7 +265,7 @@ def _parts(value, place: str, directory: str):
 
 def _bare_amounts(assembly) -> None:
     """A scene has no length unit, so a part's density or mass cannot carry one."""
-    from p3d_cli.assembly import Assembly
+    from p3d_cli.measure import Assembly
     from p3d_cli.units import has_unit
 
     for part in assembly.parts:

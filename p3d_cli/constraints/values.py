@@ -11,9 +11,9 @@ import math
 import numpy as np
 
 from p3d_cli.constraints.rotation import quat_from_axis_angle
-from p3d_cli.rotation import quaternion_from_axis_degrees
+from p3d_cli.geometry.rotation import quaternion_from_axis_degrees
 from p3d_cli.errors import InputError, SceneError
-from p3d_cli.inertia import breaks_triangle_inequality
+from p3d_cli.geometry.inertia import breaks_triangle_inequality
 
 
 #: float64's smallest normal number.
@@ -206,8 +206,8 @@ def pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
     orientation = rotation(get["rotation"], f"{place}.rotation") if "rotation" in get else np.array([1.0, 0, 0, 0])
     if not given:
         return position, orientation
-    from p3d_cli.placement_text import placement_from_mapping
-    from p3d_cli.rotation import matrix_quaternion
+    from p3d_cli.io.placements import placement_from_mapping
+    from p3d_cli.geometry.rotation import matrix_quaternion
 
     try:
         placement = placement_from_mapping({k: get[k] for k in given}, place)

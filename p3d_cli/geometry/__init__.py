@@ -1,7 +1,9 @@
-"""Maths on arrays and values, below the mesh layer: exact geometric predicates.
+"""Maths on arrays and values, below the mesh layer: nothing here reads a file or knows a command.
 
-``p3d_cli.geometry.predicates`` decides orientation signs exactly (a float filter with a proven
-error bound, then exact integer arithmetic on the dyadic rationals the floats are); the
-self-intersection test (``p3d_cli.mesh.intersections``) and the shells' nesting test are built
-on them.
+Rotations and quaternions (``rotation``), volume moments and how a placement moves them
+(``moments``), mass properties from moments (``inertia``), exact axis-aligned bounds
+(``bounding``), placements and their composition with rounding bounds (``placement``; what users
+write is read into one by ``p3d_cli.io.placements``), error-free float arithmetic (``expansions``), and the
+exact orientation predicates (``predicates``, on ``rational``'s exact vectors) that the
+self-intersection and nesting tests are built on.
 """

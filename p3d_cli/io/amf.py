@@ -28,7 +28,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.dae_mesh import floats, indices
+from p3d_cli.io.dae.mesh import floats, indices
 from p3d_cli.io.limits import check_instances, read_member
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, instance_totals, scene_source, unique_names
@@ -119,7 +119,7 @@ def _missing(where: str, name: str) -> str:
 
 def _instance_matrix(instance, where: str) -> np.ndarray:
     from p3d_cli.errors import UsageError
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
     try:
         rx, ry, rz = (rotation_from_axis_degrees(axis, _number(instance, "r" + axis, where)) for axis in "xyz")

@@ -31,7 +31,7 @@ import numpy as np
 from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combine, combine_bound, frame_origin
 from p3d_cli.mesh.closed import (_lex_less, column_edge_keys, key_groups, side_keys, sides_of_edges)
 from p3d_cli.mesh.columns import columns
-from p3d_cli.mesh.expansions import two_sum
+from p3d_cli.geometry.expansions import two_sum
 from p3d_cli.mesh.kernels import compiled, sort
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this

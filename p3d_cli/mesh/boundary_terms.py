@@ -36,8 +36,16 @@ from fractions import Fraction
 
 import numpy as np
 
-from p3d_cli.mesh.expansions import (TINY, UNIT, ExactSum, cascaded_sums, product_of_splits, split, two_product,
-                                     two_sum)
+from p3d_cli.geometry.expansions import (
+    TINY,
+    UNIT,
+    ExactSum,
+    cascaded_sums,
+    product_of_splits,
+    split,
+    two_product,
+    two_sum,
+)
 
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _CYCLE = ((0, 1, 2), (1, 2, 0), (2, 0, 1))

@@ -87,7 +87,7 @@ def exactly_zero_area(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     undecided : (k,) bool
         Left to the rational test (coordinates out of the exact range; never both).
     """
-    from p3d_cli.mesh.expansions import two_product, two_sum
+    from p3d_cli.geometry.expansions import two_product, two_sum
 
     a, b, c = cols
     k = cols.shape[2]

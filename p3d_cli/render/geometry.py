@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from p3d_cli.placement import IDENTITY, Placement
+from p3d_cli.geometry.placement import IDENTITY, Placement
 
 #: Segments of a round shape's polyhedron in a picture (a sphere: 64 around, 32 stacks).
 ROUND_SEGMENTS = 64
@@ -56,9 +56,8 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
     P3DError
         As ``p3d.props`` for an input it cannot read.
     """
-    from p3d_cli.assembly import find_assembly
     from p3d_cli.errors import UsageError
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure import as_solid, find_assembly
 
     placement = IDENTITY if placement is None else placement
     found = find_assembly(thing) if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly" \
@@ -82,17 +81,12 @@ def scene_triangles(thing: Any, *, format: str | None = None, placement: Placeme
 
 def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
     """Every part placed, in the assembly's own length unit (its numbers read as written)."""
-    from p3d_cli.assemble import declared_scale, leaves
-    from p3d_cli.solid import as_solid
-    from p3d_cli.units import UnitSystem
+    from p3d_cli.measure import placed_parts
 
     units = assembly.units
-    system = None if units is None else UnitSystem(units, units, "kg")
     pieces = []
     count = 0
-    for leaf in leaves(assembly, placement, system, units):
-        solid = as_solid(leaf.part.thing)
-        total = declared_scale(solid, leaf.part, leaf.units, system, leaf.placement)
+    for solid, total in placed_parts(assembly, placement, units):
         if solid.shape is not None:
             shape = total.shape(solid.shape)
             triangles = shape.triangles() if shape.polyhedral else shape.tessellate(segments)
@@ -110,7 +104,7 @@ def _assembly(assembly, placement: Placement, segments: int) -> SceneGeometry:
 
 def _place(triangles: np.ndarray, placement: Placement) -> np.ndarray:
     """Triangles after ``placement`` (a mirror also swaps two corners, keeping the winding
-    outward, as ``p3d_cli.placement`` does for the measurement)."""
+    outward, as ``p3d_cli.geometry.placement`` does for the measurement)."""
     if placement.is_identity:
         return triangles
     shape = triangles.shape

@@ -1,10 +1,12 @@
 """How p3d's values show themselves in Jupyter: a picture for shapes and meshes (``_repr_png_``),
 the numbers and a thumbnail for results (``_repr_html_``).
 
-The values call these from their display methods; pictures are made through the package's
-public face (``p3d_cli.picture``), so that this module imports no part of
-the road below it. A result whose input cannot be drawn again (an array given from Python, a
-file since moved) shows its numbers alone.
+The values call these from their display methods (``_repr_*_``): callbacks that Jupyter calls,
+no part of the road from an input to a result, and the only place a value below ``render``
+imports this module. Pictures are made through the package's public face (``p3d_cli.picture``),
+as a user makes them, so that this module imports no part of the road below it. A result
+whose input cannot be drawn again (an array given from Python, a file since moved) shows its
+numbers alone.
 """
 
 from __future__ import annotations

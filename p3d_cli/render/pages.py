@@ -82,12 +82,12 @@ def with_picture(row: Row, command: str, size=PICTURE_SIZE) -> Row:
 def _numbers(source: str, command: str) -> dict:
     """The counts of ``p3d check`` or the mass properties of ``p3d props``/``bounds`` (raises
     ``P3DError`` as those do)."""
-    import p3d_cli as p3d
+    from p3d_cli import measure
 
     if command == "p3d check":
-        report = p3d.check(source).report
+        report = measure.check(source).report
         return {heading: getattr(report, key) for key, heading in CHECK_COUNTS}
-    result = p3d.props(source)
+    result = measure.props(source)
     props, bounds = result.properties, result.facts.bounds
     out: dict[str, object] = {"faces": result.facts.faces, "volume": props.volume, "mass (density 1)": props.mass}
     if props.center_of_mass is not None:

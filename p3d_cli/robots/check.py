@@ -6,7 +6,7 @@ Rules, per link (each problem names its rule):
 - ``symmetric``: the tensor equals its transpose (to 1e-9 of its largest entry).
 - ``positive definite``: every principal moment is positive.
 - ``triangle inequality``: ``I1 + I2 >= I3`` for the principal moments (to ``RTOL``: the numbers
-  in a file carry few digits). No body breaks it (``p3d_cli.inertia.breaks_triangle_inequality``).
+  in a file carry few digits). No body breaks it (``p3d_cli.geometry.inertia.breaks_triangle_inequality``).
 - ``com inside``: the centre of mass lies in the bounding box of the link's geometry, widened by
   ``com_slack`` of its diagonal on every side.
 - ``moments``: for a link whose geometry is a closed solid, the declared tensor is compared

@@ -47,8 +47,8 @@ def inertial_lines(format: str, mass: float, center, inertia, principal: bool = 
         return ["<inertial>", f'  <origin xyz="{fmt(*c)}" rpy="0 0 0"/>', f'  <mass value="{fmt(mass)}"/>',
                 "  <inertia " + " ".join(f'{k}="{fmt(v)}"' for k, v in six.items()) + "/>", "</inertial>"]
     if format == "mjcf" and principal:
-        from p3d_cli.inertia import principal_frame
-        from p3d_cli.rotation import matrix_quaternion
+        from p3d_cli.geometry.inertia import principal_frame
+        from p3d_cli.geometry.rotation import matrix_quaternion
 
         moments, axes = principal_frame(i)
         # Rows of ``axes`` are the principal axes in the link frame, so R = axesᵀ takes the

@@ -81,7 +81,7 @@ def load_masses(path: str) -> dict[str, float]:
     InputError
         Not readable, not a mapping, a value that is not a positive mass.
     """
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict):

@@ -1,8 +1,8 @@
-"""A link measured from its geometry: an assembly of its geoms (``p3d_cli.assemble``).
+"""A link measured from its geometry: an assembly of its geoms (``p3d_cli.measure.props``).
 
 Each collision (or visual) geom is one part, placed in the link frame by its own placement
 (mesh scale, rotation, translation); the link's mass properties are the parts' summed with the
-parallel-axis terms (``p3d_cli.inertia.combine_mass_properties``), in the description's units
+parallel-axis terms (``p3d_cli.geometry.inertia.combine_mass_properties``), in the description's units
 (SI). Geoms that overlap are counted twice, as MuJoCo counts them.
 """
 
@@ -11,11 +11,11 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from p3d_cli.assembly import Assembly, Part
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
-from p3d_cli.placement import IDENTITY, Placement
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.measure import Assembly, Part
 from p3d_cli.results import MassProperties, PropsResult
 from p3d_cli.robots.model import Geom, Link
 
@@ -62,7 +62,7 @@ def _in_metres(geom: Geom) -> tuple[object, Placement]:
     """The geom's solid and placement with its coordinates in metres, the description's unit: a
     mesh file that declares its own length unit (COLLADA's ``<unit meter>``, glTF's metres) is
     scaled from it first, in its own frame, before the geom's scale and placement."""
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure import as_solid
     from p3d_cli.units import LENGTHS
 
     solid = as_solid(geom.thing)
@@ -114,13 +114,13 @@ def measure_link(link: Link, role: str, source: str, *, density: float | None = 
 
 
 def _measured(assembly: Assembly, link: Link, role: str, source: str, density, mass) -> LinkGeometry:
-    from p3d_cli.assemble import assembly_props
+    from p3d_cli.measure import props
 
     try:
         # Sizes near float64's limit overflow inside the closed forms: p3d reports them as one
         # RangeError, so numpy's warnings would only be noise.
         with np.errstate(all="ignore"):
-            result = assembly_props(assembly, IDENTITY, density=1.0 if density is None else density)
+            result = props(assembly, density=1.0 if density is None else density)
     except UsageError as exc:
         if exc.where != "parts":
             raise
@@ -174,8 +174,8 @@ def _hulled(assembly: Assembly, link: Link, role: str, source: str, density, mas
 
 def _shell(assembly: Assembly, link: Link, source: str, mass, first: LinkGeometry) -> LinkGeometry:
     """The link as a thin shell of ``mass`` over its whole surface."""
+    from p3d_cli.measure import as_solid
     from p3d_cli.robots.open_mesh import placed_triangles, shell_properties
-    from p3d_cli.solid import as_solid
 
     where = f"{source}: link {link.name!r}"
     if mass is None:

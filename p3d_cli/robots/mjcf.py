@@ -36,7 +36,7 @@ import os
 import numpy as np
 
 from p3d_cli.errors import InputError, ReadError, UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers, read_xml, regular_file
 
@@ -142,7 +142,7 @@ class _Context:
         return r
 
     def _rotation(self, a: dict[str, str], where: str) -> np.ndarray | None:
-        from p3d_cli.rotation import rotation_from_axis_degrees, rotation_from_quaternion
+        from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_quaternion
 
         if "quat" in a:
             # MuJoCo normalises quaternions; so does rotation_from_quaternion.
@@ -174,7 +174,7 @@ class _Context:
 
 def z_to(direction: np.ndarray) -> np.ndarray:
     """The shortest turn taking +z to ``direction`` (MuJoCo's ``mju_quatZ2Vec``)."""
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
     length = math.hypot(*direction)
     if not 0 < length < math.inf:
@@ -252,7 +252,7 @@ def _contents(context: _Context, node: Node, childclass: str, frame: Placement |
     """Child elements with their default class, the placement of the ``<frame>`` and
     ``<replicate>`` elements around them (None: none) and the name suffix replicates give,
     looking through those two (a stack, not recursion: deep nesting cannot exhaust it)."""
-    from p3d_cli.placement import then
+    from p3d_cli.geometry.placement import then
 
     out: list[tuple[Node, str, Placement | None, str]] = []
     stack = [(child, childclass, frame, suffix) for child in reversed(node.children)]
@@ -282,7 +282,7 @@ def _contents(context: _Context, node: Node, childclass: str, frame: Placement |
 def _replicas(context: _Context, node: Node) -> list[Placement]:
     """The placements of a ``<replicate>``'s copies: the i-th is the step (euler, then offset)
     applied i times."""
-    from p3d_cli.placement import IDENTITY, then
+    from p3d_cli.geometry.placement import IDENTITY, then
 
     where = f"{node.where}: <replicate>"
     count = numbers(node.attrib.get("count"), 1, f"{where}: count")
@@ -379,7 +379,7 @@ def _geom(context: _Context, a: dict[str, str], where: str, role: str, frame: Pl
         thing = {"sphere": lambda: spec("sphere", s[0]), "capsule": lambda: spec("capsule", s[0], s[1]),
                  "cylinder": lambda: spec("cylinder", s[0], s[0], s[1]),
                  "box": lambda: spec("box", *s[:3]), "ellipsoid": lambda: spec("ellipsoid", *s[:3])}[kind]()
-    from p3d_cli.placement import then
+    from p3d_cli.geometry.placement import then
 
     placement = Placement(scale, rotation, None if not any(pos) else np.array(pos))
     mass = numbers(a.get("mass"), 1, f"{where}: mass")

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from p3d_cli.errors import InputError, ReadError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.xmltree import Document, Node
 
 

@@ -75,7 +75,7 @@ def shell_properties(triangles: np.ndarray, mass: float, where: str) -> MassProp
     InputError
         The surface has no area.
     """
-    from p3d_cli.inertia import inertia_from_second_moments, principal_frame, shifted_inertia
+    from p3d_cli.geometry.inertia import inertia_from_second_moments, principal_frame, shifted_inertia
 
     t = np.asarray(triangles, dtype=np.float64)
     a, b, c = t[:, 0], t[:, 1], t[:, 2]

@@ -24,7 +24,7 @@ import os
 import numpy as np
 
 from p3d_cli.errors import InputError, UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, inertia_matrix, resolve_uri, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
 
@@ -35,7 +35,7 @@ MAX_INCLUDE_DEPTH = 16
 
 def pose(node: Node | None, where: str) -> tuple[np.ndarray, np.ndarray | None]:
     """The translation and rotation of a ``<pose>`` element (None: identity)."""
-    from p3d_cli.rotation import rotation_from_quaternion, rotation_from_rpy
+    from p3d_cli.geometry.rotation import rotation_from_quaternion, rotation_from_rpy
 
     if node is None or not node.text:
         return np.zeros(3), None

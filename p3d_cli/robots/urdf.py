@@ -2,7 +2,7 @@
 
 Conventions (https://wiki.ros.org/urdf/XML/link): ``<origin xyz rpy>`` places an element in its
 link's frame, rpy being turns about the fixed x, y, z axes (``R = Rz Ry Rx``,
-``p3d_cli.rotation.rotation_from_rpy``); the ``<inertia>`` tensor is about the centre of mass,
+``p3d_cli.geometry.rotation.rotation_from_rpy``); the ``<inertia>`` tensor is about the centre of mass,
 in the frame of the inertial's origin (so rotated by its rpy); ``box size`` is the full size,
 ``cylinder`` has its axis along z with ``length`` the full length; a mesh's ``scale`` applies
 in the mesh's own frame, before the origin. The file is read with the standard library's expat
@@ -16,14 +16,14 @@ import os
 import numpy as np
 
 from p3d_cli.errors import InputError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, inertia_matrix, resolve_uri, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
 
 
 def origin_placement(node: Node | None, where: str, scale=None) -> Placement:
     """The placement of an ``<origin xyz rpy>`` element (None: identity), after ``scale``."""
-    from p3d_cli.rotation import rotation_from_rpy
+    from p3d_cli.geometry.rotation import rotation_from_rpy
 
     xyz = rpy = None
     if node is not None:
@@ -67,7 +67,7 @@ def read_urdf(path: str, root: Node, packages: dict[str, str]) -> Robot:
 
 
 def _inertial(node: Node, where: str):
-    from p3d_cli.rotation import rotation_from_rpy
+    from p3d_cli.geometry.rotation import rotation_from_rpy
 
     mass_node = node.find("mass")
     mass = numbers(None if mass_node is None else mass_node.attrib.get("value"), 1, f"{where}: mass value")

@@ -4,7 +4,7 @@ Each shape module states its canonical solid's volume, centre and central second
 ``C = ∫ (x - c)(x - c)ᵀ dV`` exactly (rationals, times π for the round shapes), with the
 derivation beside them. ``tests/shapes`` checks the polyhedral ones against the polyhedral
 formulas evaluated in rational arithmetic, and the round ones against refined tessellations.
-A scaled shape's moments are these constants mapped by ``p3d_cli.moments.scale_moments``
+A scaled shape's moments are these constants mapped by ``p3d_cli.geometry.moments.scale_moments``
 (the Physics3D note's eq. 4, 5 and 9, exact for any diagonal scale).
 """
 

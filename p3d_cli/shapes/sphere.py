@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.moments import scale_moments
+from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments

@@ -83,7 +83,7 @@ def test_mesh_matches_equivalent_spec(block):
     # the spec's box moved by R (0.5, 1, 1.5).
     mesh = record(block, "--rotate", "1,2,3:40")
     spec = record("box:0.5,1,1.5", "--rotate", "1,2,3:40")
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
     shift = rotation_from_axis_degrees([1, 2, 3], 40) @ [0.5, 1, 1.5]
     np.testing.assert_allclose(mesh["max"], np.array(spec["max"]) + shift, rtol=1e-14)
     np.testing.assert_allclose(mesh["min"], np.array(spec["min"]) + shift, rtol=1e-14)

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from conftest import cube_triangles, write_ascii_stl
 from p3d_cli.cli.main import cli
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
 
 def run(*args, input=None):

@@ -7,12 +7,12 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import cube_triangles, write_binary_stl
+
 from p3d_cli.constraints import load_scene, parse_scene, solve_scene
 from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.errors import SceneError
-from p3d_cli.rotation import rotation_from_rpy
+from p3d_cli.geometry.rotation import rotation_from_rpy
 
 
 def _box(m: float, half) -> tuple[float, np.ndarray]:
@@ -144,7 +144,7 @@ def test_the_placement_vocabulary_is_a_body_pose(pose, same):
 
 
 def test_rpy_pose_is_the_urdf_rotation():
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     body = parse_scene(__import__("yaml").safe_load("bodies:\n  b: {fixed: true, rpy: [0.1, -0.7, 2.0]}\n"),
                        "s", ".").body("b")
@@ -228,7 +228,7 @@ def test_the_documented_scene_format_loads_and_solves(tmp_path):
 def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
     """YAML 1.1 (PyYAML) reads ``1e8`` as text; scenes and assemblies read it as every language
     (and YAML 1.2) does, and keep quoted text as text."""
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     path = tmp_path / "n.yaml"
     path.write_text("a: [1e8, -2.5e-3, +3E2, 1.0e+8, 7, 1_0, '1e8', 1e, e5, 0x10]\n")
@@ -243,11 +243,11 @@ def test_numbers_without_a_dot_in_the_exponent_are_numbers(tmp_path):
 
 
 def test_parts_bodies_are_measured_only_when_the_solve_needs_them(monkeypatch):
-    from p3d_cli import assemble
+    from p3d_cli.measure.assembly import whole
 
     calls = []
-    real = assemble.assembly_props
-    monkeypatch.setattr(assemble, "assembly_props", lambda *a, **k: calls.append(a[0].source) or real(*a, **k))
+    real = whole.assembly_props
+    monkeypatch.setattr(whole, "assembly_props", lambda *a, **k: calls.append(a[0].source) or real(*a, **k))
     scene = parse_scene(__import__("yaml").safe_load("""
 bodies:
   ground: {fixed: true, parts: [{shape: box}]}
@@ -264,7 +264,7 @@ constraints:
 def test_plain_scalars_yaml_cannot_build_are_one_scene_error(tmp_path, value):
     """PyYAML takes these for a binary int or a date, then fails to build them with a bare
     ValueError (found by fuzzing the scene loader)."""
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     path = tmp_path / "s.yaml"
     path.write_text(f"bodies:\n  a: {{fixed: true, position: [{value}, 0, 0]}}\n")

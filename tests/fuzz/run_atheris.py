@@ -23,15 +23,17 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(1, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))   # tests/: helpers
 
 with atheris.instrument_imports(include=["p3d_cli"]):
-    import p3d_cli.exact  # noqa: F401 - instrumented before the targets import them
-    import p3d_cli.io.formats  # noqa: F401
-    import p3d_cli.io.amf  # noqa: F401 - the readers are imported on first use: instrument them here
-    import p3d_cli.io.dae  # noqa: F401
-    import p3d_cli.io.vtp  # noqa: F401
-    import p3d_cli.io.gltf  # noqa: F401
-    import p3d_cli.io.threemf  # noqa: F401
+    from targets import TARGETS, seeds
+
     import p3d_cli.constraints.scene  # noqa: F401 - the scene targets' code, instrumented too
     import p3d_cli.constraints.simulation  # noqa: F401
+    import p3d_cli.io.amf  # noqa: F401 - the readers are imported on first use: instrument them here
+    import p3d_cli.io.dae  # noqa: F401
+    import p3d_cli.io.formats  # noqa: F401
+    import p3d_cli.io.gltf  # noqa: F401
+    import p3d_cli.io.threemf  # noqa: F401
+    import p3d_cli.io.vtp  # noqa: F401
+    import p3d_cli.measure.exact  # noqa: F401 - instrumented before the targets import them
     import p3d_cli.robots  # noqa: F401 - the robot targets' readers, checks and fill
     import p3d_cli.robots.check  # noqa: F401
     import p3d_cli.robots.fill  # noqa: F401
@@ -39,7 +41,6 @@ with atheris.instrument_imports(include=["p3d_cli"]):
     import p3d_cli.robots.sdf  # noqa: F401
     import p3d_cli.robots.urdf  # noqa: F401
     import p3d_cli.robots.xmltree  # noqa: F401
-    from targets import TARGETS, seeds
 
 
 def main() -> None:

@@ -29,8 +29,8 @@ MAX_INPUT = 1 << 14
 def measure_bytes(data: bytes, fmt: str):
     """Read ``data`` as format ``fmt`` and integrate it, as ``p3d props`` would: the
     ``PropsResult``, or None when p3d refused the input with a ``P3DError``."""
-    from p3d_cli.exact import exact_props
-    from p3d_cli.solid import Solid
+    from p3d_cli.measure.exact import exact_props
+    from p3d_cli.measure.solid import Solid
 
     raw = RawInput("<fuzz>", None, data, len(data))
     try:

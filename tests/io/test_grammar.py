@@ -14,8 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io import obj, off, ply_ascii, stl_ascii
-from p3d_cli.io.ply_header import Element, Header, Property
+from p3d_cli.io import obj, off
+from p3d_cli.io.ply import ascii as ply_ascii
+from p3d_cli.io.ply.header import Element, Header, Property
+from p3d_cli.io.stl import ascii as stl_ascii
 
 SETTINGS = settings(max_examples=int(__import__("os").environ.get("P3D_GRAMMAR_EXAMPLES", "150")), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import check_reference
+
+import p3d_cli as p3d
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, obj
 from p3d_cli.io.raw import open_input
-import p3d_cli as p3d
 
 # A unit cube [0, 1]^3 as six outward quads (1-based, as OBJ writes them).
 CUBE_V = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
@@ -276,7 +276,7 @@ def careful_reading(path: str):
 def test_a_file_of_many_chunks_reads_as_the_careful_parser_reads_it(tmp_path):
     # Faces in many chunks, kept as per-chunk int32 pieces, give the careful parser's
     # triangles, in order, and the mesh source reads the pieces as one.
-    from p3d_cli.io.obj_fast import CHUNK, chunks_of
+    from p3d_cli.io.obj.fast import CHUNK, chunks_of
 
     text = many_chunk_text()
     assert len(text) > 2 * CHUNK
@@ -297,7 +297,7 @@ def test_odd_lines_send_only_their_chunks_to_the_careful_parser(tmp_path):
     # An unknown statement among the vertices and a stray corner line among the faces: two
     # chunks read carefully, the rest fast; the same triangles and the same warnings (with the
     # file's line numbers) as the careful parser reading the whole file.
-    from p3d_cli.io.obj_fast import chunks_of
+    from p3d_cli.io.obj.fast import chunks_of
 
     text = many_chunk_text({20_000: "cstype bspline", 50_000: "1/617/894", 50_001: "deg 3"})
     path = write(tmp_path, text)

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from exact import exact_moments
 
 import p3d_cli as p3d
-from exact import exact_moments
-from p3d_cli.assembly import Assembly, Part
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.measure.assembly.parts import Assembly, Part
 
 RTOL = 1e-12
 

@@ -10,13 +10,13 @@ import zlib
 
 import numpy as np
 import pytest
-
-import p3d_cli as p3d
 from helpers.exact_check import assert_exact
 from helpers.gltf_writer import CUBE_FACES, CUBE_VERTICES, TET_FACES, TET_VERTICES, placed, trs
 from helpers.threemf_writer import component_object, mesh_object, model, package
+
+import p3d_cli as p3d
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io import threemf_model
+from p3d_cli.io.threemf import model as threemf_model
 
 AXIS = np.array([2.0, -1.0, 2.0]) / 3.0
 TURN = trs((1.5, -2.0, 0.25), (*(math.sin(0.3) * AXIS), math.cos(0.3)), (1.0, 1.0, 1.0))

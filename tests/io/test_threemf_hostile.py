@@ -10,12 +10,13 @@ import zipfile
 import numpy as np
 import pytest
 from click.testing import CliRunner
-
+from helpers.cli_errors import one_error
 from helpers.gltf_writer import CUBE_FACES, CUBE_VERTICES, TET_FACES, TET_VERTICES, trs
 from helpers.threemf_writer import component_object, mesh_object, model, package
-from helpers.cli_errors import one_error
+
 from p3d_cli.cli.main import cli
-from p3d_cli.io import limits, threemf_model
+from p3d_cli.io import limits
+from p3d_cli.io.threemf import model as threemf_model
 
 
 def tet_model(**kwargs) -> str:

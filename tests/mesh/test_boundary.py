@@ -27,9 +27,9 @@ from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.boundary import (boundary_of, boundary_sums, boundary_terms, boundary_volume,
                                    unbalanced_groups, unbalanced_of)
 from p3d_cli.mesh.closed import column_edge_keys
-from p3d_cli.mesh.expansions import ExactSum, cascaded_sums, two_product, two_sum
+from p3d_cli.geometry.expansions import ExactSum, cascaded_sums, two_product, two_sum
 from p3d_cli.mesh.columns import columns
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
 REL = 1e-9
 

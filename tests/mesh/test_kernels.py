@@ -367,7 +367,7 @@ def test_placed_indexed_mesh_has_its_bounds(scale):
     the same mesh as a binary STL (blocks of triangles): the placement's projection of every
     block must see the blocks, so the indexed road is not taken past it."""
     from p3d_cli import props
-    from p3d_cli.placement import Placement
+    from p3d_cli.geometry.placement import Placement
 
     placement = Placement(np.array(scale), np.eye(3), np.array([-0.005, 0.0, 0.02]))
     obj = props(str(REPO / "sample_meshes" / "bracket.obj"), placement)

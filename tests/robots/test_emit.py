@@ -53,7 +53,7 @@ def test_urdf_block_reads_back_in_yourdfpy(part, tmp_path):
 
 def test_mjcf_block_compiles_in_mujoco(part, tmp_path):
     mujoco = pytest.importorskip("mujoco")
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     path, record = part
     block = _emit(path, "mjcf")

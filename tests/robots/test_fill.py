@@ -77,7 +77,7 @@ def test_filled_urdf_reads_back_in_pinocchio(arm):
 
 
 def _mujoco_body(model, name):
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     b = model.body(name).id
     r = quaternion_matrix(model.body_iquat[b])

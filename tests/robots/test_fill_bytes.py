@@ -162,7 +162,7 @@ def test_fill_changes_only_the_inertials_whatever_surrounds_them(tmp_path, case)
 
 def test_mujoco_compiles_the_filled_constructs_with_p3ds_numbers(tmp_path):
     mujoco = pytest.importorskip("mujoco")
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     # MuJoCo (tinyxml2) reads UTF-8, knows no DTD entities and no processing instructions inside
     # the root: the constructs it does read, all at once.

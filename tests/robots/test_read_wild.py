@@ -129,7 +129,7 @@ def test_mjcf_include_defaults_replicate_frames_and_geom_density_as_mujoco_compi
     result = fill_robot(robot)  # no inertials: MuJoCo computes every body from its geoms
     ours = {f.link: f for f in result.links}
     mujoco = pytest.importorskip("mujoco")
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     model = mujoco.MjModel.from_xml_path(str(path))
     names = [model.body(i).name for i in range(1, model.nbody)]

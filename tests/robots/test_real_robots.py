@@ -156,7 +156,7 @@ def test_filled_xacro_writes_a_urdf_that_loads(tmp_path):
 @pytest.mark.parametrize("case", ["vx300s", "shadow_hand", "fetch", "replicate"])
 def test_filled_real_mjcf_compiles_in_mujoco_with_p3ds_numbers(case, tmp_path):
     mujoco = pytest.importorskip("mujoco")
-    from p3d_cli.rotation import quaternion_matrix
+    from p3d_cli.geometry.rotation import quaternion_matrix
 
     path, _, robot, result, originals = _fill(case, tmp_path)
     write_fill(robot, result)

@@ -7,7 +7,7 @@ import numpy as np
 from exact import exact_moments
 from rational_oracle import directed_edges_pair_up, rational_moments
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
 
 def check_constants_exact(module) -> None:

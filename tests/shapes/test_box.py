@@ -3,7 +3,7 @@
 import numpy as np
 
 import polyhedral_checks as checks
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import Box, box
 
 

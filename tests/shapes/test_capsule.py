@@ -12,7 +12,7 @@ import pytest
 import round_checks as checks
 import p3d_cli as p3d
 from p3d_cli.errors import SpecError
-from p3d_cli.rotation import rotation_from_rpy
+from p3d_cli.geometry.rotation import rotation_from_rpy
 from p3d_cli.shapes import Capsule, parse_spec
 
 

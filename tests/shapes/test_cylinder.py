@@ -6,7 +6,7 @@ from fractions import Fraction as F
 import numpy as np
 
 import round_checks as checks
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import Cylinder, EllipticCylinder, cylinder
 
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 import round_checks as checks
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import Ellipsoid, Sphere
 
 

@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 from exact import exact_moments
 from strategies import rotations, scales
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.moments import scale_moments
-from p3d_cli.placement import place_moments
-from p3d_cli.rotation import rotation_from_quaternion
+from p3d_cli.geometry.moments import scale_moments
+from p3d_cli.geometry.placement import place_moments
+from p3d_cli.geometry.rotation import rotation_from_quaternion
 from p3d_cli.shapes import SHAPES
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import round_checks as checks
 from p3d_cli.errors import UsageError
-from p3d_cli.rotation import rotation_from_axis_degrees
+from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 from p3d_cli.shapes import Ellipsoid, Sphere, sphere
 
 

@@ -44,7 +44,7 @@ def test_inside():
 def test_bounds():
     checks.check_bounds(Wedge(1.0, 2.0, 3.0))
     # Turned 180° about z the wedge occupies x + y ≥ 0 and still touches every face of its box.
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
     b = Wedge(1.0, 2.0, 3.0).bounds(rotation_from_axis_degrees("z", 45))
     s = np.sqrt(0.5)
     # Corners (1,-2), (-1,2), (-1,-2) turned by 45°: x' = s(x - y), y' = s(x + y).

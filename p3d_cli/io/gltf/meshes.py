@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.errors import FormatError
-from p3d_cli.io.gltf_data import COMPRESSION, Document, as_float
+from p3d_cli.io.gltf.data import COMPRESSION, Document, as_float
 
 #: Modes that make no triangles: points, lines, line loop, line strip.
 NO_TRIANGLES = (0, 1, 2, 3)

@@ -19,8 +19,8 @@ An assembly file is YAML recognised by its content (a top-level ``parts:`` list)
 Each part is measured exactly as a single input is (``p3d_cli.measure``), placed in the
 assembly's frame, and the parts are summed: masses and volumes add, the centre of mass is
 the mass-weighted mean, and second moments about it add with the parallel-axis terms
-(``p3d_cli.inertia.combine_mass_properties``). Placement keys are read by the one placement
-parser (``p3d_cli.placement_text.placement_from_mapping``), as for scenes and the command line.
+(``p3d_cli.geometry.inertia.combine_mass_properties``). Placement keys are read by the one placement
+parser (``p3d_cli.io.placements.placement_from_mapping``), as for scenes and the command line.
 """
 
 from __future__ import annotations
@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from p3d_cli.errors import InputError, P3DError, ReadError, UsageError
-from p3d_cli.placement import IDENTITY, Placement
-from p3d_cli.placement_text import placement_from_mapping
-from p3d_cli.solid import names_assembly_file
+from p3d_cli.geometry.placement import IDENTITY, Placement
+from p3d_cli.io.placements import placement_from_mapping
+from p3d_cli.measure.solid import names_assembly_file
 
 #: Keys of one part.
 PART_KEYS = ("name", "mesh", "shape", "assembly", "density", "mass", "translate", "rotate", "quat", "rpy",
@@ -174,7 +174,7 @@ def load_assembly(path: str, _seen: tuple[str, ...] = (), _loaded: dict | None =
 
 
 def _read_assembly(path: str, seen: tuple[str, ...], loaded: dict) -> Assembly:
-    from p3d_cli.constraints.yaml_loader import read_yaml
+    from p3d_cli.io.yaml_loader import read_yaml
 
     data = read_yaml(path, path, InputError)  # the scenes' hardened reader: duplicate keys, size, depth
     if not isinstance(data, dict) or not isinstance(data.get("parts"), list) or not data["parts"]:

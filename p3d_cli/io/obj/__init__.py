@@ -14,7 +14,7 @@ in real models) is skipped with a warning naming the first such line, as long as
 at most half of the statements: a file made mostly of them is not an OBJ file and is refused,
 at its first such line.
 
-Two parsers, one grammar: ``p3d_cli.io.obj_fast`` reads what exporters write at C speed, a
+Two parsers, one grammar: ``p3d_cli.io.obj.fast`` reads what exporters write at C speed, a
 chunk of lines at a time, and answers None for a chunk holding anything else; the careful
 line-by-line parser here then reads that chunk, and names the line of any error.
 """
@@ -28,7 +28,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.numbers import to_float, to_int
-from p3d_cli.io.obj_fast import CONTINUATION, IGNORED, chunks_of, parse_chunk
+from p3d_cli.io.obj.fast import CONTINUATION, IGNORED, chunks_of, parse_chunk
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
@@ -85,7 +85,7 @@ def load(raw: RawInput) -> MeshSource:
 
 
 def read_chunks(where: str, chunks):
-    """The file chunk by chunk: each by the fast path (``obj_fast.parse_chunk``), or, when it
+    """The file chunk by chunk: each by the fast path (``fast.parse_chunk``), or, when it
     holds anything else (an unknown statement, a stray line, an error), by the careful parser,
     with the file's line numbers. So a real model with a few odd lines is read at the fast
     path's speed but for the chunks that hold them.

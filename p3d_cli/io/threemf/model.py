@@ -17,9 +17,9 @@ import io
 import re
 from dataclasses import dataclass, field
 from typing import IO
+from xml.parsers import expat
 
 import numpy as np
-from xml.parsers import expat
 
 from p3d_cli.errors import FormatError
 from p3d_cli.io import limits

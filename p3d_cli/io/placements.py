@@ -1,6 +1,6 @@
 """Placements from what users write: the command line's options and an assembly's or scene's
 mapping (``translate``, ``rotate``, ``quat``, ``rpy``, ``scale``), one parser for both, into
-``p3d_cli.placement.Placement``.
+``p3d_cli.geometry.placement.Placement``.
 """
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import IDENTITY, Placement, check_scale
+from p3d_cli.geometry.placement import IDENTITY, Placement, check_scale
 
 
 def make_placement(*, scale=None, turns=None, quat=None, rpy=None, translate=None,
@@ -34,7 +34,7 @@ def make_placement(*, scale=None, turns=None, quat=None, rpy=None, translate=Non
     UsageError
         A malformed turn, quaternion or rpy, a zero scale, or the rotation given two ways.
     """
-    from p3d_cli.rotation import compose_rotations, parse_quaternion, parse_rpy, parse_turn
+    from p3d_cli.geometry.rotation import compose_rotations, parse_quaternion, parse_rpy, parse_turn
 
     given = [n for n, v in zip(names, (turns, quat, rpy)) if v]
     if len(given) > 1:

@@ -1,12 +1,12 @@
 """PLY (Stanford polygon file), ASCII and binary of either byte order.
 
-The header (``p3d_cli.io.ply_header``) lists elements in file order; p3d reads ``vertex``
+The header (``p3d_cli.io.ply.header``) lists elements in file order; p3d reads ``vertex``
 (``x``, ``y``, ``z``) and ``face`` (polygons, split as fans from their first vertex) and/or
 ``tristrips`` (triangle strips separated by ``-1``); every other element and property (colours,
 normals, the texture list of trimesh's fuze.ply, ...) is read past and ignored. Binary
 ``float`` coordinates are float32 (widened later, never here).
 
-The bodies are read by ``p3d_cli.io.ply_binary`` and ``p3d_cli.io.ply_ascii``. A header never
+The bodies are read by ``p3d_cli.io.ply.binary`` and ``p3d_cli.io.ply.ascii``. A header never
 makes p3d allocate what it claims: every count is checked against the bytes (binary) or numbers
 (ASCII) actually present first.
 """
@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.errors import FormatError
-from p3d_cli.io.ply_ascii import read_ascii
-from p3d_cli.io.ply_binary import read_binary
-from p3d_cli.io.ply_header import TYPES, Element, Header, Property, parse_header, required_elements
+from p3d_cli.io.ply.ascii import read_ascii
+from p3d_cli.io.ply.binary import read_binary
+from p3d_cli.io.ply.header import TYPES, Element, Header, Property, parse_header, required_elements
 from p3d_cli.io.polygons import fan_triangles, strip_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source

@@ -1,7 +1,7 @@
 """One resolved solid measured: the step that single inputs and every part of an assembly share.
 
 ``p3d_cli.measure`` resolves what the user gave (units, assemblies) and calls these;
-``p3d_cli.assemble`` calls them once per part.
+``p3d_cli.measure.assembly.whole`` calls them once per part.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from typing import Iterable
 import numpy as np
 
 from p3d_cli.errors import InputError, UsageError
-from p3d_cli.placement import Placement
+from p3d_cli.geometry.placement import Placement
+from p3d_cli.measure.solid import Solid
 from p3d_cli.results import BoundsResult, PropsResult
-from p3d_cli.solid import Solid
 
 
 def measure_solid(solid: Solid, placement: Placement, *, method: str, density, mass, about, tessellate,
@@ -22,11 +22,11 @@ def measure_solid(solid: Solid, placement: Placement, *, method: str, density, m
     """``solid``'s result by ``method``, everything already in the units of the result
     (``density_error``: the relative error of a converted density or mass, for the bounds)."""
     if method == "montecarlo":
-        from p3d_cli.montecarlo import montecarlo_props
+        from p3d_cli.measure.montecarlo import montecarlo_props
 
         return montecarlo_props(solid, placement, samples=samples, seed=seed, tolerance=tolerance,
                                 density=density, mass=mass, about=about)
-    from p3d_cli.exact import exact_props
+    from p3d_cli.measure.exact import exact_props
 
     return exact_props(solid, placement, tessellate=tessellate, density=density, mass=mass, about=about,
                        density_error=density_error)
@@ -35,7 +35,7 @@ def measure_solid(solid: Solid, placement: Placement, *, method: str, density, m
 def finish(result: PropsResult, system, user_placement: Placement, density_given: bool = False) -> PropsResult:
     """Say the units, keep the user's placement in the record, add the plausibility warnings
     (``density_given``: the density was the user's, so the unit-slip warning applies)."""
-    from p3d_cli.inertia import implausibilities
+    from p3d_cli.geometry.inertia import implausibilities
     from p3d_cli.units import MESH_UNITS, slip_warning
 
     details = dict(result.details)
@@ -59,9 +59,9 @@ def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = No
     Raises
     ------
     RangeError
-        The bounds overflow float64 (``p3d_cli.bounding.checked_bounds``).
+        The bounds overflow float64 (``p3d_cli.geometry.bounding.checked_bounds``).
     """
-    from p3d_cli.bounding import checked_bounds
+    from p3d_cli.geometry.bounding import checked_bounds
 
     with np.errstate(over="ignore", invalid="ignore"):     # refused below, in one error
         result = _solid_bounds(solid, placement, tessellate)
@@ -72,7 +72,7 @@ def solid_bounds(solid: Solid, placement: Placement, tessellate: int | None = No
 def _solid_bounds(solid: Solid, placement: Placement, tessellate: int | None) -> BoundsResult:
     if solid.shape is not None:
         if tessellate is not None:
-            from p3d_cli.exact import shape_triangles
+            from p3d_cli.measure.exact import shape_triangles
 
             triangles = shape_triangles(solid.shape, tessellate)
             return BoundsResult(solid.source, "tessellated", "vertices", placement.triangles_bounds(triangles),
@@ -80,7 +80,7 @@ def _solid_bounds(solid: Solid, placement: Placement, tessellate: int | None) ->
         method = "vertices" if solid.shape.polyhedral else "closed form"
         return BoundsResult(solid.source, "primitive", method, placement.shape_bounds(solid.shape), 0,
                             solid.warnings)
-    from p3d_cli.exact import refuse_tessellate
+    from p3d_cli.measure.exact import refuse_tessellate
 
     refuse_tessellate(solid, tessellate)
     return _mesh_bounds(solid, placement)
@@ -135,7 +135,7 @@ def scene_assembly(solid: Solid):
     mesh = solid.mesh
     if mesh is None or not mesh.objects:
         return None
-    from p3d_cli.assembly import Assembly, Part
+    from p3d_cli.measure.assembly.parts import Assembly, Part
 
     parts = tuple(Part(name, source, where=source.where) for name, source in mesh.objects)
     return Assembly(solid.source, parts, mesh.length_unit)

@@ -1,7 +1,7 @@
 """Placing a solid: a diagonal scale, then a rotation about the world origin, then a translation.
 
 Mass properties are placed from the unplaced solid's moments: eq. 9 of the Physics3D note
-(``p3d_cli.moments.scale_moments``) for the scale, ``C' = R C Rᵀ`` for the rotation (so
+(``p3d_cli.geometry.moments.scale_moments``) for the scale, ``C' = R C Rᵀ`` for the rotation (so
 ``I' = R I Rᵀ``), and the centre moved by the translation (docs/method.md, "Placement").
 Bounds are placed exactly: shapes by their closed forms, triangles by projecting every corner.
 
@@ -16,18 +16,16 @@ inward-wound input stays inward-wound (its volume stays negative), as it should.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import numpy as np
 
-from p3d_cli.bounding import triangles_bounds
+from p3d_cli.geometry.bounding import triangles_bounds
 from p3d_cli.errors import UsageError
-from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.expansions import rounded_sums
-from p3d_cli.moments import rotate_moments, scale_moments, translate_moments
+from p3d_cli.geometry.expansions import rounded_sums
+from p3d_cli.geometry.moments import rotate_moments, scale_moments, translate_moments
 from p3d_cli.results import Bounds, Moments
 
 
@@ -160,7 +158,7 @@ class Placement:
         Non-zero diagonal scale factors (one number is a uniform scale); a negative factor
         mirrors the solid (see the module's note on winding).
     rotation : (3, 3) float64 or None
-        A proper rotation matrix (``p3d_cli.rotation``).
+        A proper rotation matrix (``p3d_cli.geometry.rotation``).
     translation : (3,) float64 or None
     errors : PlacementErrors or None
         How far these floats may be from the exact placement they stand for, when they were
@@ -289,34 +287,6 @@ def placed_bounds(shape_or_triangles, scale=None, rotation=None, translation=Non
     if hasattr(shape_or_triangles, "bounds") and hasattr(shape_or_triangles, "scaled"):
         return placement.shape_bounds(shape_or_triangles)
     return placement.triangles_bounds(shape_or_triangles)
-
-
-def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Callable[[], Bounds | None]]:
-    """``mesh`` with its blocks also projected as they stream past, and a getter for the bounds.
-
-    One pass serves both the integrals and the placed bounds, so standard input (which reads
-    once) and large files are not read twice.
-    """
-    seen: list[Bounds] = []
-    if mesh.tetrahedra is not None:
-        tetrahedra = np.asarray(mesh.tetrahedra)
-        return mesh, lambda: placement.triangles_bounds(tetrahedra)
-
-    def blocks() -> Iterator[np.ndarray]:
-        seen.clear()
-        for block in mesh.read_blocks():
-            if len(block):
-                seen.append(placement.triangles_bounds(block))
-            yield block
-
-    def bounds() -> Bounds | None:
-        if not seen:
-            return None
-        return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
-
-    # indexed=None: the blocks must stream past the projection, so the kernels' indexed road
-    # (which reads the vertices and faces, not read_blocks) is not taken for a placed mesh.
-    return dataclasses.replace(mesh, read_blocks=blocks, indexed=None), bounds
 
 
 def then(first: Placement, second: Placement) -> Placement:

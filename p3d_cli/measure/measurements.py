@@ -2,7 +2,7 @@
 
 Each takes "a thing" (a path, ``-``, a shape spec, a shape object, an ``(n, 3, 3)`` triangle
 array, a ``(vertices, faces)`` pair, or a loaded ``MeshSource``), resolves it once
-(``p3d_cli.solid.as_solid``) and returns a frozen result. The command line calls exactly
+(``p3d_cli.measure.solid.as_solid``) and returns a frozen result. The command line calls exactly
 these: ``p3d props`` is parse → ``props(...)`` → format.
 """
 
@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING, Any, BinaryIO, Iterable
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.placement import IDENTITY, Placement, scaling, then
+from p3d_cli.geometry.placement import IDENTITY, Placement, scaling, then
+from p3d_cli.measure.solid import as_solid, names_assembly_file
+from p3d_cli.measure.solid_result import (declared_units, finish, measure_solid, scene_assembly, scene_record,
+                                          solid_bounds)
 from p3d_cli.results import BoundsResult, PropsResult
-from p3d_cli.single import declared_units, finish, measure_solid, scene_assembly, scene_record, solid_bounds
-from p3d_cli.solid import as_solid, names_assembly_file
 
 if TYPE_CHECKING:  # imported where used, so that props and bounds never load the checks
     from p3d_cli.mesh.solidity_report import SelfIntersections
@@ -38,7 +39,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     Parameters
     ----------
     thing : str, os.PathLike, Shape, array_like, (vertices, faces) or MeshSource
-        What to measure (see ``p3d_cli.solid.as_solid``).
+        What to measure (see ``p3d_cli.measure.solid.as_solid``).
     placement : Placement, optional
         Scale, then rotate about the world origin, then translate the solid first.
     method : {"exact", "montecarlo"}
@@ -66,13 +67,13 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         ``"LENGTH,MASS"`` of the results, e.g. ``"mm,g"`` (default ``"m,kg"``).
     intersections : bool
         Also test a mesh exactly for self-intersections and for closed shells nested wound
-        alike (``p3d_cli.bodies``): warnings ``self-intersecting`` and ``nested-shells``. The
+        alike (``p3d_cli.measure.bodies``): warnings ``self-intersecting`` and ``nested-shells``. The
         test also runs, without being asked, when the inertia is not a solid's.
     shells : bool
         Measure each closed shell of a mesh (with the cavities inside it) as a part of an
         assembly: the bodies of a multi-body export (implies ``intersections``).
 
-    A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.assembly``) or an
+    A path to an assembly file (YAML with a ``parts:`` list, ``p3d_cli.measure.assembly.parts``) or an
     ``Assembly`` gives the whole, with each part's result in ``result.parts``.
 
     Returns
@@ -104,11 +105,11 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
         units = declared_units(solid, units, density, mass)
         found = scene_assembly(solid)
         if shells:
-            from p3d_cli.bodies import shells_assembly
+            from p3d_cli.measure.bodies import shells_assembly
 
             found, extra = shells_assembly(solid, found)
     if found is not None:
-        from p3d_cli.assemble import assembly_props
+        from p3d_cli.measure.assembly.whole import assembly_props
 
         result = assembly_props(found, placement, units=units, output_units=output_units,
                                 density=density, mass=mass, about=about, method=method,
@@ -131,7 +132,7 @@ def props(thing: Any, placement: Placement | None = None, *, method: str = "exac
     result = finish(result, system, user_placement, density_given)
     if solid.mesh is not None and solid.mesh.tetrahedra is None and (
             intersections or "self-intersecting" in result.warning_codes):
-        from p3d_cli.bodies import with_solidity_warnings
+        from p3d_cli.measure.bodies import with_solidity_warnings
 
         result = with_solidity_warnings(result, solid.mesh)
     return result
@@ -144,7 +145,7 @@ def _assembly(thing):
 
     if isinstance(thing, (str, os.PathLike)) or type(thing).__name__ == "Assembly":
         if type(thing).__name__ == "Assembly" or names_assembly_file(thing):
-            from p3d_cli.assembly import find_assembly
+            from p3d_cli.measure.assembly.parts import find_assembly
 
             return find_assembly(thing)
     return None
@@ -164,7 +165,7 @@ def check_props_options(method, density, mass, tessellate, samples, seed, tolera
         raise UsageError("tessellate", "given with method=montecarlo",
                          "Monte Carlo samples the exact shape; drop one of them")
     if samples is not None:
-        from p3d_cli.montecarlo import check_samples
+        from p3d_cli.measure.montecarlo import check_samples
 
         check_samples(samples)  # a limit, checked before any input is read
 
@@ -198,7 +199,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
     placement = IDENTITY if placement is None else placement
     found = _assembly(thing)
     if found is not None:
-        from p3d_cli.assemble import assembly_bounds
+        from p3d_cli.measure.assembly.whole import assembly_bounds
 
         return assembly_bounds(found, placement, units=units, output_units=output_units, tessellate=tessellate)
     solid = as_solid(thing, format=format, stdin=stdin)
@@ -250,8 +251,8 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     if unknown:
         raise UsageError("require", f"no check named {unknown[0]!r}", "checks are: " + ", ".join(CHECKS))
     assembly = _assembly(thing) if format is None else None
-    if assembly is not None:   # each mesh part on its own (p3d_cli.assembly_check)
-        from p3d_cli.assembly_check import check_assembly
+    if assembly is not None:   # each mesh part on its own (p3d_cli.measure.assembly.check)
+        from p3d_cli.measure.assembly.check import check_assembly
 
         return check_assembly(assembly, check, required, min_volume, max_faces)
     solid = as_solid(thing, format=format, stdin=stdin)

@@ -1,6 +1,6 @@
 """glTF 2.0: ``.gltf`` (JSON, with its buffers beside it or embedded) and ``.glb`` (binary).
 
-Read here, from the buffers with numpy (``p3d_cli.io.gltf_data``, ``p3d_cli.io.gltf_meshes``),
+Read here, from the buffers with numpy (``p3d_cli.io.gltf.data``, ``p3d_cli.io.gltf.meshes``),
 after the glTF 2.0 specification; no optional library is needed. glTF's unit is the metre
 (§3.4). What is measured:
 
@@ -11,7 +11,7 @@ after the glTF 2.0 specification; no optional library is needed. glTF's unit is 
   rotation and scale, composed down the node tree in float64); each such node is one part,
   named by its ``name``; the node tree is walked without recursion, and a node met twice (a
   cycle, or a child of two parents, which §3.5.3 forbids) is refused;
-- **a mesh is all its primitives** (``gltf_meshes``), whatever their materials;
+- **a mesh is all its primitives** (``meshes``), whatever their materials;
 - ``EXT_mesh_gpu_instancing``: every instance (its TRANSLATION, ROTATION and SCALE after the
   node's transform), all of one node's instances being that node's part;
 - a skinned mesh in its bind pose (every joint's global transform times its inverse bind
@@ -32,8 +32,8 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import limits
-from p3d_cli.io.gltf_data import COMPRESSION, Document, as_float, is_glb, read_container
-from p3d_cli.io.gltf_meshes import Meshes
+from p3d_cli.io.gltf.data import COMPRESSION, Document, as_float, is_glb, read_container
+from p3d_cli.io.gltf.meshes import Meshes
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, scene_source, unique_names
 from p3d_cli.io.source import MeshSource

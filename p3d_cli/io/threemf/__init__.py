@@ -1,6 +1,6 @@
 """3MF (3D Manufacturing Format): the zip package slicers and CAD write today.
 
-Read here (zip + a streaming XML parser, ``p3d_cli.io.threemf_model``) after the 3MF Core
+Read here (zip + a streaming XML parser, ``p3d_cli.io.threemf.model``) after the 3MF Core
 Specification 1.3 and its Production Extension 1.1; no optional library is needed. What is
 measured:
 
@@ -38,7 +38,7 @@ from p3d_cli.io import limits
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, scene_source, unique_names
 from p3d_cli.io.source import MeshSource
-from p3d_cli.io.threemf_model import CORE, PRODUCTION, Model, Object, parse
+from p3d_cli.io.threemf.model import CORE, PRODUCTION, Model, Object, parse
 
 #: The ``unit`` values of the 3MF core specification, in metres.
 UNITS = {"micron": 1e-6, "millimeter": 1e-3, "centimeter": 1e-2, "inch": 0.0254, "foot": 0.3048, "meter": 1.0}

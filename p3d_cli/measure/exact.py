@@ -8,18 +8,20 @@ clean solid's (``mesh_warnings``).
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable, Iterator
 
 import numpy as np
 
 from p3d_cli.errors import UsageError
-from p3d_cli.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
+from p3d_cli.geometry.inertia import breaks_triangle_inequality, inertia_from_second_moments, mass_properties
+from p3d_cli.geometry.moments import check_range, shape_moments
+from p3d_cli.geometry.placement import IDENTITY, Placement, prescaled
+from p3d_cli.io.source import MeshSource
+from p3d_cli.measure.solid import Solid
 from p3d_cli.mesh.analysis import MeshAnalysis, analyze
 from p3d_cli.mesh.integrals import triangle_moments
-from p3d_cli.moments import check_range, shape_moments
-from p3d_cli.placement import IDENTITY, Placement, prescaled, watch_bounds
-from p3d_cli.results import MassProperties, MeshFacts, Moments, PropsResult
+from p3d_cli.results import Bounds, MassProperties, MeshFacts, Moments, PropsResult
 from p3d_cli.shapes import SHAPES
-from p3d_cli.solid import Solid
 from p3d_cli.warning_codes import CodedWarning
 
 #: A float32 file whose coordinate spacing exceeds this fraction of the part's size is
@@ -141,6 +143,34 @@ def _mesh_props(solid: Solid, placement: Placement, density, mass, about) -> Pro
             facts = dataclasses.replace(facts, bounds=placed_bounds())
     props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     return PropsResult(facts, props, "exact", tuple(warnings), exact_uncertainty(moments, props))
+
+
+def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Callable[[], Bounds | None]]:
+    """``mesh`` with its blocks also projected as they stream past, and a getter for the bounds.
+
+    One pass serves both the integrals and the placed bounds, so standard input (which reads
+    once) and large files are not read twice.
+    """
+    seen: list[Bounds] = []
+    if mesh.tetrahedra is not None:
+        tetrahedra = np.asarray(mesh.tetrahedra)
+        return mesh, lambda: placement.triangles_bounds(tetrahedra)
+
+    def blocks() -> Iterator[np.ndarray]:
+        seen.clear()
+        for block in mesh.read_blocks():
+            if len(block):
+                seen.append(placement.triangles_bounds(block))
+            yield block
+
+    def bounds() -> Bounds | None:
+        if not seen:
+            return None
+        return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
+
+    # indexed=None: the blocks must stream past the projection, so the kernels' indexed road
+    # (which reads the vertices and faces, not read_blocks) is not taken for a placed mesh.
+    return dataclasses.replace(mesh, read_blocks=blocks, indexed=None), bounds
 
 
 def solid_moments(solid: Solid) -> Moments:

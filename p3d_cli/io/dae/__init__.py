@@ -13,7 +13,7 @@ pycollada is used. What is measured:
   conformance tests read it) and ``<lookat>`` (eye, interest, up: the frame that looks from the
   eye down its -z axis at the interest point, y up), each in document order.
 - **A geometry is one mesh.** All its triangle primitives together, whatever their materials
-  and whether their material bindings resolve (``p3d_cli.io.dae_mesh``).
+  and whether their material bindings resolve (``p3d_cli.io.dae.mesh``).
 - **Units by scope.** ``<asset><unit meter=...>`` applies to the element that holds the asset
   and everything inside it, unless a nearer asset says otherwise (COLLADA 1.4.1, "asset"): a
   geometry's positions are in the unit of their ``<source>``'s scope, a node's translations in
@@ -36,7 +36,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError, UsageError
-from p3d_cli.io.dae_mesh import GeometryMesh, child, children, floats, geometry_mesh, local
+from p3d_cli.io.dae.mesh import GeometryMesh, child, children, floats, geometry_mesh, local
 from p3d_cli.io.limits import check_instances
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, instance_totals, scene_source, unique_names
@@ -130,7 +130,7 @@ def _numbers(element, count: int, where: str) -> np.ndarray:
 
 
 def _transform(kind: str, element, factor: float, where: str) -> np.ndarray:
-    from p3d_cli.rotation import rotation_from_axis_degrees
+    from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 
     out = np.eye(4)
     if kind == "matrix":

@@ -34,13 +34,13 @@ from typing import Callable
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
-from p3d_cli.exact import mesh_facts, mesh_warnings
-from p3d_cli.inertia import density_for, inertia_from_second_moments, mass_properties
+from p3d_cli.geometry.inertia import density_for, inertia_from_second_moments, mass_properties
+from p3d_cli.geometry.placement import IDENTITY, Placement
+from p3d_cli.measure.exact import mesh_facts, mesh_warnings
+from p3d_cli.measure.confidence import _PAIRS, ALPHA, _central, clopper_pearson, conservative_errors  # noqa: F401
+from p3d_cli.measure.solid import Solid
 from p3d_cli.mesh.analysis import analyze
-from p3d_cli.montecarlo_bounds import _PAIRS, ALPHA, _central, clopper_pearson, conservative_errors  # noqa: F401
-from p3d_cli.placement import IDENTITY, Placement
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
-from p3d_cli.solid import Solid
 
 #: Points drawn per chunk (the random stream is consumed chunk by chunk, so the chunk size is
 #: part of what "the same seed gives the same numbers" means: do not change it lightly).
@@ -326,7 +326,7 @@ def montecarlo_props(solid: Solid, placement: Placement = IDENTITY, *, samples: 
         Target relative standard error of the volume; picks the sample count (at most
         ``MAX_SAMPLES``: a tolerance that needs more runs the cap and warns, however small).
     density, mass, about
-        As for ``p3d_cli.exact.exact_props``.
+        As for ``p3d_cli.measure.exact.exact_props``.
 
     Returns
     -------

@@ -17,7 +17,7 @@ from array import array
 import numpy as np
 
 from p3d_cli.errors import FormatError
-from p3d_cli.io.ply_header import FORMATS, HINT, ITEMSIZE, Element, Header, is_kept, list_positions, wanted
+from p3d_cli.io.ply.header import FORMATS, HINT, ITEMSIZE, Element, Header, is_kept, list_positions, wanted
 
 
 def read_binary(where: str, header: Header, data: bytes):

@@ -168,7 +168,7 @@ def spec_warnings(source: str) -> list[str]:
 
 def names_assembly_file(path) -> bool:
     """True for a text file with a top-level ``parts:`` line: an assembly (YAML, recognised by
-    its content; ``p3d_cli.assembly``), told without importing the assembly modules."""
+    its content; ``p3d_cli.measure.assembly.parts``), told without importing the assembly modules."""
 
     path = os.fspath(path)
     if path == "-" or not os.path.isfile(path):

@@ -1,6 +1,6 @@
 """Monte Carlo error bounds that hold with few samples inside: Clopper-Pearson for the inside
 fraction, Hoeffding for the centre and the second moments (docs/accuracy.md, "Few samples
-inside"). ``p3d_cli.montecarlo.Estimate.uncertainty`` uses them below ``MIN_INSIDE`` points.
+inside"). ``p3d_cli.measure.montecarlo.Estimate.uncertainty`` uses them below ``MIN_INSIDE`` points.
 """
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ from typing import Protocol
 
 import numpy as np
 
-from p3d_cli.inertia import density_for, inertia_from_second_moments
+from p3d_cli.geometry.inertia import density_for, inertia_from_second_moments
 from p3d_cli.results import Bounds
 
 
 class Sampled(Protocol):
-    """What the bounds read of a run (``p3d_cli.montecarlo.Estimate`` is one); a protocol, so
+    """What the bounds read of a run (``p3d_cli.measure.montecarlo.Estimate`` is one); a protocol, so
     that this module does not import the estimator that uses it."""
 
     @property

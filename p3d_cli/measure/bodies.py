@@ -131,8 +131,8 @@ def shells_assembly(solid, scene):
     UsageError
         ``solid`` is a shape, a volume mesh, or a file of several objects (already parts).
     """
-    from p3d_cli.assembly import Assembly, Part
     from p3d_cli.errors import UsageError
+    from p3d_cli.measure.assembly.parts import Assembly, Part
 
     mesh = solid.mesh
     if mesh is None or mesh.tetrahedra is not None or scene is not None:

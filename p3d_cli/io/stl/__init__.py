@@ -7,7 +7,7 @@ a binary file holds ``84 + 50 n`` bytes (trailing bytes are tolerated with a war
 the first word (trimesh 5.2 gets this wrong and returns an empty mesh). Binary files
 are streamed in blocks, so memory stays far below the file's size.
 
-ASCII STL (``p3d_cli.io.stl_ascii``): ``solid``/``endsolid`` blocks (several in one file are
+ASCII STL (``p3d_cli.io.stl.ascii``): ``solid``/``endsolid`` blocks (several in one file are
 read as one mesh) of ``facet normal``/``outer loop``/``vertex``×3/``endloop``/``endfacet``.
 """
 
@@ -59,7 +59,7 @@ def load(raw: RawInput) -> MeshSource:
     if n is not None and _HEADER + 50 * n == raw.size:
         return _load_binary(raw, n, ())
     if _starts_with_solid(head) and b"\0" not in head[:256]:
-        from p3d_cli.io.stl_ascii import load_ascii  # a binary STL's run does not import it
+        from p3d_cli.io.stl.ascii import load_ascii  # a binary STL's run does not import it
 
         return load_ascii(raw)
     if n is None:

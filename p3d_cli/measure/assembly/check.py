@@ -1,6 +1,6 @@
 """``p3d check`` of an assembly file: each mesh part checked on its own, one verdict for the whole.
 
-An assembly (``p3d_cli.assembly``) is measured by ``props`` and ``bounds`` part by part; ``check``
+An assembly (``p3d_cli.measure.assembly.parts``) is measured by ``props`` and ``bounds`` part by part; ``check``
 reads it the same way. Every mesh part (nested assemblies' too) is checked in its own file's
 frame, as ``p3d check part.stl`` would check it: placement does not change topology, and a
 mirrored part (negative scale) is measured with its winding flipped, so its own file must be
@@ -14,8 +14,8 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable, Iterable, Iterator
 
-from p3d_cli.assembly import Assembly
 from p3d_cli.errors import InputError, P3DError
+from p3d_cli.measure.assembly.parts import Assembly
 
 
 def mesh_parts(assembly: Assembly, path: str = "") -> Iterator[tuple[str, str, str]]:

@@ -17,10 +17,40 @@ from typing import Iterable
 import numpy as np
 
 from p3d_cli.results import Bounds
-from p3d_cli.shapes.polyhedron import projected_bounds
 
 #: Triangles projected at a time when one big array is given.
 _BLOCK = 1 << 16
+
+
+def projected_bounds(points: np.ndarray, rotation=None, translation=None) -> Bounds:
+    """Axis-aligned box of ``R p + t`` over the points.
+
+    Parameters
+    ----------
+    points : (k, 3) float64
+    rotation : (3, 3) array_like, optional
+        Default the identity.
+    translation : (3,) array_like, optional
+        Default zero.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if rotation is None:
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+    else:
+        # One contiguous projection per world axis, reduced at once: about 3-5 times faster
+        # than ``pts @ R.T`` followed by strided column reductions on an (n, 3) array.
+        r = np.asarray(rotation, dtype=np.float64)
+        x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+        lo, hi = np.empty(3), np.empty(3)
+        for i in range(3):
+            proj = x * r[i, 0]
+            proj += y * r[i, 1]
+            proj += z * r[i, 2]
+            lo[i], hi[i] = proj.min(), proj.max()
+    if translation is not None:
+        t = np.asarray(translation, dtype=np.float64).reshape(3)
+        lo, hi = lo + t, hi + t
+    return Bounds(lo, hi)
 
 
 def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rotation=None,
@@ -32,7 +62,7 @@ def triangles_bounds(blocks: np.ndarray | Iterable[np.ndarray], scale=None, rota
     blocks : (n, 3, 3) array, or an iterable of such blocks (float32 or float64)
         A streamed mesh is never held whole: each block is projected and dropped.
     scale : (3,) array_like, optional
-        Already checked (``p3d_cli.placement.check_scale``).
+        Already checked (``p3d_cli.geometry.placement.check_scale``).
     rotation : (3, 3) array_like, optional
     translation : (3,) array_like, optional
     """

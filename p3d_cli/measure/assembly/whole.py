@@ -1,4 +1,4 @@
-"""Measuring an assembly (``p3d_cli.assembly``): every part placed in one frame, then the whole.
+"""Measuring an assembly (``p3d_cli.measure.assembly.parts``): every part placed in one frame, then the whole.
 
 Units: an assembly's ``units`` (or the caller's, for a file that names none) is the length
 unit of its meshes and translations; a nested file without ``units`` inherits its parent's.
@@ -16,9 +16,9 @@ from typing import Iterator
 
 import numpy as np
 
-from p3d_cli.assembly import Assembly, Part
 from p3d_cli.errors import InputError, P3DError, UsageError
-from p3d_cli.placement import Placement, converted, scaling, then
+from p3d_cli.geometry.placement import Placement, converted, scaling, then
+from p3d_cli.measure.assembly.parts import Assembly, Part
 from p3d_cli.results import BoundsResult, MassProperties, MeshFacts, PropsResult
 from p3d_cli.units import DENSITY_ROUNDING, UnitSystem, exact_length, length_factor, parse_output_units
 
@@ -107,6 +107,18 @@ def leaves(assembly: Assembly, outer: Placement, system: UnitSystem | None,
         yield Leaf(part, total, units, name, density, group)
 
 
+def placed_parts(assembly: Assembly, placement: Placement, units: str | None = None) -> Iterator[tuple]:
+    """Every mesh or shape part of ``assembly`` (nested ones too) as ``(solid, placement)``: the
+    part resolved (``p3d_cli.measure.solid.Solid``) and its whole placement, its file's declared
+    unit included, with coordinates in ``units`` (None: as written). For those that draw parts."""
+    from p3d_cli.measure.solid import as_solid
+
+    system = None if units is None else UnitSystem(units, units, "kg")
+    for leaf in leaves(assembly, placement, system, units):
+        solid = as_solid(leaf.part.thing)
+        yield solid, declared_scale(solid, leaf.part, leaf.units, system, leaf.placement)
+
+
 def _amounts(part: Part, units, system: UnitSystem | None, density, mass):
     from p3d_cli.units import resolve
 
@@ -132,9 +144,9 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     ------
     InputError, UsageError
     """
-    from p3d_cli.inertia import combine_mass_properties, implausibilities
-    from p3d_cli.single import finish, measure_solid
-    from p3d_cli.solid import as_solid
+    from p3d_cli.geometry.inertia import combine_mass_properties, implausibilities
+    from p3d_cli.measure.solid_result import finish, measure_solid
+    from p3d_cli.measure.solid import as_solid
 
     system = _system(assembly, units, output_units)
     factor = 1.0 if system is None else system.factor
@@ -306,8 +318,8 @@ def _union(boxes):
 def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, output_units=None,
                     tessellate=None) -> BoundsResult:
     """The exact bounds of every placed part, and their union."""
-    from p3d_cli.single import solid_bounds
-    from p3d_cli.solid import as_solid
+    from p3d_cli.measure.solid_result import solid_bounds
+    from p3d_cli.measure.solid import as_solid
 
     system = _system(assembly, units, output_units)
     outer = converted(placement, _factor(system.mesh_length if system else None, system))
@@ -318,7 +330,7 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
         found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
     methods = {r.method for r in found}
-    from p3d_cli.bounding import checked_bounds
+    from p3d_cli.geometry.bounding import checked_bounds
 
     with np.errstate(over="ignore"):
         union = _union([r.bounds for r in found])

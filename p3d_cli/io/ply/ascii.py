@@ -16,7 +16,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError
 from p3d_cli.io.numbers import fromstring, lone_sign, saturated, to_float
-from p3d_cli.io.ply_header import HINT, Element, Header, is_kept, list_positions, wanted
+from p3d_cli.io.ply.header import HINT, Element, Header, is_kept, list_positions, wanted
 
 _NUMBERS_HINT = "PLY ASCII data holds only numbers; fix or export the file again"
 #: Float values of integer data past this are beyond every index and count a mesh can hold.
