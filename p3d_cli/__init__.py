@@ -83,6 +83,7 @@ _API = {
     # errors
     "P3DError": "p3d_cli.errors",
     "InputError": "p3d_cli.errors",
+    "ReadError": "p3d_cli.errors",
     "FormatError": "p3d_cli.errors",
     "UnknownFormatError": "p3d_cli.errors",
     "UsageError": "p3d_cli.errors",
@@ -116,6 +117,7 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
         InputError,
         MissingExtraError,
         P3DError,
+        ReadError,
         SceneError,
         SpecError,
         UnknownFormatError,

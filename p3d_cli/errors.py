@@ -11,6 +11,13 @@ Exit statuses (documented in the README and ``p3d --help``):
 - 2: usage error or input that cannot be used (missing, unreadable or corrupt file,
   bad option value, invalid scene).
 - 3: internal error (a bug in p3d; please report it).
+
+Each class also derives from the builtin a caller would catch (as rasterio's
+``RasterioIOError(RasterioError, OSError)``): a value or file contents that make no sense are a
+``ValueError`` (``InputError``, ``UsageError`` and theirs), a file that cannot be read or
+written an ``OSError`` (``ReadError``, ``OutputError``), a missing optional package an
+``ImportError`` (``MissingExtraError``). So ``except ValueError`` around ``p3d.props(...)``
+catches a bad spec, and ``except OSError`` a missing file.
 """
 
 from __future__ import annotations
@@ -52,14 +59,21 @@ class P3DError(Exception):
 
 
 def _rebuild(cls, where: str, what: str, hint: str, state: dict) -> P3DError:
-    error = cls.__new__(cls)
+    # A class that is an OSError and, through InputError, a ValueError is built by OSError's
+    # ``__new__`` (the one its layout needs); ``cls.__new__`` would find ValueError's first.
+    error = OSError.__new__(cls) if issubclass(cls, OSError) else cls.__new__(cls)
     P3DError.__init__(error, where, what, hint)
     error.__dict__.update(state)
     return error
 
 
-class InputError(P3DError):
+class InputError(P3DError, ValueError):
     """An input (file, stream, spec) cannot be read or makes no sense."""
+
+
+class ReadError(InputError, OSError):
+    """A file or stream cannot be read at all: missing, a directory, permission denied, a broken
+    link (an ``OSError``, and still an ``InputError``, as ``io.UnsupportedOperation`` is both)."""
 
 
 class FormatError(InputError):
@@ -75,7 +89,7 @@ class UnknownFormatError(InputError):
     """p3d cannot tell, or does not read, the file's format."""
 
 
-class UsageError(P3DError):
+class UsageError(P3DError, ValueError):
     """An option or argument value is invalid."""
 
 
@@ -94,12 +108,12 @@ class SceneError(InputError):
     """A constraint scene file is invalid."""
 
 
-class OutputError(P3DError):
+class OutputError(P3DError, OSError):
     """A file p3d was asked to write cannot be written, or writing it would damage a file (an
     input, a read-only file): nothing is written then (``p3d_cli.io.atomic``)."""
 
 
-class MissingExtraError(P3DError):
+class MissingExtraError(P3DError, ImportError):
     """An optional backend is needed but not installed."""
 
 

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from p3d_cli.records import Record
 from p3d_cli.warning_codes import code_of
-
 
 @dataclass(frozen=True)
 class Bounds:
@@ -197,7 +198,7 @@ class MeshFacts:
 
 
 @dataclass(frozen=True)
-class PropsResult:
+class PropsResult(Record):
     """One input's answer to ``p3d props``.
 
     Attributes
@@ -231,6 +232,50 @@ class PropsResult:
     units: dict | None = None
     parts: tuple["PropsResult", ...] = field(default_factory=tuple)
 
+    # One step to the common quantities (``properties`` and ``facts`` hold them all).
+    @property
+    def volume(self) -> float:
+        """``properties.volume``."""
+        return self.properties.volume
+
+    @property
+    def mass(self) -> float:
+        """``properties.mass``."""
+        return self.properties.mass
+
+    @property
+    def density(self) -> float:
+        """``properties.density``."""
+        return self.properties.density
+
+    @property
+    def center_of_mass(self) -> np.ndarray | None:
+        """``properties.center_of_mass``."""
+        return self.properties.center_of_mass
+
+    @property
+    def inertia(self) -> np.ndarray | None:
+        """``properties.inertia``."""
+        return self.properties.inertia
+
+    @property
+    def principal_moments(self) -> np.ndarray | None:
+        """``properties.principal_moments``."""
+        return self.properties.principal_moments
+
+    @property
+    def principal_axes(self) -> np.ndarray | None:
+        """``properties.principal_axes``."""
+        return self.properties.principal_axes
+
+    @property
+    def bounds(self) -> Bounds | None:
+        """``facts.bounds``."""
+        return self.facts.bounds
+
+    def _record(self) -> dict[str, Any]:
+        return props_record(self)
+
     @property
     def warning_codes(self) -> tuple[str, ...]:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
@@ -244,7 +289,7 @@ class PropsResult:
 
 
 @dataclass(frozen=True)
-class BoundsResult:
+class BoundsResult(Record):
     """One input's answer to ``p3d bounds``.
 
     Attributes
@@ -268,6 +313,35 @@ class BoundsResult:
     faces: int = 0
     warnings: tuple[str, ...] = field(default_factory=tuple)
 
+    # One step to the box's quantities.
+    @property
+    def min(self) -> np.ndarray:
+        """``bounds.min``."""
+        return self.bounds.min
+
+    @property
+    def max(self) -> np.ndarray:
+        """``bounds.max``."""
+        return self.bounds.max
+
+    @property
+    def size(self) -> np.ndarray:
+        """``bounds.size``."""
+        return self.bounds.size
+
+    @property
+    def center(self) -> np.ndarray:
+        """``bounds.center``."""
+        return self.bounds.center
+
+    @property
+    def diagonal(self) -> float:
+        """``bounds.diagonal``."""
+        return self.bounds.diagonal
+
+    def _record(self) -> dict[str, Any]:
+        return bounds_record(self)
+
     @property
     def warning_codes(self) -> tuple[str, ...]:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
@@ -278,3 +352,64 @@ class BoundsResult:
         from p3d_cli.render.notebook import bounds_html
 
         return bounds_html(self)
+
+
+INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"
+
+
+def props_record(result: PropsResult) -> dict:
+    """The JSON object of ``p3d props`` for one input (stable keys; numpy arrays as they are:
+    ``PropsResult.to_dict`` gives plain values)."""
+    p, f = result.properties, result.facts
+    record = {
+        "source": f.source,
+        "format": f.format,
+        "method": result.method,
+        "faces": f.faces,
+        "closed": f.closed,
+        "bounding": f.bounding,
+        "volume": p.volume,
+        "signed_volume": -p.volume if f.wound_inward else p.volume,
+        "mass": p.mass,
+        "density": p.density,
+        "center_of_mass": p.center_of_mass,
+        "inertia": p.inertia,
+        "inertia_origin": p.inertia_origin,
+        "principal_moments": p.principal_moments,
+        "principal_axes": p.principal_axes,
+        "second_moments": p.second_moments,
+        "principal_quaternion": p.principal_quaternion,
+        "principal_rpy": p.principal_rpy,
+        "bounds": None if f.bounds is None else {"min": f.bounds.min, "max": f.bounds.max},
+        "coordinate_dtype": f.coordinate_dtype,
+        "inertia_convention": INERTIA_CONVENTION,
+        "warnings": [str(w) for w in result.warnings],
+        "warning_codes": list(result.warning_codes),
+        "uncertainty": result.uncertainty,
+    }
+    if p.about is not None:
+        record["about"] = p.about
+        record["inertia_about"] = p.inertia_about
+    record.update(result.details)
+    record["units"] = result.units
+    if result.parts:
+        record["parts"] = [props_record(part) for part in result.parts]
+    return record
+
+
+def bounds_record(result: BoundsResult) -> dict:
+    """The JSON object of ``p3d bounds`` for one input (stable keys)."""
+    b = result.bounds
+    return {
+        "source": result.source,
+        "format": result.format,
+        "method": result.method,
+        "faces": result.faces,
+        "min": b.min,
+        "max": b.max,
+        "size": b.size,
+        "center": b.center,
+        "diagonal": b.diagonal,
+        "warnings": [str(w) for w in result.warnings],
+        "warning_codes": list(result.warning_codes),
+    }

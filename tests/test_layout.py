@@ -19,7 +19,7 @@ MAX_LINES = 450
 
 #: The modules left loose at the top of the package: the leaves everyone imports, the package's
 #: face and ``python -m p3d_cli``.
-LEAVES = {"errors", "results", "units", "warning_codes"}
+LEAVES = {"errors", "records", "results", "units", "warning_codes"}
 LOOSE = LEAVES | {"__init__", "__main__"}
 
 #: Each folder's floor: a module may import from its own floor and the floors below, never above.

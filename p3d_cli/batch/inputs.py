@@ -12,7 +12,7 @@ import os
 import sys
 from typing import Iterable, Iterator
 
-from p3d_cli.errors import InputError, P3DError, UsageError
+from p3d_cli.errors import InputError, P3DError, ReadError, UsageError
 
 
 def expand_inputs(inputs: Iterable[str | InputError],
@@ -95,12 +95,12 @@ def read_file_list(files_from: str, stdin=None, null: bool = False) -> list[str]
             with open(files_from, "rb") as f:
                 text = f.read().decode("utf-8", "surrogateescape")
         except FileNotFoundError:
-            raise InputError(files_from, "no such file", "check the path of the list") from None
+            raise ReadError(files_from, "no such file", "check the path of the list") from None
         except IsADirectoryError:
-            raise InputError(files_from, "is a directory",
+            raise ReadError(files_from, "is a directory",
                              "the list is a text file of paths; pass a directory as an input") from None
         except OSError as exc:
-            raise InputError(files_from, f"cannot be read ({exc.strerror or exc})", "check the file") from None
+            raise ReadError(files_from, f"cannot be read ({exc.strerror or exc})", "check the file") from None
     if null:
         return [name for name in text.split("\0") if name]
     return [line.strip() for line in text.splitlines() if line.strip()]

@@ -24,7 +24,7 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from p3d_cli.errors import FormatError, InputError, UsageError
+from p3d_cli.errors import FormatError, ReadError, UsageError
 
 #: Compared with a tolerance: record key -> default relative tolerance. Exact results repeat to
 #: the last bit on the same input, and move by a few ulps across platforms and numpy versions
@@ -124,9 +124,9 @@ def read_baseline(path: str, root: str) -> dict[str, dict]:
         with open(path, encoding="utf-8", errors="surrogateescape") as f:
             lines = f.read().splitlines()
     except FileNotFoundError:
-        raise InputError(path, "no such file", "record one with p3d props ... --json > baseline.ndjson") from None
+        raise ReadError(path, "no such file", "record one with p3d props ... --json > baseline.ndjson") from None
     except OSError as exc:
-        raise InputError(path, f"cannot be read ({exc.strerror or exc})", "check the file") from None
+        raise ReadError(path, f"cannot be read ({exc.strerror or exc})", "check the file") from None
     out: dict[str, dict] = {}
     for number, line in enumerate(lines, 1):
         if not line.strip():

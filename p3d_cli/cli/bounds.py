@@ -25,6 +25,7 @@ from p3d_cli.cli.output import plural
 from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.settings import WarningFilter, settings_for
+from p3d_cli.results import bounds_record
 
 
 @click.command(help=f"""Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation
@@ -120,24 +121,6 @@ def error_line(outcome, *, style: str) -> str | None:
     if style in ("table", "fields"):
         return None if style == "table" else ""
     return output.record_line("bounds", record) if style == "json" else csv_row(record)
-
-
-def bounds_record(result) -> dict:
-    """The JSON object of ``p3d bounds`` for one input (stable keys)."""
-    b = result.bounds
-    return {
-        "source": result.source,
-        "format": result.format,
-        "method": result.method,
-        "faces": result.faces,
-        "min": b.min,
-        "max": b.max,
-        "size": b.size,
-        "center": b.center,
-        "diagonal": b.diagonal,
-        "warnings": [str(w) for w in result.warnings],
-        "warning_codes": list(result.warning_codes),
-    }
 
 
 def bounds_table(result, precision: int = 10) -> str:

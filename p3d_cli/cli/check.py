@@ -23,7 +23,7 @@ from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.settings_file import Config
 from p3d_cli.errors import UsageError
-from p3d_cli.mesh.verdicts import CHECKS, CheckResult
+from p3d_cli.mesh.verdicts import CHECKS, SAMPLED_COUNTS as _COUNTS, CheckResult, check_record
 
 #: Columns of ``--csv``, in order (the flat keys of the JSON record, then ``error``).
 CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
@@ -31,13 +31,6 @@ CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges",
                "nonmanifold_vertices", "degenerate_faces", "zero_area_faces",
                "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume",
                "self_intersections")
-
-_COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
-           ("nonmanifold_edges", "non-manifold edge", "nonmanifold_edge_samples"),
-           ("misoriented_edges", "misoriented edge", "misoriented_edge_samples"),
-           ("nonmanifold_vertices", "non-manifold vertex", "nonmanifold_vertex_samples"),
-           ("degenerate_faces", "degenerate face", "degenerate_face_samples"),
-           ("duplicate_faces", "duplicate face", "duplicate_face_samples"))
 
 
 def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), config: Config | None = None,
@@ -116,60 +109,6 @@ def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[st
                 raise UsageError(where, f"no check named {name!r}",
                                  "checks are: " + ", ".join(CHECKS) + " (or all, none)")
     return tuple(dict.fromkeys(names))
-
-
-def check_record(result: CheckResult) -> dict:
-    """The JSON object of ``p3d check`` for one input (stable keys)."""
-    r = result.report
-    record = {
-        "source": result.source,
-        "format": result.format,
-        "ok": result.ok,
-        "failed": list(result.failed),
-        "required": list(result.required),
-        "faces": r.faces,
-        "vertices": r.vertices,
-        "edges": r.edges,
-        "closed": r.closed,
-        "oriented": r.oriented,
-        "outward": r.volume > 0,
-        "manifold": r.manifold,
-    }
-    for key, _, _ in _COUNTS:
-        record[key] = getattr(r, key)
-    record.update({
-        "zero_area_faces": r.zero_area_faces,
-        "faces_with_repeated_vertex": r.faces_with_repeated_vertex,
-        "shells": r.shells,
-        "shell_list": [{"faces": s.faces, "first_face": s.first_face, "volume": s.volume}
-                       for s in r.shell_list],
-        # The volume props reports (the enclosed solid's, positive for an inward mesh) and the
-        # faces' signed volume, in the same units as props.
-        "volume": r.solid_volume,
-        "signed_volume": r.volume,
-        "units": ({"length": "m", "volume": "m^3", "mesh_length": result.declared_unit} if result.declared_unit
-                  else {"length": "mesh unit", "volume": "mesh unit^3"}),
-        "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in _COUNTS},
-        "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
-        # None when the no-self-intersection check was not asked for (it is not computed then).
-        "self_intersections": None if r.self_intersections is None else r.self_intersections.to_dict(),
-        "nesting": None if r.nesting is None else r.nesting.to_dict(),
-    })
-    if result.weld is not None:
-        record["weld"] = result.weld.to_dict()
-    if result.parts:
-        record["parts"] = [{"name": name, **check_record(part)} for name, part in result.parts]
-    return record
-
-
-def _sample_json(sample):
-    if isinstance(sample, int):
-        return sample
-    if isinstance(sample, tuple):  # duplicate faces: (earlier face, later face)
-        return list(sample)
-    if hasattr(sample, "points"):
-        return {"faces": list(sample.faces), "edge": [list(p) for p in sample.points]}
-    return {"faces": list(sample.faces), "vertex": list(sample.point)}
 
 
 def check_csv_line(record: dict) -> str:

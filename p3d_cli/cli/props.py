@@ -28,7 +28,7 @@ from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.rounding import snapped
 from p3d_cli.cli.settings import WarningFilter, settings_for
 from p3d_cli.errors import CheckFailedError, FieldError, UsageError
-from p3d_cli.results import PropsResult
+from p3d_cli.results import INERTIA_CONVENTION, PropsResult, props_record
 
 
 @click.command()
@@ -228,48 +228,6 @@ def error_line(outcome, *, style: str, about: bool = False) -> str | None:
     if style == "fields":
         return ""
     return output.record_line("props", record) if style == "json" else None
-
-
-INERTIA_CONVENTION = "positive tensor: Ixx = ∫(y²+z²) dm, Ixy = -∫xy dm"
-
-
-def props_record(result: PropsResult) -> dict:
-    """The JSON object of ``p3d props`` for one input (stable keys)."""
-    p, f = result.properties, result.facts
-    record = {
-        "source": f.source,
-        "format": f.format,
-        "method": result.method,
-        "faces": f.faces,
-        "closed": f.closed,
-        "bounding": f.bounding,
-        "volume": p.volume,
-        "signed_volume": -p.volume if f.wound_inward else p.volume,
-        "mass": p.mass,
-        "density": p.density,
-        "center_of_mass": p.center_of_mass,
-        "inertia": p.inertia,
-        "inertia_origin": p.inertia_origin,
-        "principal_moments": p.principal_moments,
-        "principal_axes": p.principal_axes,
-        "second_moments": p.second_moments,
-        "principal_quaternion": p.principal_quaternion,
-        "principal_rpy": p.principal_rpy,
-        "bounds": None if f.bounds is None else {"min": f.bounds.min, "max": f.bounds.max},
-        "coordinate_dtype": f.coordinate_dtype,
-        "inertia_convention": INERTIA_CONVENTION,
-        "warnings": [str(w) for w in result.warnings],
-        "warning_codes": list(result.warning_codes),
-        "uncertainty": result.uncertainty,
-    }
-    if p.about is not None:
-        record["about"] = p.about
-        record["inertia_about"] = p.inertia_about
-    record.update(result.details)
-    record["units"] = result.units
-    if result.parts:
-        record["parts"] = [props_record(part) for part in result.parts]
-    return record
 
 
 def units_line(units: dict | None) -> list[str]:

@@ -7,6 +7,7 @@ import click
 from p3d_cli.cli import output
 from p3d_cli.cli.options import FiniteFloat, json_option
 from p3d_cli.constraints import SolveResult, load_scene, solve_scene
+from p3d_cli.constraints.outcome import solve_record
 from p3d_cli.constraints.simulation import check_steps
 from p3d_cli.constraints.trajectory import trajectory_writer
 from p3d_cli.errors import UsageError
@@ -67,44 +68,6 @@ def solve(scene, steps, dt, trajectory, plot, animate, as_json):
         click.echo(output.record_line("solve", solve_record(result)))
     else:
         click.echo(solve_table(scene, result))
-
-
-def solve_record(result: SolveResult) -> dict:
-    """The JSON object of ``p3d solve`` (stable keys; see docs/solve.md)."""
-    bodies = {}
-    for body in result.bodies:
-        bodies[body.name] = {
-            "fixed": body.fixed,
-            "position": body.position,
-            "rotation": body.rotation,
-            "center_of_mass": body.center_of_mass,
-            "velocity": body.velocity,
-            "angular_velocity": body.angular_velocity,
-            "constrained": body.constrained,
-        }
-    constraints = []
-    for c in result.constraints:
-        entry = {"type": c.type, "a": c.a, "b": c.b, "impulse": c.impulse, "error": c.error,
-                 "position_error": c.position_error, "island": c.island}
-        if c.angular_impulse is not None:
-            entry["angular_impulse"] = c.angular_impulse
-        constraints.append(entry)
-    return {
-        "bodies": bodies,
-        "constraints": constraints,
-        "rank": result.rank,
-        "equations": result.equations,
-        "redundant": result.redundant,
-        "islands": result.islands,
-        "kinetic_energy": {"before": result.kinetic_energy[0], "after": result.kinetic_energy[1]},
-        "momentum": {"before": result.momentum[0], "after": result.momentum[1]},
-        "angular_momentum": {"before": result.angular_momentum[0], "after": result.angular_momentum[1]},
-        "steps": result.steps,
-        "time": result.time,
-        "max_position_error": result.max_position_error,
-        "frame": "world; velocity is the centre of mass's; angular momentum about the world origin; "
-                 "impulses act on body b (a receives the opposite)",
-    }
 
 
 def solve_table(where: str, result: SolveResult) -> str:

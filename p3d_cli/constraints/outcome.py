@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from p3d_cli.records import Record
 
 
 @dataclass(frozen=True)
@@ -73,7 +76,7 @@ class ConstraintOutcome:
 
 
 @dataclass(frozen=True)
-class SolveResult:
+class SolveResult(Record):
     """What ``p3d solve`` reports.
 
     Attributes
@@ -118,3 +121,53 @@ class SolveResult:
     def redundant(self) -> int:
         """Number of redundant equations (``equations - rank``)."""
         return self.equations - self.rank
+
+    def body(self, name: str) -> BodyState:
+        """The body named ``name`` (KeyError when the scene has none)."""
+        for body in self.bodies:
+            if body.name == name:
+                return body
+        raise KeyError(name)
+
+    _has_settings = False  # p3d solve reads no project settings
+
+    def _record(self) -> dict[str, Any]:
+        return solve_record(self)
+
+
+def solve_record(result: SolveResult) -> dict:
+    """The JSON object of ``p3d solve`` (stable keys; see docs/solve.md)."""
+    bodies = {}
+    for body in result.bodies:
+        bodies[body.name] = {
+            "fixed": body.fixed,
+            "position": body.position,
+            "rotation": body.rotation,
+            "center_of_mass": body.center_of_mass,
+            "velocity": body.velocity,
+            "angular_velocity": body.angular_velocity,
+            "constrained": body.constrained,
+        }
+    constraints = []
+    for c in result.constraints:
+        entry = {"type": c.type, "a": c.a, "b": c.b, "impulse": c.impulse, "error": c.error,
+                 "position_error": c.position_error, "island": c.island}
+        if c.angular_impulse is not None:
+            entry["angular_impulse"] = c.angular_impulse
+        constraints.append(entry)
+    return {
+        "bodies": bodies,
+        "constraints": constraints,
+        "rank": result.rank,
+        "equations": result.equations,
+        "redundant": result.redundant,
+        "islands": result.islands,
+        "kinetic_energy": {"before": result.kinetic_energy[0], "after": result.kinetic_energy[1]},
+        "momentum": {"before": result.momentum[0], "after": result.momentum[1]},
+        "angular_momentum": {"before": result.angular_momentum[0], "after": result.angular_momentum[1]},
+        "steps": result.steps,
+        "time": result.time,
+        "max_position_error": result.max_position_error,
+        "frame": "world; velocity is the centre of mass's; angular momentum about the world origin; "
+                 "impulses act on body b (a receives the opposite)",
+    }

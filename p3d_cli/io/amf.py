@@ -69,6 +69,8 @@ def _xml(raw: RawInput) -> bytes:
             if not chosen:
                 raise zipfile.BadZipFile("the archive is empty")
             return read_member(raw.where, archive, chosen[0], f"the zipped AMF's {chosen[0].filename[:60]!r}")
+    except FormatError:
+        raise  # read_member's own, a ValueError too: as it is
     except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError, RuntimeError) as exc:
         raise FormatError(raw.where, f"is not a readable zipped AMF ({str(exc)[:120]})", "export it again") from None
 

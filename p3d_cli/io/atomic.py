@@ -28,7 +28,7 @@ import tempfile
 from pathlib import Path
 from typing import BinaryIO, Iterable, Iterator
 
-from p3d_cli.errors import OutputError
+from p3d_cli.errors import OutputError, P3DError
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
@@ -113,6 +113,8 @@ def replacing(path: str | os.PathLike, *, inputs: Iterable[str | os.PathLike] = 
         _copy_permissions(target, temporary)
         os.replace(temporary, target)
         done = True
+    except P3DError:
+        raise  # the caller's own error, an OSError perhaps (ReadError): not a failure to write
     except OSError as error:
         raise OutputError(str(path), f"cannot write {what}: {error.strerror}",
                           "check the free space and the folder's permissions") from None

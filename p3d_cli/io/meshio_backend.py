@@ -13,6 +13,7 @@ reader for the chosen format is called directly instead, and its errors become F
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import os
 import re
@@ -192,6 +193,19 @@ def _read_stdin(raw: RawInput, helpers, reader, name: str):
         return reader(path)
     finally:
         os.unlink(path)
+
+
+def mesh_object_source(mesh, where: str) -> MeshSource:
+    """A ``MeshSource`` over a ``meshio.Mesh`` already in memory, read as a file of it is
+    (format ``meshio``; by its ``points`` and ``cells``: meshio is not imported).
+
+    Raises
+    ------
+    FormatError, InputError
+        As for a file: cells p3d does not integrate, indices out of range, no faces.
+    """
+    source = _source(where, "", mesh)
+    return dataclasses.replace(source, format="meshio", where=where)
 
 
 def _source(where: str, name: str, mesh, notes=()) -> MeshSource:

@@ -10,7 +10,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-from p3d_cli.errors import InputError
+from p3d_cli.errors import InputError, ReadError
 
 
 @dataclass(frozen=True)
@@ -82,19 +82,19 @@ def open_input(source: str, stdin=None) -> RawInput:
         return RawInput("<stdin>", None, data, len(data))
     mode = _mode(source)
     if stat.S_ISDIR(mode):
-        raise InputError(source, "is a directory", "name the mesh files, or pass the directory to a batch command")
+        raise ReadError(source, "is a directory", "name the mesh files, or pass the directory to a batch command")
     if stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):
         return _open_pipe(source)
     if not stat.S_ISREG(mode):
-        raise InputError(source, "is a device, not a file", "name a mesh file, or pipe the mesh into p3d with -")
+        raise ReadError(source, "is a device, not a file", "name a mesh file, or pipe the mesh into p3d with -")
     try:
         size = os.path.getsize(source)
         with open(source, "rb"):
             pass
     except PermissionError:
-        raise InputError(source, "permission denied", "check the file's permissions") from None
+        raise ReadError(source, "permission denied", "check the file's permissions") from None
     except OSError as exc:
-        raise InputError(source, f"cannot be read ({exc.strerror or exc})", "check the file") from None
+        raise ReadError(source, f"cannot be read ({exc.strerror or exc})", "check the file") from None
     if size == 0:
         raise InputError(source, "file is empty", "export the mesh again")
     return RawInput(source, source, None, size)
@@ -103,23 +103,23 @@ def open_input(source: str, stdin=None) -> RawInput:
 def _mode(source: str) -> int:
     """``st_mode`` of ``source``, with errors that say what is wrong with the path."""
     if source == "":
-        raise InputError("''", "an empty path names no file", "give the mesh's path or a shape spec")
+        raise ReadError("''", "an empty path names no file", "give the mesh's path or a shape spec")
     try:
         return os.stat(source).st_mode
     except FileNotFoundError:
         if os.path.islink(source):
-            raise InputError(source, f"a broken symbolic link (to {os.readlink(source)!r})",
+            raise ReadError(source, f"a broken symbolic link (to {os.readlink(source)!r})",
                              "point the link at the mesh, or name the mesh itself") from None
         from p3d_cli.shapes import SHAPES
 
-        raise InputError(source, "no such file",
-                         f"check the path (shape specs are {', '.join(SHAPES)})") from None
+        raise ReadError(source, "no such file",
+                        f"check the path (shape specs are {', '.join(SHAPES)})") from None
     except PermissionError:
-        raise InputError(source, "permission denied", "check the permissions of the file and its folders") from None
+        raise ReadError(source, "permission denied", "check the permissions of the file and its folders") from None
     except OSError as exc:
         if exc.errno == errno.ELOOP:
-            raise InputError(source, "a loop of symbolic links", "point the link at the mesh itself") from None
-        raise InputError(source, f"cannot be read ({exc.strerror or exc})", "check the path") from None
+            raise ReadError(source, "a loop of symbolic links", "point the link at the mesh itself") from None
+        raise ReadError(source, f"cannot be read ({exc.strerror or exc})", "check the path") from None
 
 
 def _open_pipe(source: str) -> RawInput:
@@ -132,9 +132,9 @@ def _open_pipe(source: str) -> RawInput:
     try:
         fd = os.open(source, os.O_RDONLY | os.O_NONBLOCK)
     except PermissionError:
-        raise InputError(source, "permission denied", "check the file's permissions") from None
+        raise ReadError(source, "permission denied", "check the file's permissions") from None
     except OSError as exc:
-        raise InputError(source, f"cannot be read ({exc.strerror or exc})", "check the file") from None
+        raise ReadError(source, f"cannot be read ({exc.strerror or exc})", "check the file") from None
     with os.fdopen(fd, "rb", buffering=0) as stream:
         first = _first_bytes(stream, time.monotonic() + FIFO_WAIT)
         os.set_blocking(fd, True)

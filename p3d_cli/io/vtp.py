@@ -208,6 +208,8 @@ class _Xml:
                 raise _corrupt(self.where, f"a DataArray of unknown format {fmt!r}")
             usable = len(data) - len(data) % dtype.itemsize
             return np.frombuffer(data[:usable], dtype).astype(dtype.newbyteorder("="))
+        except FormatError:
+            raise  # our own, a ValueError too: as it is
         except (ValueError, OverflowError, binascii.Error, IndexError) as exc:
             raise _corrupt(self.where, f"a DataArray cannot be decoded ({exc})") from None
 
@@ -413,6 +415,8 @@ def _load_legacy(raw: RawInput) -> MeshSource:
                     triangles.append(_cells(connectivity, offsets, bool(_SECTIONS[key]), raw.where))
             else:
                 raise _corrupt(raw.where, f"unexpected section {key[:30].decode(errors='replace')!r}")
+        except FormatError:
+            raise  # our own, a ValueError too: as it is
         except (ValueError, OverflowError, IndexError, KeyError) as exc:
             raise _corrupt(raw.where, f"a {key[:30].decode(errors='replace')} section cannot be read ({exc})") from None
     if points is None:

@@ -9,7 +9,7 @@ these: ``p3d props`` is parse → ``props(...)`` → format.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, BinaryIO, Iterable
+from typing import TYPE_CHECKING, Any, BinaryIO, Iterable
 
 import numpy as np
 
@@ -19,6 +19,10 @@ from p3d_cli.measure.solid import as_solid, names_assembly_file
 from p3d_cli.measure.solid_result import (declared_units, finish, measure_solid, scene_assembly, scene_record,
                                           solid_bounds)
 from p3d_cli.results import BoundsResult, PropsResult
+
+if TYPE_CHECKING:  # imported where used, so that props and bounds never load the checks
+    from p3d_cli.mesh.solidity_report import SelfIntersections
+    from p3d_cli.mesh.verdicts import CheckResult
 
 #: The values of ``props(method=...)``.
 METHODS = ("exact", "montecarlo")
@@ -211,7 +215,7 @@ def bounds(thing: Any, placement: Placement | None = None, *, tessellate: int | 
 
 def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float | None = None,
           max_faces: int | None = None, format: str | None = None, stdin: BinaryIO | None = None,
-          weld: float | None = None):
+          weld: float | None = None) -> CheckResult:
     """Is a mesh a clean solid? Closed, oriented, outward, manifold, no degenerate or duplicate faces.
 
     Parameters
@@ -272,7 +276,8 @@ def check(thing: Any, *, require: Iterable[str] | None = None, min_volume: float
     return dataclasses.replace(whole, failed=failed, parts=parts)
 
 
-def self_intersections(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = None):
+def self_intersections(thing: Any, *, format: str | None = None,
+                       stdin: BinaryIO | None = None) -> SelfIntersections:
     """The face pairs of a mesh whose interiors cross or overlap, decided exactly.
 
     Faces that share an edge or a vertex, or touch without crossing, are never reported;

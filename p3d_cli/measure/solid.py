@@ -9,6 +9,7 @@ gives. The road then runs one way: read (here) → validate (as the triangles st
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from dataclasses import dataclass
@@ -56,10 +57,14 @@ def as_solid(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = 
 
     Parameters
     ----------
-    thing : str, os.PathLike, Shape, (n, 3, 3) array_like, (vertices, faces) pair, MeshSource
+    thing : str, os.PathLike, Shape, (n, 3, 3) array_like, (vertices, faces) pair, MeshSource, mesh object
         A shape spec (``"box:1,2,3"``) or a path (``"-"``: standard input); a shape object; an
         ``(n, 3, 3)`` array of triangle corners; a pair of an ``(m, 3)`` vertex array and an
-        ``(n, 3)`` array of vertex indices (0-based); or an already loaded mesh.
+        ``(n, 3)`` array of vertex indices (0-based); an already loaded mesh; or another
+        library's mesh object, read by duck typing (neither library is imported): one with
+        ``vertices`` and ``faces`` arrays (``trimesh.Trimesh``), or one with ``points`` and
+        ``cells`` blocks of ``type`` and ``data`` (``meshio.Mesh``: its triangle, quad and
+        polygon cells, or its tetrahedra), as p3d reads them from a file.
     format : str, optional
         Format name for a path, instead of guessing from content and extension.
     stdin : binary stream, optional
@@ -84,11 +89,21 @@ def as_solid(thing: Any, *, format: str | None = None, stdin: BinaryIO | None = 
         return Solid(thing.spec(), shape=thing)
     if isinstance(thing, (tuple, list)) and len(thing) == 2:
         return Solid("<array>", mesh=indexed_mesh(*thing))
+    if hasattr(thing, "vertices") and hasattr(thing, "faces"):      # trimesh.Trimesh and its kind
+        where = f"<{type(thing).__name__}>"
+        mesh = dataclasses.replace(indexed_mesh(thing.vertices, thing.faces, "trimesh"), where=where)
+        return Solid(where, mesh=mesh)
+    if hasattr(thing, "points") and hasattr(thing, "cells"):        # meshio.Mesh
+        from p3d_cli.io.meshio_backend import mesh_object_source
+
+        where = f"<{type(thing).__name__}>"
+        return Solid(where, mesh=mesh_object_source(thing, where))
     if isinstance(thing, (np.ndarray, list)):
         return Solid("<array>", mesh=triangle_mesh(thing))
     raise UsageError("thing", f"cannot measure a {type(thing).__name__}",
-                     "give a path, a shape spec or shape, an (n, 3, 3) triangle array or a "
-                     "(vertices, faces) pair")
+                     "give a path, a shape spec or shape, an (n, 3, 3) triangle array, a "
+                     "(vertices, faces) pair, or a mesh object with vertices and faces (trimesh) or "
+                     "points and cells (meshio)")
 
 
 def is_shape(thing: Any) -> TypeGuard[Shape]:
@@ -106,7 +121,7 @@ def triangle_mesh(triangles) -> MeshSource:
     return array_source("array", array if dtype == "float32" else array.astype(np.float64), dtype)
 
 
-def indexed_mesh(vertices, faces) -> MeshSource:
+def indexed_mesh(vertices, faces, format: str = "array") -> MeshSource:
     """A ``MeshSource`` over an ``(m, 3)`` vertex array and an ``(n, 3)`` index array (0-based)."""
     v, f = np.asarray(vertices), np.asarray(faces)
     if v.ndim != 2 or v.shape[1] != 3 or not _is_real(v):
@@ -120,7 +135,7 @@ def indexed_mesh(vertices, faces) -> MeshSource:
         raise InputError("<array>", f"face {bad} indexes a vertex outside 0..{len(v) - 1}",
                          "indices count from 0")
     dtype = "float32" if v.dtype == np.float32 else "float64"
-    return indexed_source("array", v if dtype == "float32" else v.astype(np.float64), f.astype(np.intp), dtype)
+    return indexed_source(format, v if dtype == "float32" else v.astype(np.float64), f.astype(np.intp), dtype)
 
 
 def _is_real(array: np.ndarray) -> bool:

@@ -94,6 +94,8 @@ def _mesh_bounds(solid: Solid, placement: Placement) -> BoundsResult:
         blocks = mesh.finite_blocks()
     try:
         box = placement.triangles_bounds(blocks)
+    except InputError:
+        raise  # the blocks' own (a non-finite coordinate), a ValueError too: as it is
     except ValueError:
         raise InputError(mesh.where, "the mesh has no faces", "export it again with its faces") from None
     return BoundsResult(solid.source, mesh.format, "vertices", box, mesh.face_count, tuple(mesh.warnings))

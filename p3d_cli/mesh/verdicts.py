@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from p3d_cli.mesh.report import TopologyReport
 from p3d_cli.mesh.topology import topology_and_layout
 from p3d_cli.mesh.weld import Weld
+from p3d_cli.records import Record
 
 #: The checks ``p3d check --require`` can ask for, and what each needs.
 CHECKS = {
@@ -20,6 +22,15 @@ CHECKS = {
     "nesting": "closed shells nest as a solid's: a shell inside another is wound opposite to it (a cavity), "
                "so no volume is counted twice",
 }
+
+#: The counts of defects the record and the text verdict give, each with its noun and the
+#: ``TopologyReport`` field of its sample locations.
+SAMPLED_COUNTS = (("boundary_edges", "boundary edge", "boundary_edge_samples"),
+                  ("nonmanifold_edges", "non-manifold edge", "nonmanifold_edge_samples"),
+                  ("misoriented_edges", "misoriented edge", "misoriented_edge_samples"),
+                  ("nonmanifold_vertices", "non-manifold vertex", "nonmanifold_vertex_samples"),
+                  ("degenerate_faces", "degenerate face", "degenerate_face_samples"),
+                  ("duplicate_faces", "duplicate face", "duplicate_face_samples"))
 
 #: The checks that need the self-intersection pass (the costliest: run only when required).
 SOLIDITY = ("no-self-intersection", "nesting")
@@ -47,7 +58,7 @@ def passes(report: TopologyReport, check: str) -> bool:
 
 
 @dataclass(frozen=True)
-class CheckResult:
+class CheckResult(Record):
     """One mesh's verdict.
 
     Attributes
@@ -82,6 +93,30 @@ class CheckResult:
     @property
     def ok(self) -> bool:
         return not self.failed
+
+    # One step to the report's common quantities.
+    @property
+    def volume(self) -> float:
+        """``report.solid_volume``: the enclosed solid's, positive for an inward-wound mesh (as props)."""
+        return self.report.solid_volume
+
+    @property
+    def faces(self) -> int:
+        """``report.faces``."""
+        return self.report.faces
+
+    @property
+    def closed(self) -> bool:
+        """``report.closed``."""
+        return self.report.closed
+
+    @property
+    def manifold(self) -> bool:
+        """``report.manifold``."""
+        return self.report.manifold
+
+    def _record(self) -> dict[str, Any]:
+        return check_record(self)
 
     def _repr_html_(self) -> str:
         """In a notebook: the verdict, the counts, and the mesh with its defects drawn."""
@@ -166,3 +201,57 @@ def _finite(mesh, where: str):
     if bad is not None:
         raise nonfinite_error(where, bad)
     return np.asarray(triangles, dtype=np.float64)
+
+
+def check_record(result: CheckResult) -> dict:
+    """The JSON object of ``p3d check`` for one input (stable keys)."""
+    r = result.report
+    record = {
+        "source": result.source,
+        "format": result.format,
+        "ok": result.ok,
+        "failed": list(result.failed),
+        "required": list(result.required),
+        "faces": r.faces,
+        "vertices": r.vertices,
+        "edges": r.edges,
+        "closed": r.closed,
+        "oriented": r.oriented,
+        "outward": r.volume > 0,
+        "manifold": r.manifold,
+    }
+    for key, _, _ in SAMPLED_COUNTS:
+        record[key] = getattr(r, key)
+    record.update({
+        "zero_area_faces": r.zero_area_faces,
+        "faces_with_repeated_vertex": r.faces_with_repeated_vertex,
+        "shells": r.shells,
+        "shell_list": [{"faces": s.faces, "first_face": s.first_face, "volume": s.volume}
+                       for s in r.shell_list],
+        # The volume props reports (the enclosed solid's, positive for an inward mesh) and the
+        # faces' signed volume, in the same units as props.
+        "volume": r.solid_volume,
+        "signed_volume": r.volume,
+        "units": ({"length": "m", "volume": "m^3", "mesh_length": result.declared_unit} if result.declared_unit
+                  else {"length": "mesh unit", "volume": "mesh unit^3"}),
+        "samples": {key: [_sample_json(s) for s in getattr(r, samples)] for key, _, samples in SAMPLED_COUNTS},
+        "vertex_matching": "exact coordinates (no tolerance; -0.0 equals 0.0)",
+        # None when the no-self-intersection check was not asked for (it is not computed then).
+        "self_intersections": None if r.self_intersections is None else r.self_intersections.to_dict(),
+        "nesting": None if r.nesting is None else r.nesting.to_dict(),
+    })
+    if result.weld is not None:
+        record["weld"] = result.weld.to_dict()
+    if result.parts:
+        record["parts"] = [{"name": name, **check_record(part)} for name, part in result.parts]
+    return record
+
+
+def _sample_json(sample):
+    if isinstance(sample, int):
+        return sample
+    if isinstance(sample, tuple):  # duplicate faces: (earlier face, later face)
+        return list(sample)
+    if hasattr(sample, "points"):
+        return {"faces": list(sample.faces), "edge": [list(p) for p in sample.points]}
+    return {"faces": list(sample.faces), "vertex": list(sample.point)}

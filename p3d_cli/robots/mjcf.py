@@ -35,7 +35,7 @@ import os
 
 import numpy as np
 
-from p3d_cli.errors import InputError, UsageError
+from p3d_cli.errors import InputError, ReadError, UsageError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers, read_xml, regular_file
@@ -363,7 +363,7 @@ def _geom(context: _Context, a: dict[str, str], where: str, role: str, frame: Pl
         if not thing:
             raise _Skipped(f"mesh {mesh!r} has no file (inline or generated meshes are not read)")
         if not os.path.exists(thing):
-            raise InputError(where, f"mesh {mesh!r}: {thing}: no such file",
+            raise ReadError(where, f"mesh {mesh!r}: {thing}: no such file",
                              "mesh files are found under the compiler's meshdir, relative to the model")
         regular_file(thing, where, f"mesh {mesh!r}:")
     elif kind in ("plane", "hfield", "sdf"):

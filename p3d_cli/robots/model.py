@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from p3d_cli.errors import InputError
+from p3d_cli.errors import InputError, ReadError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.xmltree import Document, Node
 
@@ -169,14 +169,14 @@ def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str, folde
             name, _, rest = uri[len(scheme):].partition("/")
             path = _in_package(name, rest, packages, variables, folder)
             if path is None:
-                raise InputError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
+                raise ReadError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
                                  f"give package_paths={name}=DIR (the folder of package {name})")
             return _regular(path, uri, where, folder)
     path = uri[len("file://"):] if uri.startswith("file://") else uri
     if not os.path.isabs(path):
         path = os.path.join(base, path)
     if not os.path.exists(path):
-        raise InputError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
+        raise ReadError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
                          "paths are relative to the description's folder")
     return _regular(path, uri, where, folder)
 
@@ -187,9 +187,9 @@ def _regular(path: str, uri: str, where: str, folder: bool) -> str:
     try:
         mode = os.stat(path).st_mode
     except OSError as exc:
-        raise InputError(where, f"mesh {uri}: {exc.strerror or exc}", "check the path") from None
+        raise ReadError(where, f"mesh {uri}: {exc.strerror or exc}", "check the path") from None
     if not (stat.S_ISREG(mode) or (folder and stat.S_ISDIR(mode))):
-        raise InputError(where, f"mesh {uri} is not a regular file (a folder, FIFO or device)", "name a mesh file")
+        raise ReadError(where, f"mesh {uri} is not a regular file (a folder, FIFO or device)", "name a mesh file")
     return path
 
 

@@ -27,7 +27,7 @@ import xml.parsers.expat
 from dataclasses import dataclass, field
 from typing import Iterator
 
-from p3d_cli.errors import FormatError, InputError
+from p3d_cli.errors import FormatError, InputError, ReadError
 
 #: The largest description (or included file) read, in bytes: real ones are well under 10 MB.
 MAX_FILE_BYTES = 256 << 20
@@ -304,9 +304,9 @@ def regular_file(path: str, where: str, what: str = "file") -> os.stat_result:
     try:
         info = os.stat(path)
     except OSError as exc:
-        raise InputError(where, f"{what} {path}: {exc.strerror or exc}", "check the path") from None
+        raise ReadError(where, f"{what} {path}: {exc.strerror or exc}", "check the path") from None
     if not stat.S_ISREG(info.st_mode):
-        raise InputError(where, f"{what} {path} is not a regular file (a folder, FIFO or device)",
+        raise ReadError(where, f"{what} {path} is not a regular file (a folder, FIFO or device)",
                          "name a regular file")
     return info
 
@@ -322,10 +322,10 @@ def read_xml(path: str, where: str | None = None) -> Node:
     try:
         info = os.stat(path)
     except OSError as exc:
-        raise InputError(where or path, f"{'' if where is None else path + ' '}cannot be read "
+        raise ReadError(where or path, f"{'' if where is None else path + ' '}cannot be read "
                          f"({exc.strerror or exc})", "check the path") from None
     if not stat.S_ISREG(info.st_mode):
-        raise InputError(where or path, f"{'' if where is None else path + ' '}is not a regular file (a folder, "
+        raise ReadError(where or path, f"{'' if where is None else path + ' '}is not a regular file (a folder, "
                          "FIFO or device)", "name a regular file")
     if info.st_size > MAX_FILE_BYTES:
         raise InputError(where or path, f"{path} holds {info.st_size} bytes, more than p3d reads "
@@ -334,7 +334,7 @@ def read_xml(path: str, where: str | None = None) -> Node:
         with open(path, "rb") as f:
             data = f.read(MAX_FILE_BYTES + 1)
     except OSError as exc:
-        raise InputError(where or path, f"{path} cannot be read ({exc.strerror or exc})", "check the path") from None
+        raise ReadError(where or path, f"{path} cannot be read ({exc.strerror or exc})", "check the path") from None
     if len(data) > MAX_FILE_BYTES:
         raise InputError(where or path, f"{path} grew past {MAX_FILE_BYTES} bytes while read", "give a robot "
                          "description")

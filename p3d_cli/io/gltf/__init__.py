@@ -81,8 +81,9 @@ def _local(doc: Document, node: dict, where: str) -> np.ndarray:
         return doc.numbers(node, "matrix", 16, where, []).reshape(4, 4).T
     out = np.eye(4)
     rotation = doc.numbers(node, "rotation", 4, where, [0.0, 0.0, 0.0, 1.0])
+    scale = doc.numbers(node, "scale", 3, where, [1.0, 1.0, 1.0])  # its own error, outside the try
     try:
-        out[:3, :3] = quaternion_matrix(rotation) * doc.numbers(node, "scale", 3, where, [1.0, 1.0, 1.0])
+        out[:3, :3] = quaternion_matrix(rotation) * scale
     except ValueError:
         raise doc.error(f"{where}.rotation", "is the zero quaternion") from None
     out[:3, 3] = doc.numbers(node, "translation", 3, where, [0.0, 0.0, 0.0])

@@ -236,6 +236,8 @@ class _Parser:
                 self.parser.Parse(chunk, not chunk)
             except expat.ExpatError as exc:
                 raise FormatError(self.where, f"{self.part} is not well-formed XML ({exc})", CORRUPT) from None
+            except FormatError:
+                raise  # the handlers' own, a ValueError too: as it is
             except (LookupError, ValueError) as exc:
                 # The XML declaration names an encoding Python lacks (LookupError) or one expat
                 # cannot read ("multi-byte encodings are not supported": UTF-7, Shift-JIS).

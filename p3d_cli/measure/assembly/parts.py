@@ -29,7 +29,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Any
 
-from p3d_cli.errors import InputError, P3DError, UsageError
+from p3d_cli.errors import InputError, P3DError, ReadError, UsageError
 from p3d_cli.geometry.placement import IDENTITY, Placement
 from p3d_cli.io.placements import placement_from_mapping
 from p3d_cli.measure.solid import names_assembly_file
@@ -251,7 +251,7 @@ def _part(entry, where: str, folder: str, seen: tuple[str, ...], loaded: dict) -
     else:
         path = value if os.path.isabs(value) else os.path.join(folder, value)
         if not os.path.isfile(path):
-            raise InputError(f"{where}.{kind}", f"no such file {path}", "paths are relative to the assembly file")
+            raise ReadError(f"{where}.{kind}", f"no such file {path}", "paths are relative to the assembly file")
         thing = load_assembly(path, seen, loaded) if kind == "assembly" else path
     name = entry.get("name", os.path.basename(value) if kind != "shape" else value)
     if not isinstance(name, (str, int)) or isinstance(name, bool):
