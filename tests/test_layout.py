@@ -7,6 +7,7 @@ module or inside a function, except inside the callbacks named below.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -53,7 +54,9 @@ def module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+@functools.lru_cache(maxsize=None)
 def modules(package: Path = PACKAGE) -> dict[str, ast.Module]:
+    """Every module's syntax tree, parsed once per package (the tests only read them)."""
     root = package.parent
     out = {}
     for path in package.rglob("*.py"):
@@ -99,6 +102,7 @@ def imports(name: str, tree: ast.Module, known: set[str], callbacks: bool = Fals
     return found
 
 
+@functools.lru_cache(maxsize=None)
 def import_graph(package: Path = PACKAGE) -> dict[str, dict[str, int]]:
     trees = modules(package)
     return {name: imports(name, tree, set(trees)) for name, tree in trees.items()}
