@@ -44,6 +44,7 @@ _API = {
     "Sphere": "p3d_cli.shapes",
     "Ellipsoid": "p3d_cli.shapes",
     "EllipticCylinder": "p3d_cli.shapes",
+    "Capsule": "p3d_cli.shapes",
     # pictures
     "picture": "p3d_cli.render.picture",
     "Picture": "p3d_cli.render.image",
@@ -142,4 +143,5 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.render.picture import picture
     from p3d_cli.repairs import RepairedMesh, RepairReport, repair, repair_file
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
-    from p3d_cli.shapes import SHAPES, Box, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge, parse_shape
+    from p3d_cli.shapes import (SHAPES, Box, Capsule, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge,
+                                parse_shape)

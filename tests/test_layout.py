@@ -253,3 +253,27 @@ def test_a_climb_is_found_even_deferred_but_not_in_a_callback(tmp_path, callback
                                   "measure/exact.py": "",
                                   "geometry/rotation.py": f"{callback}\n    from p3d_cli.measure import exact\n"})
     assert climbs(_graph(package)) == (["p3d_cli.geometry.rotation:2 -> p3d_cli.measure.exact"] if found else [])
+
+
+def test_every_shape_and_constraint_type_is_public():
+    """A shape class in the registry is a public name (``p3d.Capsule`` was missing once), and
+    every constraint type the registry names is one the public scene reader takes."""
+    import p3d_cli
+    from p3d_cli.constraints.registry import CONSTRAINT_TYPES
+    from p3d_cli.constraints.scene import parse_scene
+    from p3d_cli.shapes import SHAPES
+
+    missing = sorted(cls.__name__ for cls in SHAPES.values() if cls.__name__ not in p3d_cli.__all__)
+    assert not missing, f"shapes missing from p3d_cli.__all__: {missing}"
+    assert all(getattr(p3d_cli, cls.__name__) is cls for cls in SHAPES.values())
+    assert "parse_scene" in p3d_cli.__all__
+    for kind in CONSTRAINT_TYPES:
+        entry = {"type": kind, "a": "a", "b": "b", "attach_a": [0, 0, 0]}
+        if kind == "bar":
+            entry["attach_b"] = [0, 0, 1]
+        if kind == "hinge":
+            entry["axis_a"] = [0, 0, 1]
+        body = {"mass": 1.0, "inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}
+        scene = parse_scene({"bodies": {"a": dict(body), "b": {**body, "position": [0, 0, 2]}},
+                             "constraints": [entry]}, "scene.yaml", ".")
+        assert [type(c).__name__ for c in scene.constraints] and len(scene.constraints) == 1
