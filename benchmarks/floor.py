@@ -7,7 +7,8 @@ block totals; no checks of any kind (no finite test, no closed test, no error bo
 bounds), nothing kept. A whole process doing only that is the floor the benchmarks hold
 ``p3d props`` against (issue 32): p3d does all of it plus its checks.
 
-    python benchmarks/floor.py FILE        # binary STL, binary PLY (little-endian), ASCII STL
+    python benchmarks/floor.py FILE        # binary STL, binary PLY (little-endian), ASCII STL,
+                                           # GLB, 3MF (one mesh, no transforms: the floor's files)
 
 Prints the volume (so that the benchmarks can check it against p3d's).
 """
@@ -96,14 +97,62 @@ def stl_ascii_blocks(f):
             return
 
 
+def glb_blocks(f):
+    """The first primitive of a GLB's first mesh: its POSITION and indices accessors read
+    straight from the binary chunk (no node transforms, no sparse accessors: the floor's files)."""
+    import json
+
+    data = f.read()
+    length = int(np.frombuffer(data[12:16], "<u4")[0])
+    doc = json.loads(data[20:20 + length])
+    binary = memoryview(data)[20 + length + 8:]
+    kinds = {5121: "u1", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
+
+    def accessor(i: int) -> np.ndarray:
+        a = doc["accessors"][i]
+        view = doc["bufferViews"][a["bufferView"]]
+        width = {"SCALAR": 1, "VEC3": 3}[a["type"]]
+        start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+        dtype = np.dtype(kinds[a["componentType"]])
+        return np.frombuffer(binary, dtype, a["count"] * width, start).reshape(-1, width)
+
+    primitive = doc["meshes"][0]["primitives"][0]
+    vertices = accessor(primitive["attributes"]["POSITION"])
+    faces = accessor(primitive["indices"]).reshape(-1, 3)
+    for start in range(0, len(faces), BLOCK):
+        yield vertices[faces[start:start + BLOCK]]
+
+
+def threemf_blocks(path: str):
+    """The vertices and triangles of a 3MF's model part, found by regular expressions over the
+    XML text and parsed by numpy's float parser (no XML tree, no transforms, no components)."""
+    import re
+    import zipfile
+
+    with zipfile.ZipFile(path) as z:
+        name = next(n for n in z.namelist() if n.lower().endswith(".model"))
+        text = z.read(name)
+    numbers = re.findall(rb'<vertex x="([^"]*)" y="([^"]*)" z="([^"]*)"', text)
+    vertices = np.array(numbers, dtype=np.float64)
+    corners = re.findall(rb'<triangle v1="([^"]*)" v2="([^"]*)" v3="([^"]*)"', text)
+    faces = np.array(corners, dtype=np.int64)
+    for start in range(0, len(faces), BLOCK):
+        yield vertices[faces[start:start + BLOCK]]
+
+
 def main(path: str) -> None:
+    if path.lower().endswith(".3mf"):
+        print(repr(float(integrate(threemf_blocks(path)))))
+        return
     with open(path, "rb") as f:
         head = f.read(84)
         f.seek(0, 2)
         size = f.tell()
         f.seek(0)
         n = int(np.frombuffer(head[80:84], "<u4")[0]) if len(head) == 84 else -1
-        if head.startswith(b"ply"):
+        if head.startswith(b"glTF"):
+            volume = integrate(glb_blocks(f))
+        elif head.startswith(b"ply"):
             volume = integrate(ply_binary_blocks(f))
         elif 84 + 50 * n == size:
             volume = integrate(stl_binary_blocks(f, n))
