@@ -47,10 +47,11 @@ class MeshSource:
     object_kind : str
         What the file calls those objects (``nodes``, ``build items``), for the record.
     indexed : tuple or None
-        For an indexed mesh (``indexed_source``): its ``(vertices, face pieces)``, so that a
-        reader of the indices (the compiled kernels) need not gather ``vertices[faces]``. A
-        copy whose ``read_blocks`` yields anything else (or must see every block, as placed
-        bounds do) sets it to None, or the kernels would read the stale indexed mesh instead.
+        For an indexed mesh (``indexed_source``): its ``(vertices, face pieces, reader)``, so
+        that a reader of the indices (the compiled kernels) need not gather
+        ``vertices[faces]``. ``reader`` is the ``read_blocks`` they stand for: a copy with
+        other blocks (placed, projected, replaced) no longer counts as indexed
+        (``indexed_arrays``), whoever makes it.
     """
 
     format: str
@@ -65,10 +66,20 @@ class MeshSource:
     object_kind: str = ""
     indexed: tuple | None = None
 
+    def indexed_arrays(self) -> tuple[np.ndarray, tuple[np.ndarray, ...]] | None:
+        """``(vertices, face pieces)`` while ``read_blocks`` is still the indexed mesh's own;
+        None otherwise (not indexed, or a copy whose blocks differ)."""
+        if self.indexed is None or self.indexed[2] is not self.read_blocks:
+            return None
+        return self.indexed[0], self.indexed[1]
+
     def index_blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         """``(vertices, faces)`` of every block of an indexed mesh: ``vertices[faces]`` is
-        the block ``read_blocks`` yields."""
-        vertices, pieces = self.indexed
+        the block ``read_blocks`` yields (``indexed_arrays`` must not be None)."""
+        arrays = self.indexed_arrays()
+        if arrays is None:
+            raise ValueError("index_blocks of a source whose blocks are not its indexed mesh's")
+        vertices, pieces = arrays
         for block in _blocks_of(list(pieces), BLOCK):
             yield vertices, block
 
@@ -130,7 +141,7 @@ def indexed_source(fmt: str, vertices: np.ndarray, faces, dtype: str, warnings=(
             yield vertices[block]
 
     return MeshSource(fmt, sum(len(piece) for piece in pieces), dtype, read_blocks, None, tuple(warnings),
-                      indexed=(vertices, tuple(pieces)))
+                      indexed=(vertices, tuple(pieces), read_blocks))
 
 
 def _blocks_of(pieces: list[np.ndarray], size: int) -> Iterator[np.ndarray]:

@@ -168,9 +168,9 @@ def watch_bounds(mesh: MeshSource, placement: Placement) -> tuple[MeshSource, Ca
             return None
         return Bounds(np.min([b.min for b in seen], axis=0), np.max([b.max for b in seen], axis=0))
 
-    # indexed=None: the blocks must stream past the projection, so the kernels' indexed road
-    # (which reads the vertices and faces, not read_blocks) is not taken for a placed mesh.
-    return dataclasses.replace(mesh, read_blocks=blocks, indexed=None), bounds
+    # Another read_blocks: the kernels' indexed road (which reads the vertices and faces, not
+    # the blocks) is not taken for it (MeshSource.indexed_arrays), so every block streams past.
+    return dataclasses.replace(mesh, read_blocks=blocks), bounds
 
 
 def solid_moments(solid: Solid) -> Moments:

@@ -423,7 +423,7 @@ def _mesh_setup(solid: Solid, placement: Placement):
         triangles = tets[:, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]].reshape(-1, 3, 3)
     else:
         triangles = mesh.triangles()    # read once; the analysis below reuses the array
-        mesh = dataclasses.replace(mesh, read_blocks=lambda: iter([triangles]), indexed=None)
+        mesh = dataclasses.replace(mesh, read_blocks=lambda: iter([triangles]))
     found = analyze(mesh, mesh.where, rescale=True)     # scaled moments: the warnings are scale-free
     facts = mesh_facts(solid, found)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)

@@ -219,9 +219,10 @@ def _keys_in_order(source: MeshSource) -> np.ndarray:
 
 def _indexed(source: MeshSource) -> bool:
     """Whether the kernels read the source's ``(vertices, faces)`` as they are."""
-    if source.indexed is None:
+    arrays = source.indexed_arrays()
+    if arrays is None:
         return False
-    vertices, pieces = source.indexed
+    vertices, pieces = arrays
     return (isinstance(vertices, np.ndarray) and vertices.ndim == 2 and vertices.shape[1] == 3
             and vertices.dtype in (np.float32, np.float64) and vertices.dtype.isnative
             and all(isinstance(p, np.ndarray) and p.ndim == 2 and p.shape[1] == 3 and p.dtype.isnative
