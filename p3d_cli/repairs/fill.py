@@ -138,30 +138,37 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
         # winding), simple whenever it has an area: only the exact area test is left. The many
         # one-face holes of a scan or a damaged file are filled without the polygon's machinery.
         triangles = vertices[[2, 0, 1]].reshape(1, 3)
-        if zero_area_faces(columns(corners[[2, 0, 1]].reshape(1, 3, 3))).size:
-            return left("every triangulation of it would repeat an edge the mesh already has "
-                        "(making it non-manifold) or make a face of zero area", flat)
-        return Hole(vertices, k, where, size, flat, triangles, None)
-    axis = int(np.argmax(np.abs(normal)))
-    plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
-    safe = in_safe_range(plane)
-    if not _simple(plane, safe):
-        if policy != "any":
-            return left("seen along its normal the loop crosses itself", flat)
-        # A loop bent far from any coordinate plane (a hole across a fold) can still be simple
-        # seen along its own normal: take coordinates in that plane (rounded, so the
-        # triangulation is only a choice, and its faces are tested exactly in 3-D after).
-        plane = _in_own_plane(relative, normal / length)
-        safe = in_safe_range(plane)
-        if not _simple(plane, safe):
-            return left("seen along its normal the loop crosses itself", flat)
-    triangles = _ear_clipping(plane, vertices, safe, has_edge)
+    else:
+        found = _triangulated(corners, relative, normal, length, vertices, policy, has_edge)
+        if isinstance(found, str):
+            return left(found, flat)
+        triangles = found
     if triangles is not None and zero_area_faces(columns(np.asarray(points, dtype=np.float64)[triangles])).size:
         triangles = None
     if triangles is None:
         return left("every triangulation of it would repeat an edge the mesh already has "
                     "(making it non-manifold) or make a face of zero area", flat)
     return Hole(vertices, k, where, size, flat, triangles, None)
+
+
+def _triangulated(corners: np.ndarray, relative: np.ndarray, normal: np.ndarray, length: float,
+                  vertices: np.ndarray, policy: str, has_edge) -> np.ndarray | str | None:
+    """Ear clipping of a loop of four corners or more, seen along its normal: its triangles,
+    None when clipping gets stuck, or why the loop cannot be filled (it crosses itself)."""
+    axis = int(np.argmax(np.abs(normal)))
+    plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
+    safe = in_safe_range(plane)
+    if not _simple(plane, safe):
+        if policy != "any":
+            return "seen along its normal the loop crosses itself"
+        # A loop bent far from any coordinate plane (a hole across a fold) can still be simple
+        # seen along its own normal: take coordinates in that plane (rounded, so the
+        # triangulation is only a choice, and its faces are tested exactly in 3-D after).
+        plane = _in_own_plane(relative, normal / length)
+        safe = in_safe_range(plane)
+        if not _simple(plane, safe):
+            return "seen along its normal the loop crosses itself"
+    return _ear_clipping(plane, vertices, safe, has_edge)
 
 
 def _in_own_plane(relative: np.ndarray, unit_normal: np.ndarray) -> np.ndarray:
