@@ -36,6 +36,7 @@ _FACE = {
     "load_assembly": "p3d_cli.measure.assembly.parts",
     "parts_assembly": "p3d_cli.measure.assembly.parts",
     "placed_parts": "p3d_cli.measure.assembly.whole",
+    "at_mass": "p3d_cli.measure.assembly.whole",
 }
 
 __all__ = list(_FACE)
@@ -54,7 +55,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # what type checkers and readers see; nothing is imported at run time
     from p3d_cli.measure.assembly.parts import Assembly, Part, combine, find_assembly, load_assembly, parts_assembly
-    from p3d_cli.measure.assembly.whole import placed_parts
+    from p3d_cli.measure.assembly.whole import at_mass, placed_parts
     from p3d_cli.measure.exact import solid_moments
     from p3d_cli.measure.measurements import METHODS, bounds, check, check_props_options, props, self_intersections
     from p3d_cli.measure.solid import Solid, as_solid, names_assembly_file

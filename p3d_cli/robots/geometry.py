@@ -16,7 +16,7 @@ import numpy as np
 from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.measure import Assembly, Part
-from p3d_cli.results import MassProperties, PropsResult
+from p3d_cli.results import PropsResult
 from p3d_cli.robots.model import Geom, Link
 
 
@@ -134,18 +134,22 @@ def _measured(assembly: Assembly, link: Link, role: str, source: str, density, m
     if result.facts.closed is False and not problems:
         problems.append("a mesh is not closed")
     if mass is not None and result.properties.mass > 0:
-        result = dataclasses.replace(result, properties=_at_mass(result.properties, mass, source, link))
+        result = _at_mass(result, mass, source, link)
     return LinkGeometry(result, not problems, tuple(problems))
 
 
-def _at_mass(p: MassProperties, mass: float, source: str, link: Link) -> MassProperties:
-    # Every moment of mass is linear in the density: scale them all to the mass asked for.
+def _at_mass(result: PropsResult, mass: float, source: str, link: Link) -> PropsResult:
+    from p3d_cli.measure import at_mass
+
+    # Every moment of mass is linear in the density: scale them all, and their bounds, to the
+    # mass asked for.
     with np.errstate(all="ignore"):  # overflow is refused just below
-        props = scaled(p, mass / p.mass)
+        scaled = at_mass(result, mass)
+    props = scaled.properties
     if not (np.isfinite(props.mass) and np.all(np.isfinite(props.inertia))):
         raise RangeError(f"{source}: link {link.name!r}", f"mass {mass!r} makes the inertia overflow float64",
                          "check the mass and its unit")
-    return props
+    return scaled
 
 
 def _hulled(assembly: Assembly, link: Link, role: str, source: str, density, mass,
@@ -189,13 +193,7 @@ def _shell(assembly: Assembly, link: Link, source: str, mass, first: LinkGeometr
         bounds = Bounds(triangles.reshape(-1, 3).min(axis=0), triangles.reshape(-1, 3).max(axis=0))
         result = PropsResult(MeshFacts(where, "assembly", len(triangles), None, bounds), properties)
     else:
-        result = dataclasses.replace(first.result, properties=properties)
+        # The solid's bounds and parts are not the shell's: a thin shell states none.
+        result = dataclasses.replace(first.result, properties=properties, uncertainty=None, parts=())
     return LinkGeometry(result, True, first.problems, "thin shell")
 
-
-def scaled(p: MassProperties, k: float) -> MassProperties:
-    """``p`` with its density, so its mass and every moment of mass, multiplied by ``k``."""
-    times = lambda a: None if a is None else a * k
-    return dataclasses.replace(p, density=p.density * k, mass=p.mass * k, inertia=times(p.inertia),
-                               inertia_origin=times(p.inertia_origin), principal_moments=times(p.principal_moments),
-                               second_moments=times(p.second_moments), inertia_about=times(p.inertia_about))

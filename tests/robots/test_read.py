@@ -210,3 +210,33 @@ def test_sdf_pose_forms_agree(tmp_path):
     half = np.sqrt(0.5)
     np.testing.assert_allclose(inertia(f'<pose rotation_format="quat_xyzw">0 0 0 0 0 {half} {half}</pose>'), rpy,
                                atol=1e-15)
+
+
+def test_a_link_scaled_to_its_mass_scales_its_bounds_too(tmp_path):
+    """``mass=`` measures at density 1, then scales every moment of mass to the mass asked for:
+    the stated bounds must scale with them (and take the factor's own rounding), or a heavy
+    link's inertia error exceeds a bound stated for density 1."""
+    from fractions import Fraction
+
+    from helpers.exact_assembly import ExactPart, error_ratios, whole_of
+
+    rng = np.random.default_rng(7)
+    corners = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]])
+    corners = corners + rng.uniform(-0.01, 0.01, corners.shape) + [3.1, -2.7, 1.3]
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    triangles = corners[faces]
+    (tmp_path / "tet.obj").write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in corners.tolist())
+                                      + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    (tmp_path / "r.urdf").write_text('<robot name="r"><link name="a"><collision><geometry>'
+                                     '<mesh filename="tet.obj"/></geometry></collision></link></robot>')
+    robot = load_robot(tmp_path / "r.urdf")
+    mass = 1.0e6
+    light = measure_link(robot.links[0], "collision", robot.path, density=1.0)
+    heavy = measure_link(robot.links[0], "collision", robot.path, mass=mass)
+    assert heavy.solid and heavy.result.properties.mass == pytest.approx(mass, rel=1e-15)
+    k = mass / light.result.properties.mass
+    assert np.all(heavy.result.uncertainty["inertia"] >= k * light.result.uncertainty["inertia"])
+    assert heavy.result.uncertainty["mass"] >= k * light.result.uncertainty["mass"]
+    exact = ExactPart.of_triangles(triangles)
+    exact = ExactPart(exact.volume, exact.center, exact.central, Fraction(mass) / exact.volume)
+    assert max(error_ratios(heavy.result, whole_of(exact)).values()) <= 1.0

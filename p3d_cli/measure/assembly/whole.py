@@ -231,6 +231,21 @@ def _rescaled(p: MassProperties, k: float) -> MassProperties:
                    second_moments=times(p.second_moments), inertia_about=times(p.inertia_about))
 
 
+def at_mass(result: PropsResult, mass: float) -> PropsResult:
+    """``result`` with its density, so its mass and every moment of mass, scaled to ``mass`` (its
+    parts' too, by the same factor: one density over them all, as ``mass=`` gives an assembly).
+    Every stated bound grows with the factor and its own rounding, which is the measured mass's
+    bound relative to it. ``result.properties.mass`` must be positive."""
+    p = result.properties
+    k = mass / p.mass
+    k_error = _factor_error(mass, [p.mass], [result.uncertainty], False) if result.uncertainty is not None else 0.0
+    parts = tuple(replace(r, properties=_rescaled(r.properties, k),
+                          uncertainty=_rescaled_uncertainty(r.uncertainty, r.properties, k, k_error))
+                  for r in result.parts)
+    return replace(result, properties=_rescaled(p, k), parts=parts,
+                   uncertainty=_rescaled_uncertainty(result.uncertainty, p, k, k_error))
+
+
 def _factor_error(target: float, masses: list, bounds: list, converted: bool) -> float:
     """Relative error of ``k = target / Σ m``: the masses' bounds and the sum's rounding, the
     division's, and the target's own when it was converted from a unit."""
