@@ -51,6 +51,7 @@ def register(cls: type[Shape]) -> type[Shape]:
 for _cls in vars(classes).values():
     if isinstance(_cls, type) and issubclass(_cls, ShapeRecord):
         register(_cls)
+del _cls
 
 
 def forms() -> dict[str, str]:
