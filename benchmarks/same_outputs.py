@@ -100,6 +100,11 @@ def cases() -> list[tuple]:
     return out
 
 
+#: ``python -m p3d_cli`` run from ``tree`` whatever the working folder (``sys.path[0]`` is it).
+RUNNER = ("import runpy, sys; sys.path[0] = {tree!r}; "
+          "runpy.run_module('p3d_cli', run_name='__main__', alter_sys=True)")
+
+
 def run(tree: Path, arguments: list[str], inputs: dict[str, str] | None = None) -> tuple:
     """Exit status, stdout, stderr and the files written of ``p3d ARGUMENTS`` run from ``tree``."""
     env = {**os.environ, "PYTHONPATH": str(tree), "PYTHONHASHSEED": "0", "COLUMNS": "100"}
@@ -108,7 +113,9 @@ def run(tree: Path, arguments: list[str], inputs: dict[str, str] | None = None) 
         args = [a.replace("{out}", folder) for a in arguments]
         for name, text in (inputs or {}).items():
             (Path(folder) / name).write_text(text)
-        done = subprocess.run([sys.executable, "-m", "p3d_cli", *args], cwd=HERE, env=env,
+        # Not ``python -m p3d_cli``: -m puts the working folder (this tree) first on the path, ahead
+        # of PYTHONPATH, so the baseline run would import this tree too and every case would agree.
+        done = subprocess.run([sys.executable, "-c", RUNNER.format(tree=str(tree)), *args], cwd=HERE, env=env,
                               capture_output=True, stdin=subprocess.DEVNULL)
         files = {p.name: p.read_bytes() for p in Path(folder).iterdir() if p.is_file() and p.name not in (inputs or {})}
     swap = lambda b: b.replace(folder.encode(), b"{out}")  # noqa: E731

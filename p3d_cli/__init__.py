@@ -37,14 +37,7 @@ _API = {
     "MeshSource": "p3d_cli.io.source",
     "FORMATS": "p3d_cli.io.formats",
     "SHAPES": "p3d_cli.shapes",
-    "Box": "p3d_cli.shapes",
-    "Wedge": "p3d_cli.shapes",
-    "Corner": "p3d_cli.shapes",
-    "Cylinder": "p3d_cli.shapes",
-    "Sphere": "p3d_cli.shapes",
-    "Ellipsoid": "p3d_cli.shapes",
-    "EllipticCylinder": "p3d_cli.shapes",
-    "Capsule": "p3d_cli.shapes",
+    # and every shape class by its own name (``p3d.Box``): ``_shape_classes``, from ``SHAPES``
     # pictures
     "picture": "p3d_cli.render.picture",
     "Picture": "p3d_cli.render.image",
@@ -94,12 +87,21 @@ _API = {
     "CheckFailedError": "p3d_cli.errors",
 }
 
-__all__ = ["__version__", *_API]
+
+
+def _shape_classes() -> dict[str, Any]:
+    """Class name -> shape class, for every class in ``SHAPES`` (which the classes build)."""
+    return importlib.import_module("p3d_cli.shapes").public_classes()
 
 
 def __getattr__(name: str) -> Any:
+    if name == "__all__":     # every public name; the shapes' are known once they are imported
+        return ["__version__", *_API, *_shape_classes()]
     module = _API.get(name)
     if module is None:
+        shapes = _shape_classes()
+        if name in shapes:
+            return shapes[name]   # not kept: SHAPES stays the one record of which shapes there are
         raise AttributeError(f"module 'p3d_cli' has no attribute {name!r}")
     value = getattr(importlib.import_module(module), name)
     globals()[name] = value  # the next look-up is a plain attribute
@@ -107,7 +109,7 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_API))
+    return sorted(set(globals()) | set(_API) | set(_shape_classes()))
 
 
 if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at run time
@@ -143,5 +145,5 @@ if TYPE_CHECKING:  # what type checkers and editors see; nothing is imported at 
     from p3d_cli.render.picture import picture
     from p3d_cli.repairs import RepairedMesh, RepairReport, repair, repair_file
     from p3d_cli.results import Bounds, BoundsResult, MassProperties, MeshFacts, Moments, PropsResult
-    from p3d_cli.shapes import (SHAPES, Box, Capsule, Corner, Cylinder, Ellipsoid, EllipticCylinder, Sphere, Wedge,
-                                parse_shape)
+    from p3d_cli.shapes import SHAPES, parse_shape
+    from p3d_cli.shapes.classes import *  # noqa: F403 - every shape class, by its own name

@@ -6,7 +6,7 @@ import functools
 
 import click
 
-from p3d_cli import measure
+from p3d_cli import measure, shapes
 from p3d_cli.cli import output
 from p3d_cli.cli.main import error_message
 from p3d_cli.cli.options import (
@@ -28,22 +28,26 @@ from p3d_cli.cli.settings import WarningFilter, settings_for
 from p3d_cli.results import bounds_record
 
 
+def _and(names: list[str]) -> str:
+    """``a, b and c``."""
+    return ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else "".join(names)
+
+
 @click.command(help=f"""Exact axis-aligned bounds of meshes and shapes, after --scale, a rotation
 and --translate.
 
-Exact for every class: meshes, box, wedge and corner by projecting their vertices; sphere,
-cylinder, ellipsoid and ecylinder by closed forms. {PLACEMENT_HELP} Rotations are active, about
+Exact for every class: meshes, {_and(shapes.names(polyhedral=True))} by projecting their vertices;
+{_and(shapes.names(polyhedral=False))} by closed forms. {PLACEMENT_HELP} Rotations are active, about
 the world origin, right-hand rule: --rotate z:90 takes the x axis to the y axis; several
 --rotate turns are each applied after the previous one about the fixed world axes.
 
 \b
-Inputs: mesh files, - for standard input, or shape specs:
-  box, wedge, corner, cylinder, sphere     unit scale (the canonical [-1,1]³ shape)
-  box:SX,SY,SZ                             half-extents: box:1,2,3 measures 2 x 4 x 6
-  sphere:R   cylinder:R,R,H                a sphere keeps sx=sy=sz, a cylinder sx=sy
-  ellipsoid:A,B,C   ecylinder:A,B,H        their exact generalisations
-  capsule:R,H                              radius R about z, H the cylinder's half-length
-A file named like a spec is reached as ./box. Directories are searched for mesh files, and
+Inputs: mesh files, - for standard input, or shape specs, a name alone being unit scale (the
+canonical [-1,1]³ shape) and scale factors half-extents (box:1,2,3 measures 2 x 4 x 6):
+{shapes.spec_lines()}
+
+A sphere keeps sx=sy=sz and a cylinder sx=sy; ellipsoid and ecylinder are their exact
+generalisations. A file named like a spec is reached as ./box. Directories are searched for mesh files, and
 --files-from, --jobs, --dask and --csv work as for p3d props (see docs/batch.md).
 
 \b

@@ -206,13 +206,15 @@ def placement_options(f):
     command as ``placement: p3d_cli.geometry.placement.Placement`` and ``tessellate: int | None``."""
     import functools
 
+    from p3d_cli import shapes
+
     @functools.wraps(f)
     def command(*args, scale, turns, quat, rpy, translate, tessellate, **kwargs):
         return f(*args, placement=make_placement(scale, turns, quat, translate, rpy),
                  tessellate=tessellate, **kwargs)
 
     command = click.option("--tessellate", type=click.IntRange(min=3), default=None, metavar="N",
-                           help="Replace a round shape spec (sphere, cylinder, ellipsoid, ecylinder, capsule) "
+                           help=f"Replace a round shape spec ({', '.join(shapes.names(polyhedral=False))}) "
                                 "by an inscribed polyhedron of N segments, to see how far the "
                                 "polyhedral approximation is from the exact shape.")(command)
     command = click.option("--translate", type=VECTOR3, default=None, metavar="X,Y,Z",

@@ -93,8 +93,8 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
       p3d props a.stl b.stl --combine --units mm --density 2.7g/cm^3
       p3d props export.stl --shells --json
 
-    Shape specs (box, wedge, corner, cylinder, sphere, ellipsoid, ecylinder; see p3d bounds
-    --help) give exact closed forms. --scale, --rotate/--quat and --translate place the solid
+    Shape specs (box:1,2,3, sphere:0.5; p3d bounds --help lists them all) give exact closed
+    forms. --scale, --rotate/--quat and --translate place the solid
     (scale first, then rotation about the world origin, then translation); the centre of mass
     and inertia reported are the placed solid's (I' = R I Rᵀ).
 

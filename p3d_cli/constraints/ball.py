@@ -13,7 +13,15 @@ import numpy as np
 
 from p3d_cli.constraints.rotation import skew
 
+#: The keys of its scene entry besides ``type``, ``a`` and ``b`` (docs/solve.md).
+KEYS = ("attach_a", "attach_b")
+#: Rows per constraint.
 EQUATIONS = 3
+
+
+def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
+    """Its own values of a scene entry (``ConstraintSpec`` fields): none beyond the attachments."""
+    return {}
 
 
 def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:

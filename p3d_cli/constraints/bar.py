@@ -10,11 +10,37 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.constraints.rotation import cross
-
+from p3d_cli.constraints import values
+from p3d_cli.constraints.rotation import cross, quat_to_matrix
 from p3d_cli.errors import SceneError
 
+#: The keys of its scene entry besides ``type``, ``a`` and ``b`` (docs/solve.md).
+KEYS = ("attach_a", "attach_b", "length")
+#: Rows per constraint.
 EQUATIONS = 1
+
+
+def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
+    """Its own values of a scene entry (``ConstraintSpec`` fields): the length, by default the
+    distance between the attachment points where the scene places the bodies."""
+    world_a = body_a.position + quat_to_matrix(body_a.rotation) @ attach_a
+    world_b = body_b.position + quat_to_matrix(body_b.rotation) @ attach_b
+    with np.errstate(all="ignore"):     # an overflow is checked for just below
+        gap = float(np.linalg.norm(world_b - world_a))
+    if not np.isfinite(gap):
+        raise SceneError(place, "the distance between the bar's attachment points overflows float64",
+                         "give positions and attachments in units that keep them nearer 1")
+    if spec.get("length") is not None:
+        length = values.number(spec["length"], f"{place}.length")
+        if length <= 0:
+            raise SceneError(f"{place}.length", f"a bar of length {spec['length']!r} has no direction",
+                             "give a positive length, or use a ball joint to join two points")
+    else:
+        length = gap
+    if gap == 0.0:
+        raise SceneError(place, "the bar's two attachment points coincide, so it has no direction",
+                         "place the bodies so the points are apart, or use a ball joint")
+    return {"length": length}
 
 
 def direction(geo) -> np.ndarray:

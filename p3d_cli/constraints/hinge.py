@@ -19,10 +19,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.constraints import ball
+from p3d_cli.constraints import ball, values
 from p3d_cli.constraints.rotation import cross
 
+#: The keys of its scene entry besides ``type``, ``a`` and ``b`` (docs/solve.md).
+KEYS = ("attach_a", "attach_b", "axis_a", "axis_b")
+#: Rows per constraint.
 EQUATIONS = 5
+
+
+def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
+    """Its own values of a scene entry (``ConstraintSpec`` fields): the unit axes in each body's
+    frame (a missing one is the other's, carried into its body's frame)."""
+    axis_a, axis_b = values.pair(spec, "axis", place, body_a, body_b, point=False)
+    return {"axis_a": values.unit_vector(axis_a), "axis_b": values.unit_vector(axis_b)}   # nonzero, finite
 
 
 def frame(geo) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:

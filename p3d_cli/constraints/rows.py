@@ -16,10 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.errors import SceneError
-
-#: Rows per constraint type (the modules' ``EQUATIONS``).
-SIZES = {"ball": 3, "hinge": 5, "bar": 1}
 
 
 class Geometry:
@@ -76,7 +74,7 @@ class RowSet:
         self.where = [c.where for c in specs]
         self.a = np.array([index[c.a] for c in specs], dtype=np.intp)
         self.b = np.array([index[c.b] for c in specs], dtype=np.intp)
-        sizes = np.array([SIZES[c.type] for c in specs], dtype=np.intp)
+        sizes = np.array([CONSTRAINT_TYPES[c.type].EQUATIONS for c in specs], dtype=np.intp)
         self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
         self.m = int(self.offsets[-1])
         self.row_constraint = np.repeat(np.arange(len(specs)), sizes)

@@ -17,6 +17,7 @@ import math
 
 from p3d_cli.constraints.body_kernels import (carry_spin, carry_spin_diagonal, conjugate, conjugate_diagonal,
                                               nudge, turn)
+from p3d_cli.constraints import ball, bar, hinge
 from p3d_cli.constraints.rows import bar_met_error
 
 #: The per-body kernels live in ``body_kernels``; these names are kept here for their callers.
@@ -152,13 +153,13 @@ def _point(com, rot, i: int, off):
 
 class Ball(Joint):
     __slots__ = ()
-    kind, rows = "ball", 3
+    kind, rows = "ball", ball.EQUATIONS
     evaluate = Joint.points
 
 
 class Bar(Joint):
     __slots__ = ("length",)
-    kind, rows = "bar", 1
+    kind, rows = "bar", bar.EQUATIONS
     length: float
 
     def evaluate(self, com, rot) -> list[float]:
@@ -188,7 +189,7 @@ class Bar(Joint):
 
 class Hinge(Joint):
     __slots__ = ("axis_a", "axis_b", "z_a", "z_b", "along_a", "along_b")
-    kind, rows = "hinge", 5
+    kind, rows = "hinge", hinge.EQUATIONS
     axis_a: list
     axis_b: list
     z_a: tuple | None

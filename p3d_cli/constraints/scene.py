@@ -13,19 +13,13 @@ from typing import Any
 import numpy as np
 
 from p3d_cli.constraints import values
-from p3d_cli.constraints.rotation import quat_to_matrix
+from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.errors import InputError, SceneError
 from p3d_cli.io.yaml_loader import read_yaml
 
 TOP_KEYS = ("gravity", "bodies", "constraints")
 BODY_KEYS = ("shape", "parts", "density", "mass", "inertia", "center_of_mass", "fixed", "position",
              "rotation", *values.POSE_KEYS, "velocity", "angular_velocity")
-#: Constraint type -> the keys it takes besides ``type``, ``a`` and ``b``.
-CONSTRAINT_KEYS = {
-    "ball": ("attach_a", "attach_b"),
-    "hinge": ("attach_a", "attach_b", "axis_a", "axis_b"),
-    "bar": ("attach_a", "attach_b", "length"),
-}
 
 
 @dataclass(frozen=True)
@@ -92,7 +86,7 @@ class ConstraintSpec:
     where : str
         ``scene.yaml: constraints[<index>]``, for messages.
     type : str
-        ``ball``, ``hinge`` or ``bar``.
+        A name of ``CONSTRAINT_TYPES``: ``ball``, ``hinge`` or ``bar``.
     a, b : str
         Body names.
     attach_a, attach_b : (3,) float64
@@ -100,6 +94,8 @@ class ConstraintSpec:
         Unit hinge axes (hinge only).
     length : float or None
         Bar length (bar only).
+
+    The fields after ``attach_b`` are what a type's ``read`` gives (its module's own values).
     """
 
     index: int
@@ -301,11 +297,12 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
         raise SceneError(place, f"expected a mapping, got {values.describe(spec)}",
                          "write {type: ball, a: base, b: arm, attach_a: [..], attach_b: [..]}")
     kind = spec.get("type")
-    if not isinstance(kind, str) or kind not in CONSTRAINT_KEYS:
+    if not isinstance(kind, str) or kind not in CONSTRAINT_TYPES:
         what = ("has no type" if kind is None else f"unknown constraint type {kind!r}" if isinstance(kind, str)
                 else f"expected a type name, got {values.describe(kind)}")
-        raise SceneError(f"{place}.type", what, "use one of: " + ", ".join(CONSTRAINT_KEYS))
-    allowed = ("type", "a", "b") + CONSTRAINT_KEYS[kind]
+        raise SceneError(f"{place}.type", what, "use one of: " + ", ".join(CONSTRAINT_TYPES))
+    module = CONSTRAINT_TYPES[kind]          # the type's keys and its own values are its module's
+    allowed = ("type", "a", "b") + module.KEYS
     _known_keys(spec, allowed, where, f"constraints[{index}].")
     names = []
     for side in ("a", "b"):
@@ -324,52 +321,6 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
     if bodies[a].fixed and bodies[b].fixed:
         raise SceneError(place, f"links two fixed bodies ({a!r}, {b!r}), so it can never act",
                          "remove it, or make one body free")
-    attach_a, attach_b = _pair(spec, "attach", place, bodies[a], bodies[b], point=True)
-    axis_a = axis_b = length = None
-    if kind == "hinge":
-        axis_a, axis_b = _pair(spec, "axis", place, bodies[a], bodies[b], point=False)
-        axis_a, axis_b = values.unit_vector(axis_a), values.unit_vector(axis_b)   # nonzero, finite
-    if kind == "bar":
-        world_a = bodies[a].position + quat_to_matrix(bodies[a].rotation) @ attach_a
-        world_b = bodies[b].position + quat_to_matrix(bodies[b].rotation) @ attach_b
-        with np.errstate(all="ignore"):     # an overflow is checked for just below
-            gap = float(np.linalg.norm(world_b - world_a))
-        if not np.isfinite(gap):
-            raise SceneError(place, "the distance between the bar's attachment points overflows float64",
-                             "give positions and attachments in units that keep them nearer 1")
-        if spec.get("length") is not None:
-            length = values.number(spec["length"], f"{place}.length")
-            if length <= 0:
-                raise SceneError(f"{place}.length", f"a bar of length {spec['length']!r} has no direction",
-                                 "give a positive length, or use a ball joint to join two points")
-        else:
-            length = gap
-        if gap == 0.0:
-            raise SceneError(place, "the bar's two attachment points coincide, so it has no direction",
-                             "place the bodies so the points are apart, or use a ball joint")
-    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, axis_a, axis_b, length, place)
-
-
-def _pair(spec: dict, stem: str, place: str, body_a: BodySpec, body_b: BodySpec, point: bool):
-    """``<stem>_a`` and ``<stem>_b``; a missing one defaults to the other's world value,
-    carried into its body's frame (the joint is assembled where the scene places it)."""
-    key_a, key_b = f"{stem}_a", f"{stem}_b"
-    given_a, given_b = spec.get(key_a) is not None, spec.get(key_b) is not None
-    if not (given_a or given_b):
-        raise SceneError(f"{place}.{key_a}", "missing",
-                         f"give {key_a} and {key_b} (each in its own body's frame)")
-    va = values.vector(spec[key_a], f"{place}.{key_a}", nonzero=not point) if given_a else None
-    vb = values.vector(spec[key_b], f"{place}.{key_b}", nonzero=not point) if given_b else None
-    ra, rb = quat_to_matrix(body_a.rotation), quat_to_matrix(body_b.rotation)
-    with np.errstate(all="ignore"):     # an overflow is checked for just below
-        if va is None:
-            world = rb @ vb + (body_b.position if point else 0.0)
-            va = ra.T @ (world - (body_a.position if point else 0.0))
-        if vb is None:
-            world = ra @ va + (body_a.position if point else 0.0)
-            vb = rb.T @ (world - (body_b.position if point else 0.0))
-    for key, v in ((key_a, va), (key_b, vb)):
-        if not np.isfinite(v).all():
-            raise SceneError(f"{place}.{key}", "carried into its body's frame, it overflows float64",
-                             f"give {key} yourself, or positions nearer the origin")
-    return va, vb
+    attach_a, attach_b = values.pair(spec, "attach", place, bodies[a], bodies[b], point=True)
+    own = module.read(spec, place, bodies[a], bodies[b], attach_a, attach_b)
+    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, **own, where=place)

@@ -14,47 +14,6 @@ import numpy as np
 
 from p3d_cli.constraints.solver import RANK_RTOL
 
-try:
-    # numpy.linalg's own LAPACK gufuncs, without the public wrappers' checks and error-state
-    # set-up (~4 µs a call, a tenth of a small scene's step); results are identical.
-    from numpy.linalg import _umath_linalg as _gufuncs
-except ImportError:  # pragma: no cover - a numpy that moved them: the public functions
-    _gufuncs = None
-
-
-def _private_gufuncs_agree() -> bool:
-    """Whether the private gufuncs take these calls and give the public functions' numbers on
-    a small known matrix (a private API may change under a new numpy: then they are not used)."""
-    probe = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]])
-    try:
-        inverse = _gufuncs.inv(probe, signature="d->d")
-        values, vectors = _gufuncs.eigh_lo(probe, signature="d->dd")
-    except Exception:  # noqa: BLE001 - any failure means: use the public functions
-        return False
-    public_values, public_vectors = np.linalg.eigh(probe)
-    return (np.array_equal(inverse, np.linalg.inv(probe)) and np.array_equal(values, public_values)
-            and np.array_equal(np.abs(vectors), np.abs(public_vectors)))
-
-
-if _gufuncs is not None and not _private_gufuncs_agree():  # pragma: no cover
-    _gufuncs = None
-
-
-def _inverse(a: np.ndarray) -> np.ndarray:
-    """``inv(a)``; a singular ``a`` gives non-finite entries (or ``LinAlgError``)."""
-    if _gufuncs is None:  # pragma: no cover
-        return np.linalg.inv(a)
-    return _gufuncs.inv(a, signature="d->d")
-
-
-def _eigh(a: np.ndarray):
-    """``numpy.linalg.eigh(a)``, which is called when the fast call's result is not finite so
-    that it raises as it would have."""
-    if _gufuncs is not None:
-        values, vectors = _gufuncs.eigh_lo(a, signature="d->dd")
-        if math.isfinite(float(values.sum())):
-            return values, vectors
-    return np.linalg.eigh(a)
 
 
 class _Factor:
@@ -171,13 +130,13 @@ class _Island:
         threshold = RANK_RTOL * max(max(system.diagonal().tolist()), 0.0)
         if not self.redundant:
             try:
-                inverse = _inverse(system)
+                inverse = np.linalg.inv(system)
             except np.linalg.LinAlgError:
                 inverse = None
             if inverse is not None and threshold > 0 and math.sqrt(float(np.vdot(inverse, inverse))) * threshold < 0.5:
                 return inverse, self.m
             self.redundant = True
-        eig, vectors = _eigh(system)
+        eig, vectors = np.linalg.eigh(system)   # its lower triangle; LinAlgError if it does not converge
         keep = eig > threshold
         inv = np.divide(1.0, eig, out=np.zeros_like(eig), where=keep)
         return (vectors * inv).dot(vectors.T), int(keep.sum())

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from p3d_cli.constraints.rotation import quat_from_axis_angle
+from p3d_cli.constraints.rotation import quat_from_axis_angle, quat_to_matrix
 from p3d_cli.geometry.rotation import quaternion_from_axis_degrees
 from p3d_cli.errors import InputError, SceneError
 from p3d_cli.geometry.inertia import breaks_triangle_inequality
@@ -218,3 +218,29 @@ def pose(get: dict, place: str) -> tuple[np.ndarray, np.ndarray]:
     if placement.rotation is not None:
         orientation = np.asarray(matrix_quaternion(placement.rotation), dtype=np.float64)
     return position, orientation
+
+
+def pair(spec: dict, stem: str, place: str, body_a, body_b, point: bool):
+    """``<stem>_a`` and ``<stem>_b`` of a constraint's entry, each in its body's frame (``body_a``
+    and ``body_b`` are ``BodySpec``s); a missing one defaults to the other's world value,
+    carried into its body's frame (the joint is assembled where the scene places it)."""
+    key_a, key_b = f"{stem}_a", f"{stem}_b"
+    given_a, given_b = spec.get(key_a) is not None, spec.get(key_b) is not None
+    if not (given_a or given_b):
+        raise SceneError(f"{place}.{key_a}", "missing",
+                         f"give {key_a} and {key_b} (each in its own body's frame)")
+    va = vector(spec[key_a], f"{place}.{key_a}", nonzero=not point) if given_a else None
+    vb = vector(spec[key_b], f"{place}.{key_b}", nonzero=not point) if given_b else None
+    ra, rb = quat_to_matrix(body_a.rotation), quat_to_matrix(body_b.rotation)
+    with np.errstate(all="ignore"):     # an overflow is checked for just below
+        if va is None:
+            world = rb @ vb + (body_b.position if point else 0.0)
+            va = ra.T @ (world - (body_a.position if point else 0.0))
+        if vb is None:
+            world = ra @ va + (body_a.position if point else 0.0)
+            vb = rb.T @ (world - (body_b.position if point else 0.0))
+    for key, v in ((key_a, va), (key_b, vb)):
+        if not np.isfinite(v).all():
+            raise SceneError(f"{place}.{key}", "carried into its body's frame, it overflows float64",
+                             f"give {key} yourself, or positions nearer the origin")
+    return va, vb

@@ -29,10 +29,6 @@ from p3d_cli.geometry.moments import rotate_moments, scale_moments, translate_mo
 from p3d_cli.results import Bounds, Moments
 
 
-#: Shapes symmetric under each coordinate-plane reflection: mirroring them changes nothing.
-MIRROR_SYMMETRIC = frozenset({"box", "sphere", "cylinder", "ellipsoid", "ecylinder", "capsule"})
-
-
 def check_scale(scale) -> np.ndarray:
     """``scale`` as ``(3,) float64`` (one number: uniform), or ``UsageError`` unless all three
     are finite and non-zero (negative factors mirror)."""
@@ -83,6 +79,10 @@ class Mirrored:
     @property
     def polyhedral(self) -> bool:
         return self.shape.polyhedral
+
+    @property
+    def mirror_symmetric(self) -> bool:
+        return self.shape.mirror_symmetric
 
     @property
     def scale(self) -> np.ndarray:
@@ -194,12 +194,12 @@ class Placement:
 
     def shape(self, shape):
         """The shape after the scale (a sphere or cylinder becomes its exact generalisation; a
-        mirrored wedge or corner a ``Mirrored`` shape)."""
+        mirrored shape that is not ``mirror_symmetric``, as a wedge or corner, a ``Mirrored`` one)."""
         if self.scale is None:
             return shape
         signs = mirror_signs(self.scale)
         scaled = shape.scaled(np.abs(self.scale))
-        if signs is None or scaled.name in MIRROR_SYMMETRIC:
+        if signs is None or scaled.mirror_symmetric:     # the shape class declares it
             return scaled
         return Mirrored(scaled, signs)
 

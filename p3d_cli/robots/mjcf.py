@@ -39,6 +39,7 @@ from p3d_cli.errors import InputError, ReadError, UsageError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers, read_xml, regular_file
+from p3d_cli.shapes import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 #: Files one model may include (MuJoCo itself includes each file once).
 MAX_INCLUDES = 256
@@ -376,9 +377,10 @@ def _geom(context: _Context, a: dict[str, str], where: str, role: str, frame: Pl
             raise InputError(where, f"a {kind} needs {counts[kind]} positive size numbers, has {size}",
                              "give the half-sizes")
         s = size
-        thing = {"sphere": lambda: spec("sphere", s[0]), "capsule": lambda: spec("capsule", s[0], s[1]),
-                 "cylinder": lambda: spec("cylinder", s[0], s[0], s[1]),
-                 "box": lambda: spec("box", *s[:3]), "ellipsoid": lambda: spec("ellipsoid", *s[:3])}[kind]()
+        # MuJoCo's sizes are half-sizes: a capsule's and a cylinder's radius and half-length.
+        thing = spec({"sphere": lambda: Sphere(s[0]), "capsule": lambda: Capsule(s[0], s[1]),
+                      "cylinder": lambda: Cylinder(s[0], s[1]),
+                      "box": lambda: Box(*s[:3]), "ellipsoid": lambda: Ellipsoid(*s[:3])}[kind]())
     from p3d_cli.geometry.placement import then
 
     placement = Placement(scale, rotation, None if not any(pos) else np.array(pos))

@@ -124,9 +124,11 @@ class Robot:
         return self.doc.data
 
 
-def spec(name: str, *values: float) -> str:
-    """A shape spec with full-precision numbers (``repr`` round-trips a float64)."""
-    return f"{name}:" + ",".join(repr(float(v)) for v in values)
+def spec(shape) -> str:
+    """The spec of ``shape`` (a ``p3d_cli.shapes`` object) with full-precision numbers (``repr``
+    round-trips a float64): a reader maps its format's primitive onto a shape class, and the
+    class says how its spec is written."""
+    return f"{shape.name}:" + ",".join(repr(float(v)) for v in shape.numbers())
 
 
 def inertia_matrix(ixx: float, ixy: float, ixz: float, iyy: float, iyz: float, izz: float) -> np.ndarray:

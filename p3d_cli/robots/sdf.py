@@ -27,6 +27,7 @@ from p3d_cli.errors import InputError, UsageError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, inertia_matrix, resolve_uri, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
+from p3d_cli.shapes import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 
 #: Includes inside included models, at most.
@@ -234,14 +235,14 @@ def _geometry(element: Node, where: str, base: str, packages: dict[str, str], ro
         values = numbers(shape.child_text(key), 3, f"{where}: {kind} {key}")
         if values is None or any(v <= 0 for v in values):
             raise InputError(where, f"<{kind}> needs three positive numbers in <{key}>", f"give the {key}")
-        thing = spec(kind, *(0.5 * v if kind == "box" else v for v in values))
+        thing = spec(Box(*(0.5 * v for v in values)) if kind == "box" else Ellipsoid(*values))
     elif kind == "cylinder":
         r = one("radius")
-        thing = spec("cylinder", r, r, 0.5 * one("length"))
+        thing = spec(Cylinder(r, 0.5 * one("length")))
     elif kind == "capsule":
-        thing = spec("capsule", one("radius"), 0.5 * one("length"))
+        thing = spec(Capsule(one("radius"), 0.5 * one("length")))
     elif kind == "sphere":
-        thing = spec("sphere", one("radius"))
+        thing = spec(Sphere(one("radius")))
     elif kind in ("plane", "heightmap", "empty"):
         return None
     else:

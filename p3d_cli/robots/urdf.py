@@ -19,6 +19,7 @@ from p3d_cli.errors import InputError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.robots.model import Geom, Link, Robot, inertia_matrix, resolve_uri, rotated_inertial, spec
 from p3d_cli.robots.xmltree import Node, numbers
+from p3d_cli.shapes import Box, Capsule, Cylinder, Sphere
 
 
 def origin_placement(node: Node | None, where: str, scale=None) -> Placement:
@@ -104,14 +105,14 @@ def _geometry(element: Node, where: str, base: str, packages: dict[str, str], ro
         scale = None if s is None or all(v == 1 for v in s) else np.array(s * 3 if len(s) == 1 else s)
     elif kind == "box":
         size = numbers(a.get("size"), 3, f"{where}: box size")
-        thing = spec("box", *(0.5 * v for v in _required(size, where, "box size")))
+        thing = spec(Box(*(0.5 * v for v in _required(size, where, "box size"))))
     elif kind == "cylinder":
         r = _one(a, "radius", where)
-        thing = spec("cylinder", r, r, 0.5 * _one(a, "length", where))
+        thing = spec(Cylinder(r, 0.5 * _one(a, "length", where)))
     elif kind == "capsule":  # not in the URDF standard, but read by several tools
-        thing = spec("capsule", _one(a, "radius", where), 0.5 * _one(a, "length", where))
+        thing = spec(Capsule(_one(a, "radius", where), 0.5 * _one(a, "length", where)))
     elif kind == "sphere":
-        thing = spec("sphere", _one(a, "radius", where))
+        thing = spec(Sphere(_one(a, "radius", where)))
     else:
         raise InputError(where, f"<{kind}> is not a URDF geometry", "use mesh, box, cylinder or sphere")
     return Geom(thing, origin_placement(element.find("origin"), where, scale), where, role)

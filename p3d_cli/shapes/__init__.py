@@ -19,43 +19,60 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Union
 
 from p3d_cli.errors import SpecError
-from p3d_cli.shapes.box import Box
-from p3d_cli.shapes.capsule import Capsule
-from p3d_cli.shapes.corner import Corner
-from p3d_cli.shapes.cylinder import Cylinder
-from p3d_cli.shapes.ellipsoid import Ellipsoid
-from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
-from p3d_cli.shapes.sphere import Sphere
-from p3d_cli.shapes.wedge import Wedge
+from p3d_cli.shapes import classes
+from p3d_cli.shapes.classes import *  # noqa: F403 - the classes, by their own names (p3d_cli.shapes.Box)
+from p3d_cli.shapes.record import ShapeRecord, check_declared
 
-Shape = Union[Box, Wedge, Corner, Cylinder, Sphere, Ellipsoid, EllipticCylinder, Capsule]
+#: Any shape (the classes of ``shapes.classes`` all subclass it).
+Shape = ShapeRecord
 
-#: Spec name -> shape class.
-SHAPES: dict[str, type[Shape]] = {
-    "box": Box,
-    "wedge": Wedge,
-    "corner": Corner,
-    "cylinder": Cylinder,
-    "sphere": Sphere,
-    "ellipsoid": Ellipsoid,
-    "ecylinder": EllipticCylinder,
-    "capsule": Capsule,
-}
+#: Spec name -> shape class, built from ``shapes.classes`` (``register`` adds one).
+SHAPES: dict[str, type[Shape]] = {}
 
-#: The written form of each spec, for messages and help.
-FORMS = {
-    "box": "box or box:SX,SY,SZ",
-    "wedge": "wedge or wedge:SX,SY,SZ",
-    "corner": "corner or corner:SX,SY,SZ",
-    "cylinder": "cylinder or cylinder:R,R,H (radius R about z, half-height H)",
-    "sphere": "sphere, sphere:R or sphere:R,R,R",
-    "ellipsoid": "ellipsoid or ellipsoid:A,B,C (semi-axes)",
-    "ecylinder": "ecylinder or ecylinder:A,B,H (semi-axes A, B about z, half-height H)",
-    "capsule": "capsule or capsule:R,H (radius R about z, H the half-length of the cylindrical part)",
-}
+
+def register(cls: type[Shape]) -> type[Shape]:
+    """Add the shape class ``cls`` under its spec name (``cls.name``): every list of shapes p3d
+    gives (spec parsing, messages, help, the public ``p3d.NAME``) then has it.
+
+    Raises
+    ------
+    TypeError
+        ``cls`` leaves out a declaration (``p3d_cli.shapes.record``), or its name is taken.
+    """
+    check_declared(cls)
+    if SHAPES.get(cls.name, cls) is not cls:
+        raise TypeError(f"shape name {cls.name!r} is taken by {SHAPES[cls.name].__name__}")
+    SHAPES[cls.name] = cls
+    return cls
+
+
+for _cls in vars(classes).values():
+    if isinstance(_cls, type) and issubclass(_cls, ShapeRecord):
+        register(_cls)
+del _cls
+
+
+def forms() -> dict[str, str]:
+    """Spec name -> the written form of its spec, for messages and help."""
+    return {name: cls.form for name, cls in SHAPES.items()}
+
+
+def spec_lines(indent: str = "  ") -> str:
+    """The shapes' spec forms, one a line, for a command's help."""
+    return "\n".join(indent + cls.form for cls in SHAPES.values())
+
+
+def names(polyhedral: bool | None = None) -> list[str]:
+    """The spec names, or those of the polyhedral (True) or the round (False) shapes only."""
+    return [name for name, cls in SHAPES.items() if polyhedral is None or cls.polyhedral == polyhedral]
+
+
+def public_classes() -> dict[str, type[Shape]]:
+    """Class name -> class: the names ``p3d_cli`` gives the shapes (``p3d.Box``)."""
+    return {cls.__name__: cls for cls in SHAPES.values()}
+
 
 _SPEC = re.compile(r"^([A-Za-z]+)(?::(.*))?$")
 
@@ -117,8 +134,9 @@ def parse_shape(text: str) -> Shape:
 
 
 def _numbers(text: str, name: str, body: str) -> list[float]:
-    hint = f"write {FORMS[name]}" + ("" if name == "capsule" else
-                                      "; factors are half-extents of the canonical [-1, 1]³ shape")
+    cls = SHAPES[name]
+    hint = f"write {cls.form}" + ("; factors are half-extents of the canonical [-1, 1]³ shape"
+                                  if cls.scale_factors else "")
     values = []
     for part in body.split(","):
         try:
@@ -135,7 +153,7 @@ def _numbers(text: str, name: str, body: str) -> list[float]:
                             "scale factors are half-extents and must be > 0 "
                             "(to mirror, place the shape with a negative scale)")
         values.append(value)
-    counts = {"sphere": (1, 3), "capsule": (2,)}.get(name, (3,))
+    counts = cls.arity
     if len(values) not in counts:
         got = f"{len(values)} number{'s' if len(values) != 1 else ''}"
         raise SpecError(text, f"{name} takes {' or '.join(map(str, counts))} numbers, got {got}", hint)
@@ -143,26 +161,8 @@ def _numbers(text: str, name: str, body: str) -> list[float]:
 
 
 def _build(text: str, name: str, f: list[float]) -> Shape:
-    if name == "sphere":
-        if len(f) == 1:
-            return Sphere(f[0])
-        if not f[0] == f[1] == f[2]:
-            raise SpecError(text, "a sphere keeps sx = sy = sz (circles stay circles)",
-                            f"write sphere:R, or ellipsoid:{_join(f)} for the ellipsoid")
-        return Sphere(f[0])
-    if name == "cylinder":
-        if f[0] != f[1]:
-            raise SpecError(text, "a cylinder (axis z) keeps sx = sy (circles stay circles)",
-                            f"write cylinder:R,R,H, or ecylinder:{_join(f)} for the elliptic cylinder")
-        return Cylinder(f[0], f[2])
-    if name == "capsule":
-        return Capsule(f[0], f[1])
-    return SHAPES[name](*f)  # type: ignore[arg-type]  # the three-factor classes
+    return SHAPES[name].from_numbers(text, f)
 
 
-def _join(values) -> str:
-    return ",".join(f"{v:g}" for v in values)
-
-
-__all__ = ["SHAPES", "FORMS", "Shape", "parse_shape", "parse_spec", "looks_like_spec", "Box", "Wedge", "Corner",
-           "Cylinder", "Sphere", "Ellipsoid", "EllipticCylinder", "Capsule"]
+__all__ = ["SHAPES", "Shape", "register", "forms", "spec_lines", "names", "public_classes", "parse_shape",
+           "parse_spec", "looks_like_spec", *public_classes()]

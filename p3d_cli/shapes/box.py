@@ -28,6 +28,8 @@ class Box(polyhedron.ScaledPolyhedron):
     """The box [-sx, sx] × [-sy, sy] × [-sz, sz]."""
 
     name = "box"
+    form = "box or box:SX,SY,SZ"
+    mirror_symmetric = True
     VERTICES, FACES, VOLUME, CENTER, CENTRAL = VERTICES, FACES, VOLUME, CENTER, CENTRAL
 
     def inside(self, points) -> np.ndarray:

@@ -37,6 +37,7 @@ from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.polyhedron import check_segments
+from p3d_cli.shapes.record import ShapeRecord
 
 
 def capsule_moments(r: float, h: float) -> Moments:
@@ -49,7 +50,7 @@ def capsule_moments(r: float, h: float) -> Moments:
 
 
 @dataclass(frozen=True)
-class Capsule:
+class Capsule(ShapeRecord):
     """The solid within distance ``r`` of the segment ``(0, 0, ±h)``.
 
     Attributes
@@ -68,7 +69,14 @@ class Capsule:
     stretch: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     name = "capsule"
+    form = "capsule or capsule:R,H (radius R about z, H the half-length of the cylindrical part)"
+    arity = (2,)
+    scale_factors = False       # a radius and a half-length, not half-extents
+    mirror_symmetric = True
     polyhedral = False
+
+    def numbers(self) -> tuple[float, ...]:
+        return (float(self.r), float(self.h))
 
     @property
     def scale(self) -> np.ndarray:

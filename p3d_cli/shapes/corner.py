@@ -39,6 +39,8 @@ class Corner(polyhedron.ScaledPolyhedron):
     """The tetrahedron with the right-angled corner at (-sx, -sy, -sz)."""
 
     name = "corner"
+    form = "corner or corner:SX,SY,SZ"
+    mirror_symmetric = False
     VERTICES, FACES, VOLUME, CENTER, CENTRAL = VERTICES, FACES, VOLUME, CENTER, CENTRAL
 
     def inside(self, points) -> np.ndarray:

@@ -19,10 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.geometry.moments import scale_moments
+from p3d_cli.errors import SpecError
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
 from p3d_cli.shapes.elliptic_cylinder import EllipticCylinder
+from p3d_cli.shapes.record import ShapeRecord, written
 from p3d_cli.shapes.unit_cylinder import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_cylinder_triangles
 
 __all__ = ["Cylinder", "CENTER", "CENTRAL_PER_PI", "VOLUME_PER_PI"]
@@ -30,7 +32,7 @@ __all__ = ["Cylinder", "CENTER", "CENTRAL_PER_PI", "VOLUME_PER_PI"]
 
 
 @dataclass(frozen=True)
-class Cylinder:
+class Cylinder(ShapeRecord):
     """The solid ``x² + y² ≤ r², |z| ≤ h``.
 
     Attributes
@@ -45,7 +47,17 @@ class Cylinder:
     h: float = 1.0
 
     name = "cylinder"
+    form = "cylinder or cylinder:R,R,H (radius R about z, half-height H)"
+    mirror_symmetric = True
     polyhedral = False
+
+    @classmethod
+    def from_numbers(cls, text: str, numbers: list[float]) -> "Cylinder":
+        """``cylinder:R,R,H``; unequal first two factors are refused (circles stay circles)."""
+        if numbers[0] != numbers[1]:
+            raise SpecError(text, "a cylinder (axis z) keeps sx = sy (circles stay circles)",
+                            f"write cylinder:R,R,H, or ecylinder:{written(numbers)} for the elliptic cylinder")
+        return cls(numbers[0], numbers[2])
 
     @property
     def scale(self) -> np.ndarray:

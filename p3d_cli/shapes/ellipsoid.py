@@ -18,11 +18,12 @@ from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
+from p3d_cli.shapes.record import ShapeRecord
 from p3d_cli.shapes.unit_ball import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_sphere_triangles
 
 
 @dataclass(frozen=True)
-class Ellipsoid:
+class Ellipsoid(ShapeRecord):
     """The solid ``(x/a)² + (y/b)² + (z/c)² ≤ 1``.
 
     Attributes
@@ -36,6 +37,8 @@ class Ellipsoid:
     c: float = 1.0
 
     name = "ellipsoid"
+    form = "ellipsoid or ellipsoid:A,B,C (semi-axes)"
+    mirror_symmetric = True
     polyhedral = False
 
     @property

@@ -19,11 +19,12 @@ from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
+from p3d_cli.shapes.record import ShapeRecord
 from p3d_cli.shapes.unit_cylinder import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_cylinder_triangles
 
 
 @dataclass(frozen=True)
-class EllipticCylinder:
+class EllipticCylinder(ShapeRecord):
     """The solid ``(x/a)² + (y/b)² ≤ 1, |z| ≤ h``.
 
     Attributes
@@ -39,6 +40,8 @@ class EllipticCylinder:
     h: float = 1.0
 
     name = "ecylinder"
+    form = "ecylinder or ecylinder:A,B,H (semi-axes A, B about z, half-height H)"
+    mirror_symmetric = True
     polyhedral = False
 
     @property

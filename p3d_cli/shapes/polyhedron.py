@@ -20,6 +20,7 @@ from p3d_cli.geometry.bounding import projected_bounds
 from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes.closed_form import canonical_moments
+from p3d_cli.shapes.record import ShapeRecord
 
 
 def scaled_vertices(vertices, scale) -> np.ndarray:
@@ -42,10 +43,11 @@ def as_points(points) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class ScaledPolyhedron:
+class ScaledPolyhedron(ShapeRecord):
     """What box, wedge and corner share: canonical constants in [-1, 1]³, scaled.
 
-    A subclass sets the class attributes ``name``, ``VERTICES`` (canonical corners), ``FACES``
+    A subclass sets the class attributes ``name``, ``form``, ``mirror_symmetric``
+    (``p3d_cli.shapes.record``), ``VERTICES`` (canonical corners), ``FACES``
     (wound counter-clockwise seen from outside), ``VOLUME``, ``CENTER``, ``CENTRAL`` (exact
     ``Fraction`` constants of the canonical solid) and defines its own ``inside``.
 
@@ -61,7 +63,6 @@ class ScaledPolyhedron:
 
     polyhedral = True
     # Each subclass states its canonical solid (class constants, not dataclass fields).
-    name: ClassVar[str]
     VOLUME: ClassVar[Fraction]
     CENTER: ClassVar[tuple]
     CENTRAL: ClassVar[tuple]

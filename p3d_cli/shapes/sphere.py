@@ -13,17 +13,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from p3d_cli.geometry.moments import scale_moments
+from p3d_cli.errors import SpecError
 from p3d_cli.results import Bounds, Moments
 from p3d_cli.shapes import polyhedron
 from p3d_cli.shapes.closed_form import canonical_moments
 from p3d_cli.shapes.ellipsoid import Ellipsoid
+from p3d_cli.shapes.record import ShapeRecord, written
 from p3d_cli.shapes.unit_ball import CENTER, CENTRAL_PER_PI, VOLUME_PER_PI, unit_sphere_triangles
 
 __all__ = ["Sphere", "CENTER", "CENTRAL_PER_PI", "VOLUME_PER_PI"]
 
 
 @dataclass(frozen=True)
-class Sphere:
+class Sphere(ShapeRecord):
     """The ball of radius ``r`` about the origin.
 
     Attributes
@@ -35,7 +37,21 @@ class Sphere:
     r: float = 1.0
 
     name = "sphere"
+    form = "sphere, sphere:R or sphere:R,R,R"
+    arity = (1, 3)
+    mirror_symmetric = True
     polyhedral = False
+
+    @classmethod
+    def from_numbers(cls, text: str, numbers: list[float]) -> "Sphere":
+        """``sphere:R``, or three equal factors (unequal ones are refused: circles stay circles)."""
+        if len(numbers) == 3 and not numbers[0] == numbers[1] == numbers[2]:
+            raise SpecError(text, "a sphere keeps sx = sy = sz (circles stay circles)",
+                            f"write sphere:R, or ellipsoid:{written(numbers)} for the ellipsoid")
+        return cls(numbers[0])
+
+    def numbers(self) -> tuple[float, ...]:
+        return (float(self.r),)
 
     @property
     def scale(self) -> np.ndarray:

@@ -39,6 +39,8 @@ class Wedge(polyhedron.ScaledPolyhedron):
     """The wedge {(x, y, z) in the box of half-extents s : x/sx + y/sy ≤ 0}."""
 
     name = "wedge"
+    form = "wedge or wedge:SX,SY,SZ"
+    mirror_symmetric = False
     VERTICES, FACES, VOLUME, CENTER, CENTRAL = VERTICES, FACES, VOLUME, CENTER, CENTRAL
 
     def inside(self, points) -> np.ndarray:
