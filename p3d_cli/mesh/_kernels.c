@@ -1089,6 +1089,8 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
                          overflow ? (Py_ssize_t)-1 : written);
 }
 
+static PyObject *py_paired(PyObject *self, PyObject *args); /* below the module's table */
+
 static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
      "paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)"},
@@ -1102,8 +1104,77 @@ static PyMethodDef methods[] = {
      "block(block, ox, oy, oz, keys, offset[, fill, cap, shift]) -> bounds, finite, sums, keys written (-1: a bucket "
      "overflowed)"},
     {"sort", py_sort, METH_VARARGS, "sort(keys): in-place ascending sort of uint64 keys"},
+    {"paired", py_paired, METH_VARARGS, "paired(keys, fill, cap, shift) -> whether bucketed edge keys pair up"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
+
+/* ---- the closed test on bucketed keys, without moving them (issue 32) --------------------- */
+
+/* paired(keys, fill, cap, shift) -> whether the bucketed edge keys (block(..., fill, cap,
+ * shift)) pair up: sorted, they come as (2e, 2e + 1), one edge each, none used again, and
+ * there is at least one (p3d_cli.mesh.closed.keys_pair_up over finish()'s result). The two
+ * sides of an edge differ in bit 0 only, so they share a bucket: each bucket is sorted in place
+ * and checked while it is in cache, and the buckets are never moved together (no second touch
+ * of the keys' pages). Stops at the first bucket that does not pair up; the caller then
+ * calls finish(), which sorts every bucket again (a sorted one costs no more) and moves them
+ * together for the open-mesh road. */
+static PyObject *py_paired(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOni", &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer kview, fview;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    Py_ssize_t buckets = fview.len / 8;
+    const int64_t *fill = (const int64_t *)fview.buf;
+    int bad = kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 ||
+              buckets != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < buckets * cap;
+    for (Py_ssize_t b = 0; !bad && b < buckets; b++)
+        bad = fill[b] < 0 || fill[b] > cap;
+    if (bad) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+        return NULL;
+    }
+    uint64_t *a = kview.buf, *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
+    if (!tmp) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        return PyErr_NoMemory();
+    }
+    Py_ssize_t total = 0;
+    int pair = 1;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t b = 0; pair && b < buckets; b++) {
+        uint64_t *bucket = a + b * cap;
+        Py_ssize_t n = fill[b];
+        if (n % 2) {
+            pair = 0;
+            break;
+        }
+        msd(bucket, n, shift, tmp);
+        for (Py_ssize_t i = 0; i < n; i += 2)
+            if ((bucket[i] & 1) || bucket[i + 1] != bucket[i] + 1) {
+                pair = 0;
+                break;
+            }
+        total += n;
+    }
+    Py_END_ALLOW_THREADS
+    free(tmp);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    if (pair && total > 0)
+        Py_RETURN_TRUE;
+    Py_RETURN_FALSE;
+}

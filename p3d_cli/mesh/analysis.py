@@ -176,10 +176,13 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         if buckets.overflow:                        # keys crowding one bucket: made again in order
             del buckets
             keys = _keys_in_order(source)
+        elif buckets.pair_up():                     # closed: each bucket checked where it lies
+            del buckets
+            is_closed = bounding = True
         else:
             keys, presorted = buckets.sorted_keys(), True
             del buckets
-        filled = keys.size
+        filled = 0 if keys is None else keys.size
     if keys is not None:
         keys = keys[:filled]
         is_closed = bounding = keys_pair_up(keys, presorted)

@@ -116,6 +116,14 @@ class Buckets:
         self.keys[bucket * self.cap + self.fill[bucket] + rank] = block_keys[order]
         self.fill += counts
 
+    def pair_up(self) -> bool:
+        """``p3d_cli.mesh.closed.keys_pair_up`` of all the keys, each bucket sorted and checked
+        in place, without moving the buckets together (a closed mesh needs nothing more of its
+        keys). False leaves the buckets valid for ``sorted_keys``."""
+        kernels = KERNELS
+        assert kernels is not None and not self.overflow  # noqa: S101 - made only with the kernels
+        return bool(kernels.paired(self.keys, self.fill, self.cap, self.shift))
+
     def sorted_keys(self) -> np.ndarray:
         """All the keys, sorted (a view of the start of the buffer)."""
         kernels = KERNELS
