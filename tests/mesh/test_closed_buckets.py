@@ -1,8 +1,9 @@
-"""The closed test on bucketed keys (issue 32): each bucket sorted and checked where it lies
-(``kernels.Buckets.pair_up``, the compiled ``paired``) gives the verdict of ``keys_pair_up``
-over all the keys, on every input; a mesh it finds closed never moves its keys together; one
-it does not goes on to the open road with the same keys. Checked against the sorted keys,
-against the numpy code (no kernels) and against the exact-vertex test (``closed_exact``)."""
+"""``p3d props``' closed test on half the keys (issue 32, ``kernels.ForwardBuckets``): the
+forward keys dealt to buckets, each bucket checked for a key twice where it lies (compiled
+``distinct``), and the balance of the two directions, give the verdict of ``keys_pair_up`` over
+all the keys on every input; a mesh found closed never sorts its keys together; one not found
+closed goes on to the open road with every key. Checked against the sorted keys, against the
+numpy code (no kernels) and against the exact-vertex test (``closed_exact``)."""
 
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ from hypothesis import strategies as st
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh import kernels
 from p3d_cli.mesh.analysis import analyze
-from p3d_cli.mesh.closed import closed_exact, keys_pair_up
+from p3d_cli.mesh.closed import closed_exact, column_edge_keys, keys_pair_up
+from p3d_cli.mesh.columns import columns
 from test_kernels import assert_same_analysis
 from test_paired import torus
 
@@ -31,8 +33,9 @@ BIG = torus(120, 100, shift=(2.5, -1.25, 0.75)).astype(np.float32)
 MASK = np.uint64(2**64 - 1)
 
 
-def dealt(keys: np.ndarray) -> kernels.Buckets:
-    buckets = kernels.Buckets(max(keys.size, 1))
+def dealt(keys: np.ndarray) -> kernels.ForwardBuckets:
+    """The keys through the numpy road of ``ForwardBuckets``."""
+    buckets = kernels.ForwardBuckets(max(keys.size, 1))
     buckets.add(keys)
     assert not buckets.overflow
     return buckets
@@ -64,26 +67,51 @@ def key_sets(draw):
 
 
 @given(key_sets())
-def test_paired_is_keys_pair_up(keys):
+def test_forward_keys_and_balance_are_keys_pair_up(keys):
     buckets = dealt(keys)
-    expected = keys_pair_up(keys.copy())
-    assert buckets.pair_up() is expected
-    # Whatever it found, the buckets still hold the keys: the open road sorts them together.
-    assert np.array_equal(buckets.sorted_keys(), np.sort(keys))
+    assert buckets.closed() is keys_pair_up(keys.copy())
+    forward = keys[(keys & np.uint64(1)) == 1]
+    assert buckets.backward == keys.size - forward.size
+    assert np.array_equal(buckets.sorted_keys(), np.sort(forward))
 
 
-def test_paired_on_many_keys():
+def test_balance_sees_two_edges_each_used_one_way():
+    """Counts equal, no forward key twice: only the balance tells edge a (forward only) and
+    edge b (backward only) from one edge used once each way."""
+    a, b = np.uint64(12345), np.uint64(67890)
+    one_way = np.array([(a << np.uint64(1)) | np.uint64(1), b << np.uint64(1)], dtype=np.uint64)
+    assert dealt(one_way).closed() is keys_pair_up(one_way.copy()) is False
+    both = np.array([(a << np.uint64(1)) | np.uint64(1), a << np.uint64(1)], dtype=np.uint64)
+    assert dealt(both).closed() is keys_pair_up(both.copy()) is True
+
+
+@pytest.mark.parametrize("n", [1, 5, 128, 129, 5000, 20_000])
+def test_compiled_forward_keys_are_numpys(n):
+    """``forward_block`` deals the forward keys and sums the balance as the numpy road does."""
+    rng = np.random.default_rng(n)
+    triangles = rng.normal(size=(n, 3, 3))
+    triangles[::7, 1] = triangles[::7, 0]                # some sides whose ends are alike
+    fast, slow = kernels.ForwardBuckets(3 * n), kernels.ForwardBuckets(3 * n)
+    *_, written, balance, backward = KERNELS.forward_block(triangles, 0.0, 0.0, 0.0, fast.keys, fast.fill,
+                                                           fast.cap, fast.shift)
+    slow.add(column_edge_keys(columns(triangles)))
+    assert written == int(fast.fill.sum()) == int(slow.fill.sum())
+    assert (balance, backward) == (slow.balance, slow.backward)
+    assert np.array_equal(fast.sorted_keys(), slow.sorted_keys())
+
+
+def test_distinct_on_many_keys():
     """Enough keys for many buckets (each sorted by the radix passes, not insertion alone)."""
     rng = np.random.default_rng(5)
     edges = np.unique(rng.integers(0, 2**63, 600_000, dtype=np.uint64))
     pairs = np.concatenate([edges << np.uint64(1), (edges << np.uint64(1)) | np.uint64(1)])
     rng.shuffle(pairs)
-    assert dealt(pairs).pair_up() is True
+    assert dealt(pairs).closed() is True
     for extra in (pairs[:1], pairs[:2], pairs[[0, 1]] ^ np.uint64(1)):
         keys = np.concatenate([pairs, extra])
-        assert dealt(keys).pair_up() is keys_pair_up(keys.copy()) is False
-    assert dealt(pairs[1:]).pair_up() is False
-    assert dealt(pairs[:0]).pair_up() is False              # no sides: nothing closed
+        assert dealt(keys).closed() is keys_pair_up(keys.copy()) is False
+    assert dealt(pairs[1:]).closed() is False
+    assert dealt(pairs[:0]).closed() is False               # no sides: nothing closed
 
 
 def variants():
@@ -102,6 +130,12 @@ def variants():
     yield "the mesh twice, shuffled", np.concatenate([t, t])[rng.permutation(2 * len(t))]
     yield "every face flipped", flipped
     yield "a sliver side (two corners alike)", np.concatenate([t, np.stack([t[0, 0], t[0, 0], t[0, 1]])[None]])
+    # Every block has a bound of exactly 0 (z from 0 up): the compiled pass leaves each to the
+    # numpy code, which deals its forward keys and adds its balance itself.
+    grounded = torus(120, 100, shift=(0.0, 0.0, 1.0)).astype(np.float32)
+    assert grounded[..., 2].min() == 0.0
+    yield "touching z = 0 (the numpy road's blocks)", grounded
+    yield "touching z = 0, one face flipped", np.concatenate([grounded[:-1], grounded[-1:, ::-1]])
 
 
 @pytest.mark.parametrize("name,triangles", list(variants()), ids=[name for name, _ in variants()])
@@ -115,8 +149,8 @@ def test_adversarial_meshes_same_verdicts(name, triangles):
 
 
 def test_a_closed_mesh_never_moves_its_keys(monkeypatch):
-    """The point of checking in place: a closed mesh's keys are never sorted together (that
-    move touched every key's page a second time); an open one's still are, for its road."""
+    """A closed mesh's keys are never sorted together (that move touched every key's page a
+    second time); an open one's are, all of them, for its road."""
     calls = []
     original = kernels.Buckets.sorted_keys
 
