@@ -11,8 +11,8 @@
  * - side_keys, groups: the open-mesh road's side keys and its scan of the key groups
  *   (p3d_cli.mesh.closed, boundary);
  * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
- * - forward_block, distinct (at the end): `p3d props`' closed test on half the keys
- *   (p3d_cli.mesh.kernels.ForwardBuckets).
+ * - forward_block, distinct, keys_block (at the end): `p3d props`' closed test on half the
+ *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -1108,6 +1108,7 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
 /* Below the module's table (issue 32's closed test on half the keys). */
 static PyObject *py_distinct(PyObject *self, PyObject *args);
 static PyObject *py_forward_block(PyObject *self, PyObject *args);
+static PyObject *py_keys_block(PyObject *self, PyObject *args);
 
 static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
@@ -1125,6 +1126,7 @@ static PyMethodDef methods[] = {
     {"distinct", py_distinct, METH_VARARGS, "distinct(keys, fill, cap, shift) -> whether no bucketed key is there twice"},
     {"forward_block", py_forward_block, METH_VARARGS,
      "forward_block(block, ox, oy, oz, keys, fill, cap, shift) -> block()'s results, balance, backward sides"},
+    {"keys_block", py_keys_block, METH_VARARGS, "keys_block(block, keys, fill, cap, shift) -> keys written (-1: overflow)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -1250,4 +1252,50 @@ static PyObject *py_forward_block(PyObject *self, PyObject *args) {
                          c.finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5],
                          sums[6], sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], c.written,
                          (unsigned long long)c.balance, c.backward);
+}
+
+
+/* keys_block(block, keys, fill, cap, shift) -> keys written, -1 when a bucket overflowed:
+ * block(..., keys, 0, fill, cap, shift)'s edge keys alone (no bounds, no sums), for the open
+ * road's pass that makes every key after forward_block's did not prove the mesh closed. */
+static PyObject *py_keys_block(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOni", &obj, &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer view, kview, fview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        release_block(&view, &b);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        release_block(&view, &b);
+        PyBuffer_Release(&kview);
+        return NULL;
+    }
+    if (kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
+        (fview.len / 8) != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < (fview.len / 8) * cap) {
+        release_block(&view, &b);
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+        return NULL;
+    }
+    Pass c = {&b, {0.0, 0.0, 0.0}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
+        Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+        load(&b, t0, m, raw);
+        edge_keys(&c, raw, m);
+    }
+    Py_END_ALLOW_THREADS
+    release_block(&view, &b);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return PyLong_FromSsize_t(c.overflow ? -1 : c.written);
 }

@@ -209,23 +209,17 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
 
 def _all_keys(source: MeshSource, fast, indexed: bool) -> tuple[np.ndarray, bool]:
     """Every side's edge key, sorted when the second flag says so: one more pass over the
-    file, through the compiled pass when it takes the blocks (its sums are not used), for a
-    mesh that the forward keys did not prove closed."""
+    file (the compiled keys alone where it takes the blocks), for a mesh that the forward keys
+    did not prove closed. Its coordinates are finite: the first pass refused any other."""
     buckets = Buckets(3 * source.face_count)
     item: Any
     for item in (source.index_blocks() if indexed else source.read_blocks()):
         if buckets.overflow:
             break
         if indexed or kernel_takes(item):
-            before = buckets.fill.copy()
-            box, finite, *_, written = fast.block(item, 0.0, 0.0, 0.0, buckets.keys, 0, buckets.fill, buckets.cap,
-                                                  buckets.shift)
-            if written < 0:
+            if fast.keys_block(item, buckets.keys, buckets.fill, buckets.cap, buckets.shift) < 0:
                 buckets.overflow = True
-            if finite:                              # (not finite: refused in the first pass)
-                continue
-            buckets.fill[:] = before
-            item = item[0][item[1]] if indexed else item
+            continue
         buckets.add(column_edge_keys(columns(item)))
     if buckets.overflow:                            # keys crowding one bucket: made again in order
         del buckets

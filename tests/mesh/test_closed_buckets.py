@@ -87,7 +87,8 @@ def test_balance_sees_two_edges_each_used_one_way():
 
 @pytest.mark.parametrize("n", [1, 5, 128, 129, 5000, 20_000])
 def test_compiled_forward_keys_are_numpys(n):
-    """``forward_block`` deals the forward keys and sums the balance as the numpy road does."""
+    """``forward_block`` deals the forward keys and sums the balance as the numpy road does;
+    ``keys_block`` makes every key."""
     rng = np.random.default_rng(n)
     triangles = rng.normal(size=(n, 3, 3))
     triangles[::7, 1] = triangles[::7, 0]                # some sides whose ends are alike
@@ -98,6 +99,9 @@ def test_compiled_forward_keys_are_numpys(n):
     assert written == int(fast.fill.sum()) == int(slow.fill.sum())
     assert (balance, backward) == (slow.balance, slow.backward)
     assert np.array_equal(fast.sorted_keys(), slow.sorted_keys())
+    every = kernels.Buckets(3 * n)                       # the open road's pass: every key
+    assert KERNELS.keys_block(triangles, every.keys, every.fill, every.cap, every.shift) == int(every.fill.sum())
+    assert np.array_equal(every.sorted_keys(), np.sort(column_edge_keys(columns(triangles))))
 
 
 def test_distinct_on_many_keys():
