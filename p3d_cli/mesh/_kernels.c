@@ -1135,6 +1135,33 @@ PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
 
 /* ---- the closed test on half the keys, without moving them (issue 32) --------------------- */
 
+/* The key buckets' buffers (keys, fill: block(..., fill, cap, shift)'s), both writable and
+ * contiguous, checked to fit each other (and, with `counts`, each fill within [0, cap]); on
+ * failure -1 with the exception set and nothing held. */
+static int get_buckets(PyObject *keyobj, PyObject *fillobj, Py_ssize_t cap, int shift, int counts, Py_buffer *kview,
+                       Py_buffer *fview) {
+    if (PyObject_GetBuffer(keyobj, kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (PyObject_GetBuffer(fillobj, fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(kview);
+        return -1;
+    }
+    Py_ssize_t buckets = fview->len / 8;
+    const int64_t *fill = (const int64_t *)fview->buf;
+    int bad = kview->itemsize != 8 || fview->itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
+              buckets != ((Py_ssize_t)1 << (64 - shift)) || kview->len / 8 < buckets * cap;
+    for (Py_ssize_t b = 0; counts && !bad && b < buckets; b++)
+        bad = fill[b] < 0 || fill[b] > cap;
+    if (bad) {
+        PyBuffer_Release(kview);
+        PyBuffer_Release(fview);
+        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+        return -1;
+    }
+    return 0;
+}
+
+
 /* distinct(keys, fill, cap, shift) -> whether no key is there twice among bucketed keys
  * (forward_block's), and there is at least one. Each bucket is sorted in place and checked
  * while it is in cache; the buckets are never moved together (that would touch every key's
@@ -1146,24 +1173,10 @@ static PyObject *py_distinct(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "OOni", &keyobj, &fillobj, &cap, &shift))
         return NULL;
     Py_buffer kview, fview;
-    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0)
         return NULL;
-    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_C_CONTIGUOUS) < 0) {
-        PyBuffer_Release(&kview);
-        return NULL;
-    }
     Py_ssize_t buckets = fview.len / 8;
     const int64_t *fill = (const int64_t *)fview.buf;
-    int bad = kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 ||
-              buckets != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < buckets * cap;
-    for (Py_ssize_t b = 0; !bad && b < buckets; b++)
-        bad = fill[b] < 0 || fill[b] > cap;
-    if (bad) {
-        PyBuffer_Release(&kview);
-        PyBuffer_Release(&fview);
-        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
-        return NULL;
-    }
     uint64_t *a = kview.buf, *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
     if (!tmp) {
         PyBuffer_Release(&kview);
@@ -1215,21 +1228,8 @@ static PyObject *py_forward_block(PyObject *self, PyObject *args) {
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
-    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
         release_block(&view, &b);
-        return NULL;
-    }
-    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        release_block(&view, &b);
-        PyBuffer_Release(&kview);
-        return NULL;
-    }
-    if (kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
-        (fview.len / 8) != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < (fview.len / 8) * cap) {
-        release_block(&view, &b);
-        PyBuffer_Release(&kview);
-        PyBuffer_Release(&fview);
-        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
         return NULL;
     }
     double sums[NSUMS];
@@ -1268,21 +1268,8 @@ static PyObject *py_keys_block(PyObject *self, PyObject *args) {
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
-    if (PyObject_GetBuffer(keyobj, &kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
         release_block(&view, &b);
-        return NULL;
-    }
-    if (PyObject_GetBuffer(fillobj, &fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        release_block(&view, &b);
-        PyBuffer_Release(&kview);
-        return NULL;
-    }
-    if (kview.itemsize != 8 || fview.itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
-        (fview.len / 8) != ((Py_ssize_t)1 << (64 - shift)) || kview.len / 8 < (fview.len / 8) * cap) {
-        release_block(&view, &b);
-        PyBuffer_Release(&kview);
-        PyBuffer_Release(&fview);
-        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
         return NULL;
     }
     Pass c = {&b, {0.0, 0.0, 0.0}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
