@@ -251,11 +251,12 @@ def _indexed(source: MeshSource) -> bool:
 
 
 def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | None, keys: np.ndarray | None,
-                    filled: int, rescale: bool, buckets: Buckets | None = None):
+                    filled: int, rescale: bool, buckets: ForwardBuckets | None = None):
     """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
-    ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
-    code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
-    sign numpy's min and max decide; the first block of a part to be rescaled)."""
+    ``filled``, or the forward ones into ``buckets`` with their balance) and its sums; returns
+    ``(lo, hi, keys written, sums)``, or None for the numpy code to take the block (a NaN or
+    infinity, whose message it words; a bound of ±0, whose sign numpy's min and max decide; the
+    first block of a part to be rescaled)."""
     if sums is None:
         box, finite = fast.bounds(block)
         box = np.array(box)
@@ -265,14 +266,10 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
             return None
         sums = MomentSums(origin_from_bounds(box[:3], box[3:], single))
     balance = backward = 0
-    if isinstance(buckets, ForwardBuckets) and not buckets.overflow:
+    if buckets is not None and not buckets.overflow:
         before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
         box, finite, totals, magnitude, weighted, written, balance, backward = fast.forward_block(
             block, *sums.origin, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
-    elif buckets is not None and not buckets.overflow:
-        before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
-        box, finite, totals, magnitude, weighted, written = fast.block(
-            block, *sums.origin, buckets.keys, 0, buckets.fill, buckets.cap, buckets.shift)
     else:
         box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
     box = np.array(box)
@@ -283,7 +280,7 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     if written < 0:                                 # a bucket overflowed
         buckets.overflow = True
         written = 0
-    if isinstance(buckets, ForwardBuckets):
+    if buckets is not None:
         buckets.balance = (buckets.balance + balance) % (1 << 64)
         buckets.backward += backward
     sums.add_sums(np.array(totals), magnitude, np.array(weighted), size)
