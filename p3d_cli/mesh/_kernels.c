@@ -11,6 +11,8 @@
  * - side_keys, groups: the open-mesh road's side keys and its scan of the key groups
  *   (p3d_cli.mesh.closed, boundary);
  * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
+ * - forward_block, distinct, keys_block (at the end): `p3d props`' closed test on half the
+ *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -220,6 +222,11 @@ typedef struct {
     int shift, overflow;
     double lo[3], hi[3];
     int finite;
+    /* forward_block: only the keys of sides running from the smaller corner hash are kept;
+     * balance sums +g(edge) over those and -g(edge) over the others, mod 2^64. */
+    int forward_only;
+    uint64_t balance;
+    Py_ssize_t backward;
 } Pass;
 
 /* Corners of triangles [t0, t0 + n) widened to float64: p[k][3 v + a]. */
@@ -281,6 +288,15 @@ static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
             if (start == end)
                 continue; /* a side whose ends hash alike bounds nothing */
             uint64_t key = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
+            if (c->forward_only) {
+                uint64_t g = mix(key | 1);
+                if (start > end) {
+                    c->balance -= g;
+                    c->backward++;
+                    continue;
+                }
+                c->balance += g;
+            }
             if (c->fill) {
                 uint64_t b = key >> c->shift;
                 if (c->fill[b] == c->cap) {
@@ -1089,6 +1105,11 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
                          overflow ? (Py_ssize_t)-1 : written);
 }
 
+/* Below the module's table (issue 32's closed test on half the keys). */
+static PyObject *py_distinct(PyObject *self, PyObject *args);
+static PyObject *py_forward_block(PyObject *self, PyObject *args);
+static PyObject *py_keys_block(PyObject *self, PyObject *args);
+
 static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
      "paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)"},
@@ -1102,8 +1123,166 @@ static PyMethodDef methods[] = {
      "block(block, ox, oy, oz, keys, offset[, fill, cap, shift]) -> bounds, finite, sums, keys written (-1: a bucket "
      "overflowed)"},
     {"sort", py_sort, METH_VARARGS, "sort(keys): in-place ascending sort of uint64 keys"},
+    {"distinct", py_distinct, METH_VARARGS, "distinct(keys, fill, cap, shift) -> whether no bucketed key is there twice"},
+    {"forward_block", py_forward_block, METH_VARARGS,
+     "forward_block(block, ox, oy, oz, keys, fill, cap, shift) -> block()'s results, balance, backward sides"},
+    {"keys_block", py_keys_block, METH_VARARGS, "keys_block(block, keys, fill, cap, shift) -> keys written (-1: overflow)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
 
 PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
+
+/* ---- the closed test on half the keys, without moving them (issue 32) --------------------- */
+
+/* The key buckets' buffers (keys, fill: block(..., fill, cap, shift)'s), both writable and
+ * contiguous, checked to fit each other (and, with `counts`, each fill within [0, cap]); on
+ * failure -1 with the exception set and nothing held. */
+static int get_buckets(PyObject *keyobj, PyObject *fillobj, Py_ssize_t cap, int shift, int counts, Py_buffer *kview,
+                       Py_buffer *fview) {
+    if (PyObject_GetBuffer(keyobj, kview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (PyObject_GetBuffer(fillobj, fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(kview);
+        return -1;
+    }
+    Py_ssize_t buckets = fview->len / 8;
+    const int64_t *fill = (const int64_t *)fview->buf;
+    int bad = kview->itemsize != 8 || fview->itemsize != 8 || shift < 1 || shift > 63 || cap < 0 ||
+              buckets != ((Py_ssize_t)1 << (64 - shift)) || kview->len / 8 < buckets * cap;
+    for (Py_ssize_t b = 0; counts && !bad && b < buckets; b++)
+        bad = fill[b] < 0 || fill[b] > cap;
+    if (bad) {
+        PyBuffer_Release(kview);
+        PyBuffer_Release(fview);
+        PyErr_SetString(PyExc_ValueError, "the key buckets do not fit the buffer");
+        return -1;
+    }
+    return 0;
+}
+
+
+/* distinct(keys, fill, cap, shift) -> whether no key is there twice among bucketed keys
+ * (forward_block's), and there is at least one. Each bucket is sorted in place and checked
+ * while it is in cache; the buckets are never moved together (that would touch every key's
+ * page a second time). Stops at the first bucket with a key twice. */
+static PyObject *py_distinct(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOni", &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer kview, fview;
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0)
+        return NULL;
+    Py_ssize_t buckets = fview.len / 8;
+    const int64_t *fill = (const int64_t *)fview.buf;
+    uint64_t *a = kview.buf, *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
+    if (!tmp) {
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        return PyErr_NoMemory();
+    }
+    Py_ssize_t total = 0;
+    int distinct = 1;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t b = 0; distinct && b < buckets; b++) {
+        uint64_t *bucket = a + b * cap;
+        Py_ssize_t n = fill[b];
+        msd(bucket, n, shift, tmp);
+        for (Py_ssize_t i = 1; i < n; i++)
+            if (bucket[i] == bucket[i - 1]) {
+                distinct = 0;
+                break;
+            }
+        total += n;
+    }
+    Py_END_ALLOW_THREADS
+    free(tmp);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    if (distinct && total > 0)
+        Py_RETURN_TRUE;
+    Py_RETURN_FALSE;
+}
+
+/* forward_block(block, ox, oy, oz, keys, fill, cap, shift) ->
+ *   ((lo0, lo1, lo2, hi0, hi1, hi2), finite, (10 sums), magnitude sum, (3 weighted), keys written,
+ *    balance, backward sides)
+ * block(..., keys, 0, fill, cap, shift) keeping only the keys with bit 0 set (the sides that
+ * run from the smaller corner hash to the larger: half the sides), dealt to buckets; balance is
+ * the sum mod 2^64 of g = mix(key | 1) over those sides minus g over the others, backward the
+ * number of the others. The mesh is closed (keys_pair_up over all the keys) exactly when no
+ * kept key is there twice (distinct), the two counts agree and the balance is
+ * zero, barring a 64-bit coincidence of the balance: with no forward key twice, an edge used
+ * other than once each way is used unequally often in the two directions, and weighs g(edge)
+ * times a nonzero count in the balance (p3d_cli.mesh.analysis). */
+static PyObject *py_forward_block(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *fillobj;
+    double o[3];
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OdddOOni", &obj, &o[0], &o[1], &o[2], &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer view, kview, fview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
+        release_block(&view, &b);
+        return NULL;
+    }
+    double sums[NSUMS];
+    Pass c = {&b, {o[0], o[1], o[2]}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
+    c.forward_only = 1;
+    start_bounds(&c);
+    Py_BEGIN_ALLOW_THREADS
+    memset(sums, 0, sizeof sums);
+    if (b.n)
+        pairwise(&c, 0, b.n, sums);
+    for (int r = 0; r < NSUMS; r++)
+        sums[r] = 0.0 + sums[r];
+    Py_END_ALLOW_THREADS
+    release_block(&view, &b);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    if (c.overflow)
+        c.written = -1;
+    return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)nKn", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
+                         c.finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5],
+                         sums[6], sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], c.written,
+                         (unsigned long long)c.balance, c.backward);
+}
+
+
+/* keys_block(block, keys, fill, cap, shift) -> keys written, -1 when a bucket overflowed:
+ * block(..., keys, 0, fill, cap, shift)'s edge keys alone (no bounds, no sums), for the open
+ * road's pass that makes every key after forward_block's did not prove the mesh closed. */
+static PyObject *py_keys_block(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOni", &obj, &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer view, kview, fview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
+        release_block(&view, &b);
+        return NULL;
+    }
+    Pass c = {&b, {0.0, 0.0, 0.0}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
+        Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+        load(&b, t0, m, raw);
+        edge_keys(&c, raw, m);
+    }
+    Py_END_ALLOW_THREADS
+    release_block(&view, &b);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return PyLong_FromSsize_t(c.overflow ? -1 : c.written);
+}

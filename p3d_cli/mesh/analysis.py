@@ -18,7 +18,7 @@ from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
-from p3d_cli.mesh.kernels import Buckets, compiled, key_buffer
+from p3d_cli.mesh.kernels import Buckets, ForwardBuckets, compiled, key_buffer
 from p3d_cli.mesh.kernels import takes as kernel_takes
 from p3d_cli.results import Bounds, Moments
 
@@ -98,8 +98,9 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     buckets = None
     if closed and fast is not None and 3 * source.face_count >= 1 << 16:
         # The compiled pass deals the keys to buckets as it makes them: the sort then needs
-        # no pass over all of them (p3d_cli.mesh.kernels.Buckets).
-        buckets = Buckets(3 * source.face_count)
+        # no pass over all of them (p3d_cli.mesh.kernels.Buckets); and only the forward half
+        # of them, with the balance of the two directions (ForwardBuckets).
+        buckets = ForwardBuckets(3 * source.face_count)
         keys = None
     else:
         keys = key_buffer(3 * source.face_count) if closed else None
@@ -173,13 +174,13 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     moments = None
     presorted = False
     if buckets is not None:
-        if buckets.overflow:                        # keys crowding one bucket: made again in order
+        if not buckets.overflow and buckets.closed():   # each bucket checked where it lies
             del buckets
-            keys = _keys_in_order(source)
-        else:
-            keys, presorted = buckets.sorted_keys(), True
+            is_closed = bounding = True
+        else:                                       # the open road wants every key, sorted
             del buckets
-        filled = keys.size
+            keys, presorted = _all_keys(source, fast, pairs is not None)
+        filled = 0 if keys is None else keys.size
     if keys is not None:
         keys = keys[:filled]
         is_closed = bounding = keys_pair_up(keys, presorted)
@@ -206,6 +207,26 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
                         scale_exponent=exponent)
 
 
+def _all_keys(source: MeshSource, fast, indexed: bool) -> tuple[np.ndarray, bool]:
+    """Every side's edge key, sorted when the second flag says so: one more pass over the
+    file (the compiled keys alone where it takes the blocks), for a mesh that the forward keys
+    did not prove closed. Its coordinates are finite: the first pass refused any other."""
+    buckets = Buckets(3 * source.face_count)
+    item: Any
+    for item in (source.index_blocks() if indexed else source.read_blocks()):
+        if buckets.overflow:
+            break
+        if indexed or kernel_takes(item):
+            if fast.keys_block(item, buckets.keys, buckets.fill, buckets.cap, buckets.shift) < 0:
+                buckets.overflow = True
+            continue
+        buckets.add(column_edge_keys(columns(item)))
+    if buckets.overflow:                            # keys crowding one bucket: made again in order
+        del buckets
+        return _keys_in_order(source), False
+    return buckets.sorted_keys(), True
+
+
 def _keys_in_order(source: MeshSource) -> np.ndarray:
     """The edge keys of every block, one after the other (a second pass over the file)."""
     keys = key_buffer(3 * source.face_count)
@@ -230,11 +251,12 @@ def _indexed(source: MeshSource) -> bool:
 
 
 def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | None, keys: np.ndarray | None,
-                    filled: int, rescale: bool, buckets: Buckets | None = None):
+                    filled: int, rescale: bool, buckets: ForwardBuckets | None = None):
     """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
-    ``filled``) and its sums; returns ``(lo, hi, keys written, sums)``, or None for the numpy
-    code to take the block (a NaN or infinity, whose message it words; a bound of ±0, whose
-    sign numpy's min and max decide; the first block of a part to be rescaled)."""
+    ``filled``, or the forward ones into ``buckets`` with their balance) and its sums; returns
+    ``(lo, hi, keys written, sums)``, or None for the numpy code to take the block (a NaN or
+    infinity, whose message it words; a bound of ±0, whose sign numpy's min and max decide; the
+    first block of a part to be rescaled)."""
     if sums is None:
         box, finite = fast.bounds(block)
         box = np.array(box)
@@ -243,10 +265,11 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
         if rescale and _exponent(float((box[3:] - box[:3]).max())):
             return None
         sums = MomentSums(origin_from_bounds(box[:3], box[3:], single))
+    balance = backward = 0
     if buckets is not None and not buckets.overflow:
         before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
-        box, finite, totals, magnitude, weighted, written = fast.block(
-            block, *sums.origin, buckets.keys, 0, buckets.fill, buckets.cap, buckets.shift)
+        box, finite, totals, magnitude, weighted, written, balance, backward = fast.forward_block(
+            block, *sums.origin, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
     else:
         box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
     box = np.array(box)
@@ -257,6 +280,9 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     if written < 0:                                 # a bucket overflowed
         buckets.overflow = True
         written = 0
+    if buckets is not None:
+        buckets.balance = (buckets.balance + balance) % (1 << 64)
+        buckets.backward += backward
     sums.add_sums(np.array(totals), magnitude, np.array(weighted), size)
     return box[:3], box[3:], written, sums
 

@@ -123,6 +123,47 @@ class Buckets:
         return self.keys[:kernels.finish(self.keys, self.fill, self.cap, self.shift)]
 
 
+class ForwardBuckets(Buckets):
+    """The closed test of ``p3d props`` on half the keys (issue 32): the compiled pass
+    (``forward_block``) deals to buckets only the keys of the sides that run from the smaller
+    corner hash to the larger (bit 0 set), and sums ``g = mix(key | 1)`` over those minus
+    ``g`` over the others (``balance``, mod 2**64) and counts the others (``backward``).
+
+    The keys pair up (``p3d_cli.mesh.closed.keys_pair_up``: every edge once each way) exactly
+    when no kept key is there twice, the two directions are equally many and the balance is
+    zero (``closed``): with no forward key twice, an edge used otherwise than once each way is
+    used unequally often in the two directions, and adds ``g(edge)`` times that nonzero
+    difference to the balance, which the other such edges cancel only by a 64-bit coincidence
+    (as two edges' keys must coincide to fool the sort). ``closed`` False says nothing more:
+    the caller then makes every key (``Buckets``) for the open-mesh road.
+    """
+
+    def __init__(self, sides: int) -> None:
+        super().__init__((sides + 1) // 2)      # the count of a bucket: a Poisson count of keys
+        self.balance = 0
+        self.backward = 0
+
+    def add(self, block_keys: np.ndarray) -> None:
+        """Deal the forward keys of a block the compiled pass left to the numpy code, and add
+        its sides to the balance."""
+        from p3d_cli.mesh.closed import _mix
+
+        forward = (block_keys & np.uint64(1)).astype(bool)
+        g = _mix(block_keys | np.uint64(1))
+        self.balance = (self.balance + int(g[forward].sum(dtype=np.uint64))
+                        - int(g[~forward].sum(dtype=np.uint64))) % (1 << 64)
+        self.backward += int(block_keys.size - forward.sum())
+        super().add(block_keys[forward])
+
+    def closed(self) -> bool:
+        """Whether all the sides' keys pair up (see the class)."""
+        kernels = KERNELS
+        assert kernels is not None and not self.overflow  # noqa: S101 - made only with the kernels
+        forward = int(self.fill.sum())
+        return (forward > 0 and forward == self.backward and self.balance == 0
+                and bool(kernels.distinct(self.keys, self.fill, self.cap, self.shift)))
+
+
 class NotTaken(Exception):
     """A block the kernels do not read as it is (another dtype or byte order)."""
 
