@@ -101,24 +101,7 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
     n = len(lo)
     if n < 2:
         return
-    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2])
-    cell = float(np.quantile(extent, TYPICAL)) * SCALE
-    if not cell > 0:
-        positive = extent[extent > 0]
-        cell = float(positive.min()) if positive.size else 1.0
-    # The grid's origin and the cell size: floor((x - origin) / size) for every coordinate.
-    origin = lo.min(axis=0).astype(np.float64)
-    level = np.zeros(n, dtype=np.int16)
-    big = extent > cell
-    level[big] = np.ceil(np.log2(extent[big].astype(np.float64) / cell)).astype(np.int16)
-    # log2 rounds: make sure every box fits its level's cells (at most two per axis).
-    while True:
-        short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
-        if not short.size:
-            break
-        level[short] += 1
-    del big, extent
-    top = hi.max(axis=0).astype(np.float64)
+    cell, origin, level, top = _levels(lo, hi)
     levels = np.unique(level).tolist()
     for L in levels:
         members = np.flatnonzero(level == L).astype(np.int32 if n < 2**31 else np.int64)
@@ -137,6 +120,164 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
             for start in range(0, finer.size, PAIR_CHUNK):
                 yield from grid.probe(finer[start:start + PAIR_CHUNK])
             del grid
+
+
+def _levels(lo: np.ndarray, hi: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """``(cell, origin, level, top)``: the finest cell size, the grid's origin (cells are
+    ``floor((x - origin) / size)`` per coordinate), each box's level (its cell size
+    ``cell * 2**level`` at least its largest extent), and the boxes' upper corner."""
+    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2])
+    cell, level = _levels_of(extent)
+    return cell, lo.min(axis=0).astype(np.float64), level, hi.max(axis=0).astype(np.float64)
+
+
+def _levels_of(extent: np.ndarray) -> tuple[float, np.ndarray]:
+    """The finest cell size and each box's level, from the boxes' largest extents."""
+    cell = float(np.quantile(extent, TYPICAL)) * SCALE
+    if not cell > 0:
+        positive = extent[extent > 0]
+        cell = float(positive.min()) if positive.size else 1.0
+    level = np.zeros(len(extent), dtype=np.int16)
+    big = extent > cell
+    level[big] = np.ceil(np.log2(extent[big].astype(np.float64) / cell)).astype(np.int16)
+    # log2 rounds: make sure every box fits its level's cells (at most two per axis).
+    while True:
+        short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
+        if not short.size:
+            break
+        level[short] += 1
+    return cell, level
+
+
+def box_frame(points: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(centre, shift)``: the faces' boxes are taken about the points' centre and scaled by
+    ``2**shift`` to a span near 1 (far from the world origin float32 coordinates would be too
+    coarse, every box 8 wide at 1e8; huge or tiny parts would over- or underflow)."""
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(3)
+    span = float(np.abs(points - centre).max()) if len(points) else 0.0
+    return centre, (-int(np.frexp(span)[1]) if 0 < span < np.inf else 0)
+
+
+#: Pairs per call of the compiled grid (two int64 arrays of this length: 4 MB).
+COMPILED_PAIRS = 1 << 18
+#: Bytes per entry of the compiled grid (its box, face and vertex ids).
+ENTRY = 36
+#: The compiled grid's x cells: the level's cell size over 2**FINE_X (where the keys' bits allow).
+FINE_X = 8
+
+
+def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray,
+                   certified: np.ndarray | None) -> Pairs | None:
+    """The pairs of ``pair_blocks`` by the compiled kernels (``fast``), as face numbers: chunks
+    ``(i, j)``, ``i < j``, of the faces ``live`` whose boxes (``intersections._boxes``'s, made
+    here) overlap, exactly rather than within a quantisation step, and, when ``certified``
+    (per point) is given, that share no certified vertex (``triangle_pairs.uncertified``).
+    None when the compiled grid cannot hold the mesh (a level's cells and the box numbers do
+    not fit one 64-bit key: parts very far apart for their faces' size; more than 2**31
+    points): the caller then takes the numpy road.
+
+    The levels and cells are ``pair_blocks``'s, but each face is entered once, in the cell of
+    its box's lower corner, and looks for its partners: box ``b`` meets box ``a`` only if, along
+    each axis, ``b``'s lower-corner cell lies between ``a``'s lower-corner cell minus the most
+    cells a box of ``b``'s level spans and ``a``'s upper-corner cell (cells are monotone in the
+    coordinates: no rounding argument needed). A level's own pairs are found by each face among
+    the entries after it in key order; a finer face looks up each coarser level."""
+    n = len(live)
+    if n < 2 or len(points) >= 2**31:
+        return None
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    faces = np.ascontiguousarray(faces)
+    if faces.dtype not in (np.int32, np.int64):
+        faces = faces.astype(np.int64)
+    live = np.ascontiguousarray(live)
+    if live.dtype not in (np.int32, np.int64):
+        live = live.astype(np.int64)
+    centre, shift = box_frame(points)
+    frame = ((float(centre[0]), float(centre[1]), float(centre[2])), shift)
+    extent = np.empty(n, dtype=np.float32)
+    least, most = fast.face_extents(points, faces, live, frame, extent)
+    cell, level = _levels_of(extent)
+    del extent
+    origin, top = np.array(least), np.array(most)
+    fbits = max(int(n - 1).bit_length(), 1)
+    index = np.int32 if n < 2**31 else np.int64
+    grids = []
+    for L in np.unique(level).tolist():
+        # Cells of the level's size across y and z (rows), finer along x, down to 1/2**FINE_X
+        # of it as the key's bits allow: a row is scanned only over the x range that can hold
+        # a partner's lower corner.
+        base = cell * 2.0 ** L
+        for fine in range(FINE_X, -1, -1):
+            cell_sizes = np.array([base / 2.0 ** fine, base, base])
+            cells = np.clip(np.floor((top - origin) / cell_sizes), 0, _MAX_CELL).astype(np.int64)
+            bits = tuple(max(int(c).bit_length(), 1) for c in cells)
+            if sum(bits) + fbits <= 64 and fbits <= 62:
+                break
+        else:
+            return None
+        grids.append((L, tuple(float(x) for x in cell_sizes), bits))
+    marks = None if certified is None else np.ascontiguousarray(certified, dtype=bool).view(np.uint8)
+    corner = tuple(float(x) for x in origin)
+    built = []
+    for L, sizes, bits in grids:
+        # Keys and entries in the members' order (their points read in the faces' order),
+        # then the keys sorted and the entries put in their order.
+        members = np.flatnonzero(level == L).astype(index)
+        keys = np.empty(members.size, dtype=np.uint64)
+        entries = _unpaged((keys.size, ENTRY))
+        span = fast.grid_keys(points, faces, live, frame, members, (corner, sizes, bits, fbits, (0, 0, 0)), marks,
+                              keys, entries)
+        fast.sort(keys)
+        fast.grid_order(keys, fbits, entries)
+        if members.size == n:
+            members = None                      # every live face, in order
+        built.append((L, keys, entries, members, (corner, sizes, bits, fbits, span)))
+    # The finer entries that may meet each coarser level's faces (in the box of its faces).
+    probes: list[list] = []
+    for at in range(1, len(built)):
+        box = built[at][2].view(np.float32)
+        box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:].max(axis=0)
+        finer = []
+        for _, finer_keys, finer_entries, finer_members, _ in built[:at]:
+            corners = finer_entries.view(np.float32)
+            near = np.ones(finer_keys.size, dtype=bool)
+            for k in range(3):
+                near &= (corners[:, k] <= box_hi[k]) & (corners[:, 3 + k] >= box_lo[k])
+            finer.append((finer_keys, finer_entries, finer_members, np.flatnonzero(near).astype(index)))
+        probes.append(finer)
+    del level
+
+    def run(keys, entries, members, grid, query_keys, queries, query_members, positions) -> Pairs:
+        out_i, out_j = _unpaged(COMPILED_PAIRS, np.int64), _unpaged(COMPILED_PAIRS, np.int64)
+        total = keys.size if queries is None else positions.size
+        at = 0
+        while at < total:
+            at, written = fast.grid_pairs(keys, entries, members, live, grid, query_keys, queries, query_members,
+                                          positions, at, out_i, out_j)
+            if written < 0:                     # one face's pairs did not fit: more room
+                out_i, out_j = _unpaged(2 * out_i.size, np.int64), _unpaged(2 * out_j.size, np.int64)
+                continue
+            if written:
+                yield out_i[:written].copy(), out_j[:written].copy()
+
+    def pairs() -> Pairs:
+        for at, (_, keys, entries, members, grid) in enumerate(built):
+            yield from run(keys, entries, members, grid, None, None, None, None)
+            for query_keys, queries, query_members, positions in probes[at - 1] if at else ():
+                if positions.size:
+                    yield from run(keys, entries, members, grid, query_keys, queries, query_members, positions)
+
+    return pairs()
+
+
+def _unpaged(shape, dtype=np.uint8) -> np.ndarray:
+    """An uninitialised array in ordinary pages (``kernels.key_buffer``: no huge-page request,
+    whose compaction cost more system time than the work)."""
+    from p3d_cli.mesh.kernels import key_buffer
+
+    size = int(np.prod(shape))
+    return key_buffer((size * np.dtype(dtype).itemsize + 7) // 8).view(np.uint8)[:size * np.dtype(dtype).itemsize] \
+        .view(dtype).reshape(shape)
 
 
 #: Cells per axis at most: faces beyond are in the last cell (clamping keeps the cells monotone,

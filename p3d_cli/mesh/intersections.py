@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import in_safe_range, orient2d
-from p3d_cli.mesh.broadphase import outward_boxes, pair_blocks
+from p3d_cli.mesh.broadphase import box_frame, compiled_pairs, outward_boxes, pair_blocks
+from p3d_cli.mesh.kernels import compiled
 from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
 from p3d_cli.mesh.stars import certified_vertices
@@ -75,7 +76,22 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     kinds: list[np.ndarray] = []
     contacts: list[tuple] = []
     certified = certified_vertices(points, faces, safe) if fans and live.size > 1 else None
-    if live.size > 1:
+    fast = compiled()
+    chunks = (compiled_pairs(fast, points, faces, live, certified) if fast is not None and safe and live.size > 1
+              else None)
+    if chunks is not None:
+        # The compiled grid: the pairs to test, the certified fans' set aside, in batches.
+        batch: list[tuple[np.ndarray, np.ndarray]] = []
+        waiting = 0
+        for i, j in chunks:
+            for at in range(0, i.size, _PAIRS):
+                batch.append((i[at:at + _PAIRS], j[at:at + _PAIRS]))
+                waiting += batch[-1][0].size
+                if waiting >= _PAIRS:
+                    _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+                    batch, waiting = [], 0
+        _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+    elif live.size > 1:
         lo, hi = _boxes(points, faces, live)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
         waiting = 0
@@ -168,9 +184,7 @@ def _boxes(points, faces, live):
     box 8 wide at 1e8; huge or tiny parts would over- or underflow), rounded outwards with a
     float32 step of margin beyond the float64 rounding of the shift, block by block. Boxes only
     choose which pairs are tested: any consistent map that keeps them overlapping does."""
-    centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(3)
-    span = float(np.abs(points - centre).max()) if len(points) else 0.0
-    shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
+    centre, shift = box_frame(points)
     lo = np.empty((live.size, 3), dtype=np.float32)
     hi = np.empty((live.size, 3), dtype=np.float32)
     for start in range(0, live.size, _BLOCK):

@@ -17,6 +17,10 @@ a zero among them (``R`` along an edge, as seen) leaves the vertex to the pair t
 Every sign is exact (``p3d_cli.geometry.predicates``); the certificate is one determinant of
 each kind per corner, fewer operations than the pair tests it replaces (about a dozen pairs
 per face), and it needs no order of the faces around the vertex.
+
+With the compiled kernels (``p3d_cli.mesh.kernels``) both passes run there, the same float
+operations in the same order; the corners whose signs the float filter leaves unsure come
+back and take the exact road below, so the certified vertices are the same either way.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import O3D_BOUND, Planes, turn
+from p3d_cli.mesh.kernels import compiled
 
 #: Corners per vectorised step.
 _STEP = 1 << 15
@@ -54,6 +59,12 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
     # points scaled by a power of two to a span near 1, it neither over- nor underflows.
     span = float(np.abs(points).max()) if m else 0.0
     shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
+    fast = compiled()
+    if fast is not None and safe and m and len(faces):
+        certified = _compiled(fast, points, faces, shift, normal)
+        if certified is not None:
+            return certified
+        normal[:] = 0.0
     for start in range(0, len(faces), _STEP):
         f = faces[start:start + _STEP]
         with np.errstate(under="ignore"):
@@ -86,6 +97,41 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
             good[v[bad]] = False
             hits.append(v[(before > 0) & (after > 0)])
     count = np.bincount(np.concatenate(hits), minlength=m) if hits else np.zeros(m, dtype=np.int64)
+    return good & (count == 1)
+
+
+def _compiled(fast, points, faces, shift: int, normal: np.ndarray) -> np.ndarray | None:
+    """``certified_vertices`` by the compiled kernels (``safe`` points), or None when more
+    corners than it keeps room for were unsure (the numpy road then does them all)."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    faces = np.ascontiguousarray(faces)
+    if faces.dtype not in (np.int32, np.int64):
+        faces = faces.astype(np.int64)
+    fast.star_normals(points, faces, shift, _STEP, normal)
+    m = len(points)
+    good = np.ones(m, dtype=bool)
+    count = np.zeros(m, dtype=np.int64)
+    deferred = np.empty(max(1 << 12, len(faces) // 8), dtype=np.int64)
+    unsure = fast.star_signs(points, faces, normal, O3D_BOUND, tuple(_G[0]), tuple(_G[1]), good.view(np.uint8),
+                             count, deferred)
+    if unsure < 0:
+        return None
+    if unsure:
+        # The corners the filter left unsure: the numpy road's signs, exact where they must be.
+        corner = deferred[:unsure]
+        f, k = faces[corner // 3], corner % 3
+        rows = np.arange(unsure)
+        v = f[rows, k]
+        P, B, C = (np.take(points, f[rows, (k + s) % 3], axis=0) for s in range(3))
+        N = np.take(normal, v, axis=0)
+        R = _reference(N)
+        M, Mabs = _minors(R, N)
+        x, y = B - P, C - P
+        sector = _sector(x, y, N, P, B, C, True)
+        before = _turn(x, M, Mabs, P, B, R, N, True)
+        after = -_turn(y, M, Mabs, P, C, R, N, True)
+        good[v[(sector <= 0) | (before == 0) | (after == 0)]] = False
+        count += np.bincount(v[(before > 0) & (after > 0)], minlength=m)
     return good & (count == 1)
 
 
