@@ -1491,61 +1491,51 @@ typedef struct {
     int32_t v[3];
 } Entry;
 
-/* grid_keys(points, faces, live, frame, members, level, certified, keys, entries) -> span:
- * the keys of a level's members (numbers into live), each with the member's position in its
- * low fbits bits, and their entries, both in the members' order; and the most cells minus one
- * a member's box spans along each axis. certified: per point, or None. Point ids must fit
- * int32. */
+/* grid_keys(points, faces, live, frame, members, level, keys) -> span: the keys of a level's
+ * members (numbers into live; None: all, in order), each with the member's position in its low
+ * fbits bits, in the members' order; and the most cells minus one a member's box spans along
+ * each axis. */
 static PyObject *py_grid_keys(PyObject *self, PyObject *args) {
-    PyObject *po, *fo, *lo, *frame, *mo, *lev, *cert_o, *ko, *eo;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOO", &po, &fo, &lo, &frame, &mo, &lev, &cert_o, &ko, &eo))
+    PyObject *po, *fo, *lo, *frame, *mo, *lev, *ko;
+    if (!PyArg_ParseTuple(args, "OOOOOOO", &po, &fo, &lo, &frame, &mo, &lev, &ko))
         return NULL;
     Level L;
     if (!parse_level(lev, &L))
         return NULL;
-    enum { MEMBERS = F_ARRAYS, CERT, KEYS, ENTRIES, ARRAYS };
+    enum { MEMBERS = F_ARRAYS, KEYS, ARRAYS };
     Py_buffer v[ARRAYS];
-    int got[ARRAYS] = {0}, certify = cert_o != Py_None;
+    int got[ARRAYS] = {0};
     Frame F;
     if (get_frame(po, fo, lo, frame, v, got, &F, "grid_keys") < 0) {
         release_all(v, got, ARRAYS);
         return NULL;
     }
-    const char kinds[ARRAYS] = {0, 0, 0, 'i', 'B', 'Q', 'B'};
-    PyObject *objs[ARRAYS] = {NULL, NULL, NULL, mo, cert_o, ko, eo};
+    const char kinds[ARRAYS] = {0, 0, 0, 'i', 'Q'};
+    PyObject *objs[ARRAYS] = {NULL, NULL, NULL, mo, ko};
     for (int k = MEMBERS; k < ARRAYS; k++) {
-        if (k == CERT && !certify)
+        if (k == MEMBERS && mo == Py_None)
             continue;
-        if (get_array(objs[k], &v[k], kinds[k], k >= KEYS, "grid_keys") < 0) {
+        if (get_array(objs[k], &v[k], kinds[k], k == KEYS, "grid_keys") < 0) {
             release_all(v, got, ARRAYS);
             return NULL;
         }
         got[k] = 1;
     }
-    const Py_buffer *members = &v[MEMBERS];
-    Py_ssize_t k = members->len / members->itemsize;
-    int bad = v[KEYS].len != 8 * k || v[ENTRIES].len != (Py_ssize_t)sizeof(Entry) * k ||
-              ((int64_t)1 << L.fbits) < k || F.m_points > 2147483647 || (certify && v[CERT].len != F.m_points);
+    const Py_buffer *members = got[MEMBERS] ? &v[MEMBERS] : NULL; /* None: every live face */
+    Py_ssize_t k = members ? members->len / members->itemsize : F.n;
+    int bad = v[KEYS].len != 8 * k || ((int64_t)1 << L.fbits) < k;
     int64_t span[3] = {0, 0, 0};
     if (!bad) {
         uint64_t *keys = v[KEYS].buf;
-        Entry *entries = v[ENTRIES].buf;
-        const uint8_t *cert = certify ? v[CERT].buf : NULL;
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t e = 0; e < k && !bad; e++) {
-            int64_t box = at_index(members, e);
+            int64_t box = members ? at_index(members, e) : e;
             if (box < 0 || box >= F.n) {
                 bad = 1;
                 break;
             }
-            Entry *t = entries + e;
-            const float *b = t->box;
-            face_box(&F, box, t->box);
-            int64_t face = at_index(F.live, (Py_ssize_t)box);
-            for (int c = 0; c < 3; c++) {
-                int32_t id = (int32_t)at_index(F.faces, 3 * face + c);
-                t->v[c] = cert && cert[id] ? ~id : id;
-            }
+            float b[6];
+            face_box(&F, box, b);
             uint64_t key = 0;
             for (int a = 2; a >= 0; a--) {
                 int64_t c0 = cell_of(b[a], L.origin[a], L.size[a]), c1 = cell_of(b[3 + a], L.origin[a], L.size[a]);
@@ -1563,73 +1553,69 @@ static PyObject *py_grid_keys(PyObject *self, PyObject *args) {
     }
     release_all(v, got, ARRAYS);
     if (bad) {
-        PyErr_SetString(PyExc_ValueError, "grid_keys: the members, level, keys and entries do not match");
+        PyErr_SetString(PyExc_ValueError, "grid_keys: the members, level and keys do not match");
         return NULL;
     }
     return Py_BuildValue("LLL", (long long)span[0], (long long)span[1], (long long)span[2]);
 }
 
-/* grid_order(keys, fbits, entries): puts the entries in the order of the sorted keys (entry
- * e moves to the place of the key whose low fbits bits are e), in place: one cycle of the
- * permutation after the other, each entry read once. */
-static PyObject *py_grid_order(PyObject *self, PyObject *args) {
-    PyObject *ko, *eo;
+/* grid_fill(points, faces, live, frame, keys, fbits, members, certified, entries): the entries
+ * (k, 36) bytes of keys (any k of a level's keys, in their order): the box and vertex ids of
+ * the live face members[p], p the key's low fbits bits (members None: p itself). */
+static PyObject *py_grid_fill(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *lo, *frame, *ko, *mo, *cert_o, *eo;
     int fbits;
-    if (!PyArg_ParseTuple(args, "OiO", &ko, &fbits, &eo))
+    if (!PyArg_ParseTuple(args, "OOOOOiOOO", &po, &fo, &lo, &frame, &ko, &fbits, &mo, &cert_o, &eo))
         return NULL;
-    Py_buffer v[2];
-    int got[2] = {0};
-    if (get_array(ko, &v[0], 'Q', 0, "grid_order") < 0)
-        return NULL;
-    got[0] = 1;
-    if (get_array(eo, &v[1], 'B', 1, "grid_order") < 0) {
-        release_all(v, got, 2);
+    enum { KEYS = F_ARRAYS, MEMBERS, CERT, ENTRIES, ARRAYS };
+    Py_buffer v[ARRAYS];
+    int got[ARRAYS] = {0}, certify = cert_o != Py_None;
+    Frame F;
+    if (get_frame(po, fo, lo, frame, v, got, &F, "grid_fill") < 0) {
+        release_all(v, got, ARRAYS);
         return NULL;
     }
-    got[1] = 1;
-    Py_ssize_t k = v[0].len / 8;
-    const uint64_t *keys = v[0].buf;
-    Entry *entries = v[1].buf;
-    uint64_t mask = fbits >= 1 && fbits <= 62 ? ((uint64_t)1 << fbits) - 1 : 0;
-    int bad = v[1].len != (Py_ssize_t)sizeof(Entry) * k || !mask;
-    uint8_t *done = bad ? NULL : calloc((size_t)k / 8 + 1, 1);
-    if (!bad && !done) {
-        release_all(v, got, 2);
-        return PyErr_NoMemory();
+    const char kinds[ARRAYS] = {0, 0, 0, 'Q', 'i', 'B', 'B'};
+    PyObject *objs[ARRAYS] = {NULL, NULL, NULL, ko, mo, cert_o, eo};
+    for (int k = KEYS; k < ARRAYS; k++) {
+        if ((k == CERT && !certify) || (k == MEMBERS && mo == Py_None))
+            continue;
+        if (get_array(objs[k], &v[k], kinds[k], k == ENTRIES, "grid_fill") < 0) {
+            release_all(v, got, ARRAYS);
+            return NULL;
+        }
+        got[k] = 1;
     }
-    /* A permutation: every position named once. */
-    for (Py_ssize_t e = 0; e < k && !bad; e++) {
-        uint64_t p = keys[e] & mask;
-        if ((Py_ssize_t)p >= k || (done[p >> 3] >> (p & 7) & 1))
-            bad = 1;
-        else
-            done[p >> 3] |= (uint8_t)(1 << (p & 7));
-    }
+    const Py_buffer *members = got[MEMBERS] ? &v[MEMBERS] : NULL;
+    Py_ssize_t k = v[KEYS].len / 8, count = members ? members->len / members->itemsize : F.n;
+    int bad = v[ENTRIES].len != (Py_ssize_t)sizeof(Entry) * k || fbits < 1 || fbits > 62 ||
+              F.m_points > 2147483647 || (certify && v[CERT].len != F.m_points);
     if (!bad) {
-        memset(done, 0, (size_t)k / 8 + 1);
+        const uint64_t *keys = v[KEYS].buf;
+        const uint8_t *cert = certify ? v[CERT].buf : NULL;
+        Entry *entries = v[ENTRIES].buf;
+        uint64_t mask = ((uint64_t)1 << fbits) - 1;
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t e = 0; e < k; e++) {
-            if (done[e >> 3] >> (e & 7) & 1)
-                continue;
-            Entry first = entries[e];
-            Py_ssize_t j = e;
-            for (;;) {
-                done[j >> 3] |= (uint8_t)(1 << (j & 7));
-                Py_ssize_t from = (Py_ssize_t)(keys[j] & mask);
-                if (from == e) {
-                    entries[j] = first;
-                    break;
-                }
-                entries[j] = entries[from];
-                j = from;
+            Py_ssize_t p = (Py_ssize_t)(keys[e] & mask);
+            int64_t box = p < count ? (members ? at_index(members, p) : p) : -1;
+            if (box < 0 || box >= F.n) {
+                bad = 1;
+                break;
+            }
+            Entry *t = entries + e;
+            face_box(&F, box, t->box);
+            int64_t face = at_index(F.live, (Py_ssize_t)box);
+            for (int c = 0; c < 3; c++) {
+                int32_t id = (int32_t)at_index(F.faces, 3 * face + c);
+                t->v[c] = cert && cert[id] ? ~id : id;
             }
         }
         Py_END_ALLOW_THREADS
     }
-    free(done);
-    release_all(v, got, 2);
+    release_all(v, got, ARRAYS);
     if (bad) {
-        PyErr_SetString(PyExc_ValueError, "grid_order: the keys are not a permutation of the entries");
+        PyErr_SetString(PyExc_ValueError, "grid_fill: the keys, members, faces and entries do not match");
         return NULL;
     }
     Py_RETURN_NONE;
@@ -1680,13 +1666,14 @@ static inline int emit(Emit *E, const Entry *A, int64_t fa, const Entry *B, uint
     return 0;
 }
 
-/* grid_pairs(keys, entries, members, live, level, query_keys, queries, query_members, at, start,
- *            out_i, out_j) -> (next, written)
+/* grid_pairs(keys, entries, window, members, live, level, query_keys, queries, query_members, at,
+ *            start, stop, out_i, out_j) -> (next, written)
  * The pairs of faces whose boxes overlap (closed) and that share no certified vertex, between
  * queries and the level's entries (sorted keys, grid_keys with the level's span; their entries,
  * grid_entries), as face numbers, smaller first, in out_i/out_j (int64), from query `start`
- * on (faces live[members[p]], the positions p in the keys' low bits; members None: all the
- * live faces, in order). next: the first query not done; written -1 when one query's pairs do not fit in the
+ * on, before query `stop` (faces live[members[p]], the positions p in the keys' low bits;
+ * members None: all the live faces, in order). entries are those of keys[window:]; the
+ * entries a scan needs beyond them raise ValueError. next: the first query not done; written -1 when one query's pairs do not fit in the
  * outputs (make them larger).
  * queries None: the level's own pairs, each once (an entry keeps the entries after it in key
  * order, found by a cursor per row that moves forward only, as the queries' cells do); else
@@ -1698,9 +1685,9 @@ static inline int emit(Emit *E, const Entry *A, int64_t fa, const Entry *B, uint
  * level's span and a's upper-corner cell. */
 static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
     PyObject *ko, *eo, *mo, *live_o, *lev, *qko, *qo, *qmo, *ato, *io, *jo;
-    Py_ssize_t start;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOnOO", &ko, &eo, &mo, &live_o, &lev, &qko, &qo, &qmo, &ato, &start, &io,
-                          &jo))
+    Py_ssize_t start, stop, window;
+    if (!PyArg_ParseTuple(args, "OOnOOOOOOOnnOO", &ko, &eo, &window, &mo, &live_o, &lev, &qko, &qo, &qmo, &ato,
+                          &start, &stop, &io, &jo))
         return NULL;
     Level L;
     if (!parse_level(lev, &L))
@@ -1721,9 +1708,14 @@ static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
         got[k] = 1;
     }
     Py_ssize_t nk = v[KEYS].len / 8, nq = cross ? v[AT].len / v[AT].itemsize : nk;
+    Py_ssize_t nent = v[ENTRIES].len / (Py_ssize_t)sizeof(Entry);
+    if (stop < nq)
+        nq = stop;
     Py_ssize_t nqe = cross ? v[QKEYS].len / 8 : nk, n = v[LIVE].len / v[LIVE].itemsize;
     uint64_t fmask = ((uint64_t)1 << L.fbits) - 1;
-    int bad = v[ENTRIES].len != nk * (Py_ssize_t)sizeof(Entry) || v[OUT_I].len != v[OUT_J].len || start < 0 ||
+    int bad = v[ENTRIES].len != nent * (Py_ssize_t)sizeof(Entry) || window < 0 || window + nent > nk ||
+              (cross && window != 0) || v[OUT_I].len != v[OUT_J].len || start < 0 ||
+              (!cross && start < nq && start < window) ||
               (cross && v[QUERIES].len != nqe * (Py_ssize_t)sizeof(Entry));
     for (Py_ssize_t e = 0; cross && e < nq && !bad; e++) {
         int64_t q = at_index(&v[AT], e);
@@ -1760,12 +1752,17 @@ static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
     const uint64_t *qkeys = cross ? v[QKEYS].buf : keys;
     int bx = L.bits[0], by = L.bits[1], fb = L.fbits;
     int64_t xmax = ((int64_t)1 << bx) - 1, ymax = ((int64_t)1 << by) - 1, zmax = ((int64_t)1 << L.bits[2]) - 1;
-    Py_ssize_t next = start < nq ? start : nq, written = 0;
+    Py_ssize_t next = start < nq ? start : nq, written = 0, end = window + nent;
+    int short_window = 0;
     Py_BEGIN_ALLOW_THREADS
     for (Py_ssize_t q = start; q < nq; q++) {
         Py_ssize_t before = E.count;
         Py_ssize_t qa = cross ? (Py_ssize_t)at_index(&v[AT], q) : q;
-        const Entry *A = queries + qa;
+        if (!cross && qa >= end) {
+            short_window = 1;
+            break;
+        }
+        const Entry *A = cross ? queries + qa : entries + (qa - window);
         Py_ssize_t qp = (Py_ssize_t)(qkeys[qa] & fmask);
         int64_t fa = at_index(&v[LIVE], qmembers ? (Py_ssize_t)at_index(qmembers, qp) : qp);
         int64_t c0[3], c1[3];
@@ -1816,13 +1813,20 @@ static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
                     if (outside || x0 > x1)
                         continue;
                     uint64_t last = (row | (uint64_t)x1) << fb | fmask;
-                    for (; e < nk && keys[e] <= last; e++)
-                        if (emit(&E, A, fa, entries + e, keys[e]) < 0) {
+                    for (; e < nk && keys[e] <= last; e++) {
+                        if (e >= end) {
+                            short_window = full = 1;
+                            break;
+                        }
+                        if (emit(&E, A, fa, entries + (e - window), keys[e]) < 0) {
                             full = 1;
                             break;
                         }
+                    }
                 }
         }
+        if (short_window)
+            break;
         if (full) {
             E.count = before;
             written = before ? before : -1;
@@ -1835,6 +1839,10 @@ static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     free(cursor);
     release_all(v, got, ARRAYS);
+    if (short_window) {
+        PyErr_SetString(PyExc_ValueError, "grid_pairs: the entries do not reach the rows the queries scan");
+        return NULL;
+    }
     return Py_BuildValue("nn", next, written);
 }
 
@@ -1856,12 +1864,12 @@ static PyMethodDef methods[] = {
      "star_signs(points, faces, normal, bound, g0, g1, good, count, deferred) -> deferred count (-1: too many)"},
     {"face_extents", py_face_extents, METH_VARARGS,
      "face_extents(points, faces, live, frame, extent) -> (least lower corner, greatest upper corner)"},
-    {"grid_keys", py_grid_keys, METH_VARARGS,
-     "grid_keys(points, faces, live, frame, members, level, certified, keys, entries) -> span"},
-    {"grid_order", py_grid_order, METH_VARARGS, "grid_order(sorted keys, fbits, entries): entries in key order"},
+    {"grid_keys", py_grid_keys, METH_VARARGS, "grid_keys(points, faces, live, frame, members, level, keys) -> span"},
+    {"grid_fill", py_grid_fill, METH_VARARGS,
+     "grid_fill(points, faces, live, frame, keys, fbits, members, certified, entries)"},
     {"grid_pairs", py_grid_pairs, METH_VARARGS,
-     "grid_pairs(keys, entries, members, live, level, query_keys, queries, query_members, at, start, out_i, out_j) -> "
-     "(next, written)"},
+     "grid_pairs(keys, entries, window, members, live, level, query_keys, queries, query_members, at, start, stop, "
+     "out_i, out_j) -> (next, written)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};

@@ -158,10 +158,12 @@ def box_frame(points: np.ndarray) -> tuple[np.ndarray, int]:
     return centre, (-int(np.frexp(span)[1]) if 0 < span < np.inf else 0)
 
 
-#: Pairs per call of the compiled grid (two int64 arrays of this length: 4 MB).
-COMPILED_PAIRS = 1 << 18
-#: Bytes per entry of the compiled grid (its box, face and vertex ids).
+#: Pairs per call of the compiled grid (two int64 arrays of this length: 1 MB).
+COMPILED_PAIRS = 1 << 16
+#: Bytes per entry of the compiled grid (its box and vertex ids).
 ENTRY = 36
+#: Faces per window of the compiled grid's scan (their entries made together).
+WINDOW = 1 << 16
 #: The compiled grid's x cells: the level's cell size over 2**FINE_X (where the keys' bits allow).
 FINE_X = 8
 
@@ -220,52 +222,85 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
     corner = tuple(float(x) for x in origin)
     built = []
     for L, sizes, bits in grids:
-        # Keys and entries in the members' order (their points read in the faces' order),
-        # then the keys sorted and the entries put in their order.
-        members = np.flatnonzero(level == L).astype(index)
-        keys = np.empty(members.size, dtype=np.uint64)
-        entries = _unpaged((keys.size, ENTRY))
-        span = fast.grid_keys(points, faces, live, frame, members, (corner, sizes, bits, fbits, (0, 0, 0)), marks,
-                              keys, entries)
+        # The keys in the members' order (members None: every live face, in order), sorted.
+        members = np.flatnonzero(level == L).astype(index) if len(grids) > 1 else None
+        keys = np.empty(n if members is None else members.size, dtype=np.uint64)
+        span = fast.grid_keys(points, faces, live, frame, members, (corner, sizes, bits, fbits, (0, 0, 0)), keys)
         fast.sort(keys)
-        fast.grid_order(keys, fbits, entries)
-        if members.size == n:
-            members = None                      # every live face, in order
-        built.append((L, keys, entries, members, (corner, sizes, bits, fbits, span)))
-    # The finer entries that may meet each coarser level's faces (in the box of its faces).
-    probes: list[list] = []
-    for at in range(1, len(built)):
-        box = built[at][2].view(np.float32)
-        box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:].max(axis=0)
-        finer = []
-        for _, finer_keys, finer_entries, finer_members, _ in built[:at]:
-            corners = finer_entries.view(np.float32)
-            near = np.ones(finer_keys.size, dtype=bool)
-            for k in range(3):
-                near &= (corners[:, k] <= box_hi[k]) & (corners[:, 3 + k] >= box_lo[k])
-            finer.append((finer_keys, finer_entries, finer_members, np.flatnonzero(near).astype(index)))
-        probes.append(finer)
+        built.append((keys, members, (corner, sizes, bits, fbits, span)))
     del level
 
-    def run(keys, entries, members, grid, query_keys, queries, query_members, positions) -> Pairs:
+    def fill(keys, members):
+        """The entries of ``keys`` (boxes and vertex ids beside the keys: scans read in order)."""
+        entries = _unpaged((keys.size, ENTRY))
+        fast.grid_fill(points, faces, live, frame, keys, fbits, members, marks, entries)
+        return entries
+
+    def run(keys, entries, window, members, grid, queries, start, stop) -> Pairs:
+        query_keys, query_entries, query_members, positions = queries or (None, None, None, None)
         out_i, out_j = _unpaged(COMPILED_PAIRS, np.int64), _unpaged(COMPILED_PAIRS, np.int64)
-        total = keys.size if queries is None else positions.size
-        at = 0
-        while at < total:
-            at, written = fast.grid_pairs(keys, entries, members, live, grid, query_keys, queries, query_members,
-                                          positions, at, out_i, out_j)
+        at = start
+        while at < stop:
+            at, written = fast.grid_pairs(keys, entries, window, members, live, grid, query_keys, query_entries,
+                                          query_members, positions, at, stop, out_i, out_j)
             if written < 0:                     # one face's pairs did not fit: more room
                 out_i, out_j = _unpaged(2 * out_i.size, np.int64), _unpaged(2 * out_j.size, np.int64)
                 continue
             if written:
                 yield out_i[:written].copy(), out_j[:written].copy()
 
-    def pairs() -> Pairs:
-        for at, (_, keys, entries, members, grid) in enumerate(built):
-            yield from run(keys, entries, members, grid, None, None, None, None)
-            for query_keys, queries, query_members, positions in probes[at - 1] if at else ():
+    def own(keys, members, grid) -> Pairs:
+        """A level's own pairs, WINDOW faces at a time, with the entries of the rows they scan
+        (up to the last one's row plus the span: a few rows, not the whole level's)."""
+        _, _, (bx, by, _), _, (_, sy, sz) = grid
+        row_shift = bx + fbits
+        entries = _unpaged((0, ENTRY))
+        have, done = 0, 0                        # entries[:done - have] are those of keys[have:done]
+        for q0 in range(0, keys.size, WINDOW):
+            q1 = min(keys.size, q0 + WINDOW)
+            row = int(keys[q1 - 1]) >> row_shift
+            z, y = row >> by, row & ((1 << by) - 1)
+            top = ((z + sz) << by) | min(y + sy, (1 << by) - 1)
+            bound = (top + 1) << row_shift
+            end = keys.size if bound >= 2**64 else int(np.searchsorted(keys, np.uint64(bound), side="left"))
+            # The entries the last window made past q0 are kept (moved down), the rest made.
+            kept = max(done - q0, 0)
+            old = entries[q0 - have:done - have].copy() if kept else None
+            if end - q0 > len(entries):
+                entries = _unpaged((max(end - q0, 2 * len(entries)), ENTRY))
+            if old is not None:
+                entries[:kept] = old
+            del old
+            if end > q0 + kept:
+                fast.grid_fill(points, faces, live, frame, keys[q0 + kept:end], fbits, members, marks,
+                               entries[kept:end - q0])
+            have, done = q0, end
+            yield from run(keys, entries[:end - q0], q0, members, grid, None, q0, q1)
+
+    def probes(at) -> Pairs:
+        """The finer levels' faces near a coarser level's faces, looking its cells up."""
+        keys, members, grid = built[at]
+        entries = fill(keys, members)
+        box = entries.view(np.float32)
+        box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:6].max(axis=0)
+        for finer_keys, finer_members, _ in built[:at]:
+            for q0 in range(0, finer_keys.size, WINDOW):
+                query_keys = finer_keys[q0:q0 + WINDOW]
+                query_entries = fill(query_keys, finer_members)
+                corners = query_entries.view(np.float32)
+                near = np.ones(query_keys.size, dtype=bool)
+                for k in range(3):
+                    near &= (corners[:, k] <= box_hi[k]) & (corners[:, 3 + k] >= box_lo[k])
+                positions = np.flatnonzero(near).astype(index)
                 if positions.size:
-                    yield from run(keys, entries, members, grid, query_keys, queries, query_members, positions)
+                    yield from run(keys, entries, 0, members, grid,
+                                   (query_keys, query_entries, finer_members, positions), 0, positions.size)
+
+    def pairs() -> Pairs:
+        for at, (keys, members, grid) in enumerate(built):
+            yield from own(keys, members, grid)
+            if at:
+                yield from probes(at)
 
     return pairs()
 

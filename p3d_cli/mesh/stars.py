@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import O3D_BOUND, Planes, turn
-from p3d_cli.mesh.kernels import compiled
+from p3d_cli.mesh.kernels import compiled, key_buffer, sort
 
 #: Corners per vectorised step.
 _STEP = 1 << 15
@@ -45,7 +45,8 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
     points : (m, 3) float64
     faces : (n, 3) int
         A closed mesh without non-manifold vertices or edges: every vertex's faces form one
-        fan (the caller's condition; elsewhere the counting below proves nothing).
+        fan (the caller's condition; elsewhere the counting below proves nothing, except at
+        the ``paired_vertices``, whose faces form closed fans: one wrap in all is one fan).
     safe : bool
         ``predicates.in_safe_range(points)``.
 
@@ -98,6 +99,41 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
             hits.append(v[(before > 0) & (after > 0)])
     count = np.bincount(np.concatenate(hits), minlength=m) if hits else np.zeros(m, dtype=np.int64)
     return good & (count == 1)
+
+
+def paired_vertices(faces: np.ndarray, m: int) -> np.ndarray:
+    """Which of the ``m`` vertices have every edge paired once each way: around ``v``, each
+    neighbour is the second corner after ``v`` of exactly one face and the third of exactly
+    one (faces ``(v, b, c)`` read from ``v``). The faces around such a vertex then form closed
+    fans, each face's sides shared with the next, however open or non-manifold the mesh is
+    elsewhere, and ``certified_vertices``'s count (one wrap in all) proves them. A vertex on a
+    boundary, misoriented or non-manifold edge, or of a face with a repeated corner, is not.
+
+    Exact: the keys ``(v, b)`` and ``(v, c)`` of every corner sorted (a vertex has as many of
+    each), equal position by position and ``(v, b)`` never twice.
+    """
+    f = np.asarray(faces, dtype=np.int64)
+    if m == 0 or len(f) == 0:
+        return np.zeros(m, dtype=bool)
+    bits = max(int(m - 1).bit_length(), 1)
+    if 2 * bits > 63:
+        return np.zeros(m, dtype=bool)
+    v = f.ravel()
+    out = key_buffer(v.size)
+    np.bitwise_or(v << bits, np.roll(f, -1, axis=1).ravel(), out=out.view(np.int64))
+    into = key_buffer(v.size)
+    np.bitwise_or(v << bits, np.roll(f, -2, axis=1).ravel(), out=into.view(np.int64))
+    del v
+    sort(out)
+    sort(into)
+    good = np.ones(m, dtype=bool)
+    owner = (out >> np.uint64(bits)).astype(np.int64)
+    good[owner[out != into]] = False
+    twice = np.flatnonzero(out[1:] == out[:-1])
+    good[owner[twice]] = False
+    # A face with a repeated corner: an edge (v, v).
+    good[f[(f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])].ravel()] = False
+    return good
 
 
 def _compiled(fast, points, faces, shift: int, normal: np.ndarray) -> np.ndarray | None:

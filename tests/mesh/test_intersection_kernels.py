@@ -131,7 +131,12 @@ def compiled_pair_list(points, faces, live, certified=None):
 
 
 @pytest.mark.parametrize("name", MESHES)
-def test_compiled_pairs_are_the_overlapping_boxes(name):
+@pytest.mark.parametrize("window", [7, 1 << 16])
+def test_compiled_pairs_are_the_overlapping_boxes(name, window, monkeypatch):
+    """Scanned a window of faces at a time (7: many windows, each with the rows it reaches)."""
+    import p3d_cli.mesh.broadphase as broadphase
+
+    monkeypatch.setattr(broadphase, "WINDOW", window)
     points, faces = MESHES[name]()
     live = np.arange(len(faces), dtype=np.int32)[::-1][::2].copy()       # some faces left out, out of order
     got = compiled_pair_list(points, faces, live)
@@ -195,17 +200,22 @@ def test_overlapping_tori_are_numpys():
 
 
 def test_bad_arguments_raise():
-    keys = np.zeros(3, dtype=np.uint64)
-    entries = np.zeros((2, 36), dtype=np.uint8)                 # one entry short
+    keys = np.arange(3, dtype=np.uint64)
     level = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4), 4, (1, 1, 1))
     out = np.zeros(8, dtype=np.int64)
-    with pytest.raises(ValueError):
-        KERNELS.grid_pairs(keys, entries, None, np.arange(3), level, None, None, None, None, 0, out, out.copy())
-    with pytest.raises(ValueError):                             # keys of 70 bits
-        KERNELS.grid_pairs(keys, np.zeros((3, 36), np.uint8), None, np.arange(3),
-                           ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (30, 30, 6), 4, (1, 1, 1)), None, None, None, None, 0,
-                           out, out.copy())
-    with pytest.raises(ValueError):                             # a vertex id out of range
+
+    def pairs(entries, level=level, window=0):
+        return KERNELS.grid_pairs(keys, entries, window, None, np.arange(3), level, None, None, None, None, 0, 3, out,
+                                  out.copy())
+
+    assert pairs(np.zeros((3, 36), np.uint8)) == (3, 3)           # three equal boxes at the origin
+    with pytest.raises(ValueError):                              # entries beyond the keys
+        pairs(np.zeros((4, 36), np.uint8))
+    with pytest.raises(ValueError):                              # a scan past the window's entries
+        pairs(np.zeros((2, 36), np.uint8))
+    with pytest.raises(ValueError):                              # keys of 70 bits
+        pairs(np.zeros((3, 36), np.uint8), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (30, 30, 6), 4, (1, 1, 1)))
+    with pytest.raises(ValueError):                              # a vertex id out of range
         KERNELS.star_normals(np.zeros((3, 3)), np.array([[0, 1, 3]]), 0, 8, np.zeros((3, 3)))
     with pytest.raises(TypeError):
         KERNELS.star_normals(np.zeros((3, 3), np.float32), np.array([[0, 1, 2]]), 0, 8, np.zeros((3, 3)))
@@ -268,3 +278,70 @@ def write(path, triangles) -> None:
     records["corners"] = triangles
     with open(path, "wb") as f:
         f.write(b"\0" * 80 + np.uint32(len(triangles)).tobytes() + records.tobytes())
+
+
+def paired_oracle(faces, m):
+    """``paired_vertices`` the slow way: per vertex, its faces' next and previous corners."""
+    nexts = [[] for _ in range(m)]
+    prevs = [[] for _ in range(m)]
+    for f in np.asarray(faces).tolist():
+        for k in range(3):
+            nexts[f[k]].append(f[(k + 1) % 3])
+            prevs[f[k]].append(f[(k + 2) % 3])
+    return np.array([len(set(n)) == len(n) and sorted(n) == sorted(p) and v not in n
+                     for v, (n, p) in enumerate(zip(nexts, prevs))])
+
+
+def open_torus(holes: int = 7):
+    points, faces = torus(30, 14)
+    return points, np.delete(faces, np.arange(0, len(faces), len(faces) // holes), axis=0)
+
+
+@pytest.mark.parametrize("case", ["open torus", "soup on a grid", "bowtie", "turned face", "doubled face"])
+def test_paired_vertices_are_the_oracles(case):
+    from p3d_cli.mesh.stars import paired_vertices
+
+    if case == "open torus":
+        points, faces = open_torus()
+    elif case == "soup on a grid":
+        points, faces = soup(5, n=200, grid=3)
+    else:
+        points, faces = torus(12, 6)
+        if case == "bowtie":                 # a second torus sharing one vertex
+            faces = np.concatenate([faces, np.where(faces == 0, 0, faces + len(points))])
+            points = np.concatenate([points, points + [8.0, 0.0, 0.0]])
+        elif case == "turned face":
+            faces = faces.copy()
+            faces[5] = faces[5, ::-1]
+        else:
+            faces = np.concatenate([faces, faces[:1]])
+    got = paired_vertices(faces, len(points))
+    assert np.array_equal(got, paired_oracle(faces, len(points)))
+    if case == "bowtie":
+        # Two closed fans at vertex 0: its edges pair up, and the count (two wraps) refuses it.
+        assert got.all()
+        assert not certified_vertices(points, faces)[0]
+    elif case != "soup on a grid":
+        assert 0 < got.sum() < len(points)
+
+
+@pytest.mark.parametrize("holes", [1, 7, 40])
+def test_open_meshes_certify_their_inner_fans_and_find_the_same_pairs(holes):
+    """An open torus, alone and pushed through a closed one: the fans away from the holes are
+    certified (fewer pairs to test), and the pairs found are those of the pair test alone and
+    of the numpy road."""
+    from p3d_cli.mesh.stars import paired_vertices
+
+    points, faces = open_torus(holes)
+    paired = paired_vertices(faces, len(points))
+    assert (certified_vertices(points, faces) & paired).sum() > len(points) // 2
+    q, g = torus(20, 10, at=(1.2, 0.3, 0.2))
+    both = np.concatenate([points, q]), np.concatenate([faces, g + len(points)])
+    for p, f in ((points, faces), both):
+        got = results(p, f, False)
+        assert got == numpy_road(results, p, f, False)
+    live = np.arange(len(both[1]))
+    all_pairs = compiled_pair_list(*both, live)
+    cert = certified_vertices(*both) & paired_vertices(both[1], len(both[0]))
+    assert len(compiled_pair_list(*both, live, cert)) < len(all_pairs) / 3
+    assert results(*both, False)[0] > 0
