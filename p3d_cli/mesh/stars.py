@@ -112,27 +112,26 @@ def paired_vertices(faces: np.ndarray, m: int) -> np.ndarray:
     Exact: the keys ``(v, b)`` and ``(v, c)`` of every corner sorted (a vertex has as many of
     each), equal position by position and ``(v, b)`` never twice.
     """
-    f = np.asarray(faces, dtype=np.int64)
-    if m == 0 or len(f) == 0:
+    faces = np.asarray(faces)
+    if m == 0 or len(faces) == 0:
         return np.zeros(m, dtype=bool)
     bits = max(int(m - 1).bit_length(), 1)
     if 2 * bits > 63:
         return np.zeros(m, dtype=bool)
-    v = f.ravel()
-    out = key_buffer(v.size)
-    np.bitwise_or(v << bits, np.roll(f, -1, axis=1).ravel(), out=out.view(np.int64))
-    into = key_buffer(v.size)
-    np.bitwise_or(v << bits, np.roll(f, -2, axis=1).ravel(), out=into.view(np.int64))
-    del v
+    good = np.ones(m, dtype=bool)
+    out, into = key_buffer(3 * len(faces)), key_buffer(3 * len(faces))
+    for start in range(0, len(faces), _STEP):            # bounded temporaries
+        f = faces[start:start + _STEP].astype(np.int64)
+        v = f.ravel() << bits
+        out[3 * start:3 * start + v.size] = (v | np.roll(f, -1, axis=1).ravel()).view(np.uint64)
+        into[3 * start:3 * start + v.size] = (v | np.roll(f, -2, axis=1).ravel()).view(np.uint64)
+        # A face with a repeated corner: an edge (v, v).
+        good[f[(f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])].ravel()] = False
     sort(out)
     sort(into)
-    good = np.ones(m, dtype=bool)
-    owner = (out >> np.uint64(bits)).astype(np.int64)
-    good[owner[out != into]] = False
-    twice = np.flatnonzero(out[1:] == out[:-1])
-    good[owner[twice]] = False
-    # A face with a repeated corner: an edge (v, v).
-    good[f[(f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])].ravel()] = False
+    top = np.uint64(bits)
+    good[(out[np.flatnonzero(out != into)] >> top).astype(np.int64)] = False
+    good[(out[np.flatnonzero(out[1:] == out[:-1])] >> top).astype(np.int64)] = False
     return good
 
 
