@@ -1714,7 +1714,7 @@ static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
     Py_ssize_t nqe = cross ? v[QKEYS].len / 8 : nk, n = v[LIVE].len / v[LIVE].itemsize;
     uint64_t fmask = ((uint64_t)1 << L.fbits) - 1;
     int bad = v[ENTRIES].len != nent * (Py_ssize_t)sizeof(Entry) || window < 0 || window + nent > nk ||
-              (cross && window != 0) || v[OUT_I].len != v[OUT_J].len || start < 0 ||
+              (cross && (window != 0 || nent != nk)) || v[OUT_I].len != v[OUT_J].len || start < 0 ||
               (!cross && start < nq && start < window) ||
               (cross && v[QUERIES].len != nqe * (Py_ssize_t)sizeof(Entry));
     for (Py_ssize_t e = 0; cross && e < nq && !bad; e++) {

@@ -213,6 +213,9 @@ def test_bad_arguments_raise():
         pairs(np.zeros((4, 36), np.uint8))
     with pytest.raises(ValueError):                              # a scan past the window's entries
         pairs(np.zeros((2, 36), np.uint8))
+    with pytest.raises(ValueError):                              # a lookup needs the level's every entry
+        KERNELS.grid_pairs(keys, np.zeros((2, 36), np.uint8), 0, None, np.arange(3), level, keys,
+                           np.zeros((3, 36), np.uint8), None, np.arange(3), 0, 3, out, out.copy())
     with pytest.raises(ValueError):                              # keys of 70 bits
         pairs(np.zeros((3, 36), np.uint8), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (30, 30, 6), 4, (1, 1, 1)))
     with pytest.raises(ValueError):                              # a vertex id out of range
