@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import in_safe_range, orient2d
-from p3d_cli.mesh.broadphase import box_frame, compiled_pairs, outward_boxes, pair_blocks
+from p3d_cli.mesh.broadphase import box_frame, outward_boxes, pair_blocks
+from p3d_cli.mesh.compiled_grid import compiled_pairs
 from p3d_cli.mesh.kernels import compiled
 from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections

@@ -23,7 +23,8 @@ from conftest import REPO
 from helpers.solids import box, indexed
 from p3d_cli.geometry.predicates import O3D_BOUND, in_safe_range
 from p3d_cli.mesh import kernels
-from p3d_cli.mesh.broadphase import box_pairs, compiled_pairs
+from p3d_cli.mesh.broadphase import box_pairs
+from p3d_cli.mesh.compiled_grid import compiled_pairs
 from p3d_cli.mesh.intersections import _boxes, self_intersections
 from p3d_cli.mesh.stars import _G, certified_vertices
 from p3d_cli.mesh.triangle_pairs import uncertified
@@ -134,7 +135,7 @@ def compiled_pair_list(points, faces, live, certified=None):
 @pytest.mark.parametrize("window", [7, 1 << 16])
 def test_compiled_pairs_are_the_overlapping_boxes(name, window, monkeypatch):
     """Scanned a window of faces at a time (7: many windows, each with the rows it reaches)."""
-    import p3d_cli.mesh.broadphase as broadphase
+    import p3d_cli.mesh.compiled_grid as broadphase
 
     monkeypatch.setattr(broadphase, "WINDOW", window)
     points, faces = MESHES[name]()
@@ -156,7 +157,7 @@ def test_compiled_pairs_on_random_soups(seed, n, grid):
 
 def test_a_crowded_cell_grows_the_output():
     """One face meeting more pairs than the output holds: the caller gives more room."""
-    import p3d_cli.mesh.broadphase as broadphase
+    import p3d_cli.mesh.compiled_grid as broadphase
 
     shift = np.zeros((300, 1, 3))
     shift[:, 0, 0] = np.linspace(0, 1e-3, 300)                 # along the triangle's plane
