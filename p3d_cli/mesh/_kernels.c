@@ -1109,6 +1109,762 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
 static PyObject *py_distinct(PyObject *self, PyObject *args);
 static PyObject *py_forward_block(PyObject *self, PyObject *args);
 static PyObject *py_keys_block(PyObject *self, PyObject *args);
+/* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
+ * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
+
+/* A C-contiguous buffer of one kind: 'd' float64, 'f' float32, 'i' int32 or int64, 'B' bytes,
+ * 'Q' uint64, 'q' int64. */
+static int get_array(PyObject *obj, Py_buffer *v, char kind, int writable, const char *who) {
+    if (PyObject_GetBuffer(obj, v, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0)) < 0)
+        return -1;
+    const char *f = v->format ? v->format : "B";
+    if (*f == '<' || *f == '=' || *f == '@')
+        f++;
+    int ok = 0;
+    switch (kind) {
+    case 'd': ok = f[0] == 'd' && v->itemsize == 8 && f[1] == 0; break;
+    case 'f': ok = f[0] == 'f' && v->itemsize == 4 && f[1] == 0; break;
+    case 'i': ok = int_format(v); break;
+    case 'q': ok = (f[0] == 'l' || f[0] == 'q') && v->itemsize == 8 && f[1] == 0; break;
+    case 'B': ok = v->itemsize == 1 && (f[0] == 'B' || f[0] == '?' || f[0] == 'b') && f[1] == 0; break;
+    case 'Q': ok = (f[0] == 'L' || f[0] == 'Q') && v->itemsize == 8 && f[1] == 0; break;
+    }
+    if (!ok) {
+        PyBuffer_Release(v);
+        PyErr_Format(PyExc_TypeError, "%s: an array has the wrong dtype", who);
+        return -1;
+    }
+    return 0;
+}
+
+static inline int64_t at_index(const Py_buffer *v, Py_ssize_t k) {
+    return v->itemsize == 8 ? ((const int64_t *)v->buf)[k] : ((const int32_t *)v->buf)[k];
+}
+
+/* star_normals(points, faces, shift, step, normal): p3d_cli.mesh.stars.certified_vertices's
+ * first pass: normal[v] += the sum, over the faces of each run of `step` faces, of the cross
+ * products (b - a) x (c - a) of the points scaled by 2**shift, per corner in corner order from
+ * 0.0 (numpy's bincount), added to normal once per run. points (m, 3) float64, faces (n, 3)
+ * int32/int64, normal (m, 3) float64. */
+static PyObject *py_star_normals(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *no;
+    int shift;
+    Py_ssize_t step;
+    if (!PyArg_ParseTuple(args, "OOinO", &po, &fo, &shift, &step, &no))
+        return NULL;
+    Py_buffer pv, fv, nv;
+    if (get_array(po, &pv, 'd', 0, "star_normals") < 0)
+        return NULL;
+    if (get_array(fo, &fv, 'i', 0, "star_normals") < 0) {
+        PyBuffer_Release(&pv);
+        return NULL;
+    }
+    if (get_array(no, &nv, 'd', 1, "star_normals") < 0) {
+        PyBuffer_Release(&pv);
+        PyBuffer_Release(&fv);
+        return NULL;
+    }
+    Py_ssize_t m = pv.len / 24, n = fv.len / fv.itemsize / 3;
+    int bad = nv.len != pv.len || fv.len != 3 * n * fv.itemsize || step < 1;
+    double *temp = NULL;
+    uint8_t *mark = NULL;
+    if (!bad) {
+        temp = calloc(3 * (size_t)m + 1, sizeof(double));
+        mark = calloc((size_t)m + 1, 1);
+        if (!temp || !mark) {
+            free(temp);
+            free(mark);
+            PyBuffer_Release(&pv);
+            PyBuffer_Release(&fv);
+            PyBuffer_Release(&nv);
+            return PyErr_NoMemory();
+        }
+    }
+    const double *P = pv.buf;
+    double *normal = nv.buf;
+    /* x * 2**shift is ldexp(x, shift), both correctly rounded, while 2**shift is a normal number. */
+    int scaled = shift > -1000 && shift < 1000;
+    double scale = scaled ? ldexp(1.0, shift) : 1.0;
+    if (!bad) {
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t c = 0; c < 3 * n && !bad; c++) {
+            int64_t v = at_index(&fv, c);
+            if (v < 0 || v >= m)
+                bad = 1;
+        }
+        for (Py_ssize_t s = 0; s < n && !bad; s += step) {
+            Py_ssize_t e = n - s < step ? n : s + step;
+            for (Py_ssize_t f = s; f < e; f++) {
+                int64_t id[3];
+                double q[3][3];
+                for (int k = 0; k < 3; k++) {
+                    id[k] = at_index(&fv, 3 * f + k);
+                    for (int a = 0; a < 3; a++)
+                        q[k][a] = scaled ? P[3 * id[k] + a] * scale : ldexp(P[3 * id[k] + a], shift);
+                }
+                double u0 = q[1][0] - q[0][0], u1 = q[1][1] - q[0][1], u2 = q[1][2] - q[0][2];
+                double v0 = q[2][0] - q[0][0], v1 = q[2][1] - q[0][1], v2 = q[2][2] - q[0][2];
+                double c0 = u1 * v2 - u2 * v1, c1 = u2 * v0 - u0 * v2, c2 = u0 * v1 - u1 * v0;
+                for (int k = 0; k < 3; k++) {
+                    double *t = temp + 3 * id[k];
+                    t[0] += c0;
+                    t[1] += c1;
+                    t[2] += c2;
+                }
+            }
+            for (Py_ssize_t c = 3 * s; c < 3 * e; c++) {
+                int64_t v = at_index(&fv, c);
+                if (!mark[v]) {
+                    mark[v] = 1;
+                    for (int a = 0; a < 3; a++)
+                        normal[3 * v + a] += temp[3 * v + a];
+                }
+            }
+            for (Py_ssize_t c = 3 * s; c < 3 * e; c++) {
+                int64_t v = at_index(&fv, c);
+                mark[v] = 0;
+                temp[3 * v] = temp[3 * v + 1] = temp[3 * v + 2] = 0.0;
+            }
+        }
+        Py_END_ALLOW_THREADS
+    }
+    free(temp);
+    free(mark);
+    PyBuffer_Release(&pv);
+    PyBuffer_Release(&fv);
+    PyBuffer_Release(&nv);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "star_normals: the points, faces and normals do not match");
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+/* A sign from Shewchuk's stage A filter: 2 where |det| <= bound * perm and perm != 0 (unsure). */
+static inline int filtered(double det, double perm, double bound) {
+    if (fabs(det) <= bound * perm && perm != 0)
+        return 2;
+    return (det > 0) - (det < 0);
+}
+
+/* star_signs(points, faces, normal, bound, g0, g1, good, count, deferred) -> deferred count, or
+ * -1 when more corners than deferred holds were unsure.
+ * p3d_cli.mesh.stars.certified_vertices's second pass, corner by corner: the sector sign
+ * det[b - v, c - v, N] and the two turns det[b - v, R, N], det[R, c - v, N] with R = N x g0 (or
+ * N x g1 where that is weak), each by the float filter of stars._sector and stars._turn; a
+ * corner with a sign the filter leaves unsure is written to deferred (3 f + k) and left to the
+ * caller's exact code, the others clear good[v] (a bad sign) and count the sectors holding R.
+ * good (m,) bytes, count (m,) int64, deferred int64. */
+static PyObject *py_star_signs(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *no, *go, *co, *dobj;
+    double bound, g0[3], g1[3];
+    if (!PyArg_ParseTuple(args, "OOOd(ddd)(ddd)OOO", &po, &fo, &no, &bound, &g0[0], &g0[1], &g0[2], &g1[0], &g1[1],
+                          &g1[2], &go, &co, &dobj))
+        return NULL;
+    Py_buffer v[6];
+    const char kinds[6] = {'d', 'i', 'd', 'B', 'q', 'q'};
+    PyObject *objs[6] = {po, fo, no, go, co, dobj};
+    for (int k = 0; k < 6; k++)
+        if (get_array(objs[k], &v[k], kinds[k], k >= 3, "star_signs") < 0) {
+            while (k--)
+                PyBuffer_Release(&v[k]);
+            return NULL;
+        }
+    Py_ssize_t m = v[0].len / 24, n = v[1].len / v[1].itemsize / 3, cap = v[5].len / 8;
+    int bad = v[2].len != v[0].len || v[1].len != 3 * n * v[1].itemsize || v[3].len != m || v[4].len != 8 * m;
+    Py_ssize_t nd = 0;
+    if (!bad) {
+        const double *P = v[0].buf, *normal = v[2].buf;
+        uint8_t *good = v[3].buf;
+        int64_t *count = v[4].buf, *deferred = v[5].buf;
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t f = 0; f < n && !bad && nd >= 0; f++) {
+            int64_t id[3];
+            for (int k = 0; k < 3; k++) {
+                id[k] = at_index(&v[1], 3 * f + k);
+                if (id[k] < 0 || id[k] >= m)
+                    bad = 1;
+            }
+            if (bad)
+                break;
+            for (int k = 0; k < 3; k++) {
+                int64_t w = id[k];
+                const double *p = P + 3 * w, *b = P + 3 * id[(k + 1) % 3], *c = P + 3 * id[(k + 2) % 3];
+                const double *N = normal + 3 * w;
+                double r0 = N[1] * g0[2] - N[2] * g0[1], r1 = N[2] * g0[0] - N[0] * g0[2],
+                       r2 = N[0] * g0[1] - N[1] * g0[0];
+                if ((fabs(r0) + fabs(r1)) + fabs(r2) < 0.25 * ((fabs(N[0]) + fabs(N[1])) + fabs(N[2]))) {
+                    r0 = N[1] * g1[2] - N[2] * g1[1];
+                    r1 = N[2] * g1[0] - N[0] * g1[2];
+                    r2 = N[0] * g1[1] - N[1] * g1[0];
+                }
+                double p0 = r1 * N[2], p1 = r2 * N[1], p2 = r2 * N[0], p3 = r0 * N[2], p4 = r0 * N[1], p5 = r1 * N[0];
+                double M0 = p0 - p1, M1 = p2 - p3, M2 = p4 - p5;
+                double A0 = fabs(p0) + fabs(p1), A1 = fabs(p2) + fabs(p3), A2 = fabs(p4) + fabs(p5);
+                double x0 = b[0] - p[0], x1 = b[1] - p[1], x2 = b[2] - p[2];
+                double y0 = c[0] - p[0], y1 = c[1] - p[1], y2 = c[2] - p[2];
+                double q0 = x1 * y2, q1 = x2 * y1, q2 = x2 * y0, q3 = x0 * y2, q4 = x0 * y1, q5 = x1 * y0;
+                double det = ((q0 - q1) * N[0] + (q2 - q3) * N[1]) + (q4 - q5) * N[2];
+                double perm = ((fabs(q0) + fabs(q1)) * fabs(N[0]) + (fabs(q2) + fabs(q3)) * fabs(N[1])) +
+                              (fabs(q4) + fabs(q5)) * fabs(N[2]);
+                int sector = filtered(det, perm, bound);
+                det = (x0 * M0 + x1 * M1) + x2 * M2;
+                perm = (fabs(x0) * A0 + fabs(x1) * A1) + fabs(x2) * A2;
+                int before = filtered(det, perm, bound);
+                det = (y0 * M0 + y1 * M1) + y2 * M2;
+                perm = (fabs(y0) * A0 + fabs(y1) * A1) + fabs(y2) * A2;
+                int after = filtered(det, perm, bound);
+                if (sector == 2 || before == 2 || after == 2) {
+                    if (nd >= cap) {
+                        nd = -1;
+                        break;
+                    }
+                    deferred[nd++] = 3 * f + k;
+                    continue;
+                }
+                after = -after;
+                if (sector <= 0 || before == 0 || after == 0)
+                    good[w] = 0;
+                if (before > 0 && after > 0)
+                    count[w]++;
+            }
+        }
+        Py_END_ALLOW_THREADS
+    }
+    for (int k = 0; k < 6; k++)
+        PyBuffer_Release(&v[k]);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "star_signs: the points, faces and outputs do not match");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(nd);
+}
+
+/* The broad phase's grid of one level (p3d_cli.mesh.broadphase.compiled_pairs): every face of
+ * the level entered once, in the cell of its box's lower corner, cells numbered
+ * clip(floor((x - origin) / size), 0, 2**40) per axis (a size per axis), keys
+ * (((z << by | y) << bx | x) << fbits) | box, sorted. */
+typedef struct {
+    double origin[3], size[3];
+    int bits[3], fbits;
+    int64_t span[3];
+} Level;
+
+static inline int64_t cell_of(double x, double origin, double size) {
+    double t = floor((x - origin) / size);
+    if (!(t >= 0))
+        t = 0;
+    if (t > 1099511627776.0)
+        t = 1099511627776.0;
+    return (int64_t)t;
+}
+
+static int parse_level(PyObject *tuple, Level *L) {
+    if (!PyArg_ParseTuple(tuple, "(ddd)(ddd)(iii)i(LLL)", &L->origin[0], &L->origin[1], &L->origin[2], &L->size[0],
+                          &L->size[1], &L->size[2], &L->bits[0], &L->bits[1], &L->bits[2], &L->fbits, &L->span[0],
+                          &L->span[1], &L->span[2]))
+        return 0;
+    if (L->fbits < 1 || L->fbits > 62 || L->bits[0] < 1 || L->bits[1] < 1 || L->bits[2] < 1 ||
+        L->bits[0] + L->bits[1] + L->bits[2] + L->fbits > 64 || L->span[0] < 0 || L->span[1] < 0 || L->span[2] < 0 ||
+        !(L->size[0] > 0 && L->size[1] > 0 && L->size[2] > 0)) {
+        PyErr_SetString(PyExc_ValueError, "grid: the level does not make 64-bit keys");
+        return 0;
+    }
+    return 1;
+}
+
+static void release_all(Py_buffer *v, const int *got, int k) {
+    for (int j = 0; j < k; j++)
+        if (got[j])
+            PyBuffer_Release(&v[j]);
+}
+
+/* The faces' boxes as p3d_cli.mesh.intersections._boxes makes them: the corners' least and
+ * greatest coordinates, less the centre, scaled by 2**shift, rounded outwards to float32 and
+ * moved one float32 step further out. */
+typedef struct {
+    const double *points;
+    const Py_buffer *faces, *live;
+    double centre[3], scale;
+    int shift, scaled;
+    Py_ssize_t m_points, nfaces, n;
+} Frame;
+
+static int parse_frame(PyObject *tuple, Frame *F) {
+    if (!PyArg_ParseTuple(tuple, "(ddd)i", &F->centre[0], &F->centre[1], &F->centre[2], &F->shift))
+        return 0;
+    F->scaled = F->shift > -1000 && F->shift < 1000;
+    F->scale = F->scaled ? ldexp(1.0, F->shift) : 1.0;
+    return 1;
+}
+
+/* Whether every live number names a face and every corner of those a point. */
+static int frame_valid(Frame *F) {
+    for (Py_ssize_t e = 0; e < F->n; e++) {
+        int64_t f = at_index(F->live, e);
+        if (f < 0 || f >= F->nfaces)
+            return 0;
+        for (int k = 0; k < 3; k++) {
+            int64_t v = at_index(F->faces, 3 * f + k);
+            if (v < 0 || v >= F->m_points)
+                return 0;
+        }
+    }
+    return 1;
+}
+
+static inline void face_box(const Frame *F, int64_t box, float out[6]) {
+    int64_t f = at_index(F->live, box);
+    const double *a = F->points + 3 * at_index(F->faces, 3 * f), *b = F->points + 3 * at_index(F->faces, 3 * f + 1),
+                 *c = F->points + 3 * at_index(F->faces, 3 * f + 2);
+    for (int k = 0; k < 3; k++) {
+        double low = a[k] < b[k] ? a[k] : b[k], high = a[k] > b[k] ? a[k] : b[k];
+        low = c[k] < low ? c[k] : low;
+        high = c[k] > high ? c[k] : high;
+        low -= F->centre[k];
+        high -= F->centre[k];
+        low = F->scaled ? low * F->scale : ldexp(low, F->shift);
+        high = F->scaled ? high * F->scale : ldexp(high, F->shift);
+        float l = (float)low, h = (float)high;
+        if ((double)l > low)
+            l = nextafterf(l, -INFINITY);
+        if ((double)h < high)
+            h = nextafterf(h, INFINITY);
+        out[k] = nextafterf(l, -INFINITY);
+        out[3 + k] = nextafterf(h, INFINITY);
+    }
+}
+
+enum { F_POINTS, F_FACES, F_LIVE, F_ARRAYS };
+
+/* Points (m, 3) float64, faces (k, 3) int, live (n,) int: the frame's arrays, checked. */
+static int get_frame(PyObject *po, PyObject *fo, PyObject *lo, PyObject *frame, Py_buffer *v, int *got, Frame *F,
+                     const char *who) {
+    PyObject *objs[F_ARRAYS] = {po, fo, lo};
+    const char kinds[F_ARRAYS] = {'d', 'i', 'i'};
+    for (int k = 0; k < F_ARRAYS; k++) {
+        if (get_array(objs[k], &v[k], kinds[k], 0, who) < 0)
+            return -1;
+        got[k] = 1;
+    }
+    if (!parse_frame(frame, F))
+        return -1;
+    F->points = v[F_POINTS].buf;
+    F->faces = &v[F_FACES];
+    F->live = &v[F_LIVE];
+    F->m_points = v[F_POINTS].len / 24;
+    F->nfaces = v[F_FACES].len / v[F_FACES].itemsize / 3;
+    F->n = v[F_LIVE].len / v[F_LIVE].itemsize;
+    if (!frame_valid(F)) {
+        PyErr_Format(PyExc_ValueError, "%s: the points, faces and live faces do not match", who);
+        return -1;
+    }
+    return 0;
+}
+
+/* face_extents(points, faces, live, frame, extent) -> (least lower corner, greatest upper
+ * corner): each live face's box (frame: (centre, shift)), its largest extent in float32 (as
+ * numpy subtracts float32 corners), and the boxes' bounds. */
+static PyObject *py_face_extents(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *lo, *frame, *eo;
+    if (!PyArg_ParseTuple(args, "OOOOO", &po, &fo, &lo, &frame, &eo))
+        return NULL;
+    Py_buffer v[F_ARRAYS + 1];
+    int got[F_ARRAYS + 1] = {0};
+    Frame F;
+    if (get_frame(po, fo, lo, frame, v, got, &F, "face_extents") < 0 ||
+        get_array(eo, &v[F_ARRAYS], 'f', 1, "face_extents") < 0) {
+        release_all(v, got, F_ARRAYS + 1);
+        return NULL;
+    }
+    got[F_ARRAYS] = 1;
+    if (v[F_ARRAYS].len != 4 * F.n) {
+        release_all(v, got, F_ARRAYS + 1);
+        PyErr_SetString(PyExc_ValueError, "face_extents: the extents do not match the faces");
+        return NULL;
+    }
+    float *extent = v[F_ARRAYS].buf;
+    float least[3] = {INFINITY, INFINITY, INFINITY}, most[3] = {-INFINITY, -INFINITY, -INFINITY};
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t e = 0; e < F.n; e++) {
+        float box[6];
+        face_box(&F, e, box);
+        float x = box[3] - box[0], y = box[4] - box[1], z = box[5] - box[2];
+        float w = x > y ? x : y;
+        extent[e] = w > z ? w : z;
+        for (int k = 0; k < 3; k++) {
+            least[k] = box[k] < least[k] ? box[k] : least[k];
+            most[k] = box[3 + k] > most[k] ? box[3 + k] : most[k];
+        }
+    }
+    Py_END_ALLOW_THREADS
+    release_all(v, got, F_ARRAYS + 1);
+    return Py_BuildValue("(ddd)(ddd)", (double)least[0], (double)least[1], (double)least[2], (double)most[0],
+                         (double)most[1], (double)most[2]);
+}
+
+/* An entry of a level's grid: the box (lower corner, upper corner) and the face's three
+ * vertex ids, a certified vertex's id stored as ~id (negative). In key order, scanning a run
+ * of cells reads memory in order. */
+typedef struct {
+    float box[6];
+    int32_t v[3];
+} Entry;
+
+/* grid_keys(points, faces, live, frame, members, level, keys) -> span: the keys of a level's
+ * members (numbers into live; None: all, in order), each with the member's position in its low
+ * fbits bits, in the members' order; and the most cells minus one a member's box spans along
+ * each axis. */
+static PyObject *py_grid_keys(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *lo, *frame, *mo, *lev, *ko;
+    if (!PyArg_ParseTuple(args, "OOOOOOO", &po, &fo, &lo, &frame, &mo, &lev, &ko))
+        return NULL;
+    Level L;
+    if (!parse_level(lev, &L))
+        return NULL;
+    enum { MEMBERS = F_ARRAYS, KEYS, ARRAYS };
+    Py_buffer v[ARRAYS];
+    int got[ARRAYS] = {0};
+    Frame F;
+    if (get_frame(po, fo, lo, frame, v, got, &F, "grid_keys") < 0) {
+        release_all(v, got, ARRAYS);
+        return NULL;
+    }
+    const char kinds[ARRAYS] = {0, 0, 0, 'i', 'Q'};
+    PyObject *objs[ARRAYS] = {NULL, NULL, NULL, mo, ko};
+    for (int k = MEMBERS; k < ARRAYS; k++) {
+        if (k == MEMBERS && mo == Py_None)
+            continue;
+        if (get_array(objs[k], &v[k], kinds[k], k == KEYS, "grid_keys") < 0) {
+            release_all(v, got, ARRAYS);
+            return NULL;
+        }
+        got[k] = 1;
+    }
+    const Py_buffer *members = got[MEMBERS] ? &v[MEMBERS] : NULL; /* None: every live face */
+    Py_ssize_t k = members ? members->len / members->itemsize : F.n;
+    int bad = v[KEYS].len != 8 * k || ((int64_t)1 << L.fbits) < k;
+    int64_t span[3] = {0, 0, 0};
+    if (!bad) {
+        uint64_t *keys = v[KEYS].buf;
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t e = 0; e < k && !bad; e++) {
+            int64_t box = members ? at_index(members, e) : e;
+            if (box < 0 || box >= F.n) {
+                bad = 1;
+                break;
+            }
+            float b[6];
+            face_box(&F, box, b);
+            uint64_t key = 0;
+            for (int a = 2; a >= 0; a--) {
+                int64_t c0 = cell_of(b[a], L.origin[a], L.size[a]), c1 = cell_of(b[3 + a], L.origin[a], L.size[a]);
+                if (c1 - c0 > span[a])
+                    span[a] = c1 - c0;
+                if (c0 >> L.bits[a]) {
+                    bad = 1;
+                    break;
+                }
+                key = key << L.bits[a] | (uint64_t)c0;
+            }
+            keys[e] = key << L.fbits | (uint64_t)e;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    release_all(v, got, ARRAYS);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "grid_keys: the members, level and keys do not match");
+        return NULL;
+    }
+    return Py_BuildValue("LLL", (long long)span[0], (long long)span[1], (long long)span[2]);
+}
+
+/* grid_fill(points, faces, live, frame, keys, fbits, members, certified, entries): the entries
+ * (k, 36) bytes of keys (any k of a level's keys, in their order): the box and vertex ids of
+ * the live face members[p], p the key's low fbits bits (members None: p itself). */
+static PyObject *py_grid_fill(PyObject *self, PyObject *args) {
+    PyObject *po, *fo, *lo, *frame, *ko, *mo, *cert_o, *eo;
+    int fbits;
+    if (!PyArg_ParseTuple(args, "OOOOOiOOO", &po, &fo, &lo, &frame, &ko, &fbits, &mo, &cert_o, &eo))
+        return NULL;
+    enum { KEYS = F_ARRAYS, MEMBERS, CERT, ENTRIES, ARRAYS };
+    Py_buffer v[ARRAYS];
+    int got[ARRAYS] = {0}, certify = cert_o != Py_None;
+    Frame F;
+    if (get_frame(po, fo, lo, frame, v, got, &F, "grid_fill") < 0) {
+        release_all(v, got, ARRAYS);
+        return NULL;
+    }
+    const char kinds[ARRAYS] = {0, 0, 0, 'Q', 'i', 'B', 'B'};
+    PyObject *objs[ARRAYS] = {NULL, NULL, NULL, ko, mo, cert_o, eo};
+    for (int k = KEYS; k < ARRAYS; k++) {
+        if ((k == CERT && !certify) || (k == MEMBERS && mo == Py_None))
+            continue;
+        if (get_array(objs[k], &v[k], kinds[k], k == ENTRIES, "grid_fill") < 0) {
+            release_all(v, got, ARRAYS);
+            return NULL;
+        }
+        got[k] = 1;
+    }
+    const Py_buffer *members = got[MEMBERS] ? &v[MEMBERS] : NULL;
+    Py_ssize_t k = v[KEYS].len / 8, count = members ? members->len / members->itemsize : F.n;
+    int bad = v[ENTRIES].len != (Py_ssize_t)sizeof(Entry) * k || fbits < 1 || fbits > 62 ||
+              F.m_points > 2147483647 || (certify && v[CERT].len != F.m_points);
+    if (!bad) {
+        const uint64_t *keys = v[KEYS].buf;
+        const uint8_t *cert = certify ? v[CERT].buf : NULL;
+        Entry *entries = v[ENTRIES].buf;
+        uint64_t mask = ((uint64_t)1 << fbits) - 1;
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t e = 0; e < k; e++) {
+            Py_ssize_t p = (Py_ssize_t)(keys[e] & mask);
+            int64_t box = p < count ? (members ? at_index(members, p) : p) : -1;
+            if (box < 0 || box >= F.n) {
+                bad = 1;
+                break;
+            }
+            Entry *t = entries + e;
+            face_box(&F, box, t->box);
+            int64_t face = at_index(F.live, (Py_ssize_t)box);
+            for (int c = 0; c < 3; c++) {
+                int32_t id = (int32_t)at_index(F.faces, 3 * face + c);
+                t->v[c] = cert && cert[id] ? ~id : id;
+            }
+        }
+        Py_END_ALLOW_THREADS
+    }
+    release_all(v, got, ARRAYS);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "grid_fill: the keys, members, faces and entries do not match");
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+/* The first position in keys[lo, hi) whose key is >= target. */
+static inline Py_ssize_t lower_bound(const uint64_t *keys, Py_ssize_t lo, Py_ssize_t hi, uint64_t target) {
+    while (lo < hi) {
+        Py_ssize_t mid = lo + (hi - lo) / 2;
+        if (keys[mid] < target)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+typedef struct {
+    int64_t *out_i, *out_j;
+    Py_ssize_t cap, count;
+    const Py_buffer *live, *members;
+    uint64_t mask;
+} Emit;
+
+static inline int32_t vertex_id(int32_t x) { return x < 0 ? ~x : x; }
+
+/* Whether entries A and B have boxes that overlap (closed) and share no certified vertex
+ * (p3d_cli.mesh.triangle_pairs.uncertified): then their faces are written, the smaller first.
+ * 0: done; -1: no room. */
+static inline int emit(Emit *E, const Entry *A, int64_t fa, const Entry *B, uint64_t key) {
+    const float *a = A->box, *b = B->box;
+    if (!(a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] && b[2] <= a[5]))
+        return 0;
+    int32_t w0 = vertex_id(B->v[0]), w1 = vertex_id(B->v[1]), w2 = vertex_id(B->v[2]);
+    for (int k = 0; k < 3; k++)
+        if (A->v[k] < 0) {
+            int32_t u = ~A->v[k];
+            if (u == w0 || u == w1 || u == w2)
+                return 0;
+        }
+    if (E->count >= E->cap)
+        return -1;
+    Py_ssize_t at = (Py_ssize_t)(key & E->mask);
+    int64_t fb = at_index(E->live, E->members ? (Py_ssize_t)at_index(E->members, at) : at);
+    E->out_i[E->count] = fa < fb ? fa : fb;
+    E->out_j[E->count] = fa < fb ? fb : fa;
+    E->count++;
+    return 0;
+}
+
+/* grid_pairs(keys, entries, window, members, live, level, query_keys, queries, query_members, at,
+ *            start, stop, out_i, out_j) -> (next, written)
+ * The pairs of faces whose boxes overlap (closed) and that share no certified vertex, between
+ * queries and the level's entries (sorted keys, grid_keys with the level's span; their entries,
+ * grid_entries), as face numbers, smaller first, in out_i/out_j (int64), from query `start`
+ * on, before query `stop` (faces live[members[p]], the positions p in the keys' low bits;
+ * members None: all the live faces, in order). entries are those of keys[window:]; the
+ * entries a scan needs beyond them raise ValueError. next: the first query not done; written -1 when one query's pairs do not fit in the
+ * outputs (make them larger).
+ * queries None: the level's own pairs, each once (an entry keeps the entries after it in key
+ * order, found by a cursor per row that moves forward only, as the queries' cells do); else
+ * the entries (of a finer level, with their keys) at positions `at` (int array), each paired with every level
+ * entry whose box meets its own (a binary search per row).
+ * Why it finds every pair: if boxes a and b overlap, b's lower corner is at most a's upper
+ * corner and b's upper corner at least a's lower corner, along each axis; cells are monotone
+ * in the coordinates, so b's lower-corner cell lies between a's lower-corner cell minus the
+ * level's span and a's upper-corner cell. */
+static PyObject *py_grid_pairs(PyObject *self, PyObject *args) {
+    PyObject *ko, *eo, *mo, *live_o, *lev, *qko, *qo, *qmo, *ato, *io, *jo;
+    Py_ssize_t start, stop, window;
+    if (!PyArg_ParseTuple(args, "OOnOOOOOOOnnOO", &ko, &eo, &window, &mo, &live_o, &lev, &qko, &qo, &qmo, &ato,
+                          &start, &stop, &io, &jo))
+        return NULL;
+    Level L;
+    if (!parse_level(lev, &L))
+        return NULL;
+    int cross = qo != Py_None;
+    enum { KEYS, ENTRIES, MEMBERS, LIVE, OUT_I, OUT_J, QKEYS, QUERIES, QMEMBERS, AT, ARRAYS };
+    Py_buffer v[ARRAYS];
+    const char kinds[ARRAYS] = {'Q', 'B', 'i', 'i', 'q', 'q', 'Q', 'B', 'i', 'i'};
+    PyObject *objs[ARRAYS] = {ko, eo, mo, live_o, io, jo, qko, qo, qmo, ato};
+    int got[ARRAYS] = {0};
+    for (int k = 0; k < ARRAYS; k++) {
+        if ((k >= QKEYS && !cross) || ((k == MEMBERS || k == QMEMBERS) && objs[k] == Py_None))
+            continue;
+        if (get_array(objs[k], &v[k], kinds[k], k == OUT_I || k == OUT_J, "grid_pairs") < 0) {
+            release_all(v, got, ARRAYS);
+            return NULL;
+        }
+        got[k] = 1;
+    }
+    Py_ssize_t nk = v[KEYS].len / 8, nq = cross ? v[AT].len / v[AT].itemsize : nk;
+    Py_ssize_t nent = v[ENTRIES].len / (Py_ssize_t)sizeof(Entry);
+    if (stop < nq)
+        nq = stop;
+    Py_ssize_t nqe = cross ? v[QKEYS].len / 8 : nk, n = v[LIVE].len / v[LIVE].itemsize;
+    uint64_t fmask = ((uint64_t)1 << L.fbits) - 1;
+    int bad = v[ENTRIES].len != nent * (Py_ssize_t)sizeof(Entry) || window < 0 || window + nent > nk ||
+              (cross && (window != 0 || nent != nk)) || v[OUT_I].len != v[OUT_J].len || start < 0 ||
+              (!cross && start < nq && start < window) ||
+              (cross && v[QUERIES].len != nqe * (Py_ssize_t)sizeof(Entry));
+    for (Py_ssize_t e = 0; cross && e < nq && !bad; e++) {
+        int64_t q = at_index(&v[AT], e);
+        bad = q < 0 || q >= nqe;
+    }
+    /* Every key's position must name a member, and every member a live face. */
+    for (int w = 0; w < (cross ? 2 : 1) && !bad; w++) {
+        const uint64_t *k = v[w ? QKEYS : KEYS].buf;
+        const Py_buffer *mem = got[w ? QMEMBERS : MEMBERS] ? &v[w ? QMEMBERS : MEMBERS] : NULL;
+        Py_ssize_t count = mem ? mem->len / mem->itemsize : n;
+        for (Py_ssize_t e = 0, end = w ? nqe : nk; e < end && !bad; e++)
+            bad = (Py_ssize_t)(k[e] & fmask) >= count;
+        for (Py_ssize_t e = 0; mem && e < count && !bad; e++) {
+            int64_t b = at_index(mem, e);
+            bad = b < 0 || b >= n;
+        }
+    }
+    if (bad) {
+        release_all(v, got, ARRAYS);
+        PyErr_SetString(PyExc_ValueError, "grid_pairs: the keys, entries, queries and outputs do not match");
+        return NULL;
+    }
+    int64_t sx = L.span[0], sy = L.span[1], sz = L.span[2];
+    Py_ssize_t rows = (Py_ssize_t)(sy + sz * (2 * sy + 1));
+    Py_ssize_t *cursor = calloc((size_t)rows + 1, sizeof(Py_ssize_t));
+    if (!cursor) {
+        release_all(v, got, ARRAYS);
+        return PyErr_NoMemory();
+    }
+    Emit E = {v[OUT_I].buf, v[OUT_J].buf, v[OUT_I].len / 8, 0, &v[LIVE], got[MEMBERS] ? &v[MEMBERS] : NULL, fmask};
+    const Py_buffer *qmembers = got[cross ? QMEMBERS : MEMBERS] ? &v[cross ? QMEMBERS : MEMBERS] : NULL;
+    const uint64_t *keys = v[KEYS].buf;
+    const Entry *entries = v[ENTRIES].buf, *queries = cross ? v[QUERIES].buf : entries;
+    const uint64_t *qkeys = cross ? v[QKEYS].buf : keys;
+    int bx = L.bits[0], by = L.bits[1], fb = L.fbits;
+    int64_t xmax = ((int64_t)1 << bx) - 1, ymax = ((int64_t)1 << by) - 1, zmax = ((int64_t)1 << L.bits[2]) - 1;
+    Py_ssize_t next = start < nq ? start : nq, written = 0, end = window + nent;
+    int short_window = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t q = start; q < nq; q++) {
+        Py_ssize_t before = E.count;
+        Py_ssize_t qa = cross ? (Py_ssize_t)at_index(&v[AT], q) : q;
+        if (!cross && qa >= end) {
+            short_window = 1;
+            break;
+        }
+        const Entry *A = cross ? queries + qa : entries + (qa - window);
+        Py_ssize_t qp = (Py_ssize_t)(qkeys[qa] & fmask);
+        int64_t fa = at_index(&v[LIVE], qmembers ? (Py_ssize_t)at_index(qmembers, qp) : qp);
+        int64_t c0[3], c1[3];
+        for (int d = 0; d < 3; d++) {
+            c0[d] = cell_of(A->box[d], L.origin[d], L.size[d]);
+            c1[d] = cell_of(A->box[3 + d], L.origin[d], L.size[d]);
+        }
+        int64_t x0 = c0[0] - sx < 0 ? 0 : c0[0] - sx, x1 = c1[0] < xmax ? c1[0] : xmax;
+        int full = 0;
+        if (cross) {
+            int64_t z0 = c0[2] - sz < 0 ? 0 : c0[2] - sz, z1 = c1[2] < zmax ? c1[2] : zmax;
+            int64_t y0 = c0[1] - sy < 0 ? 0 : c0[1] - sy, y1 = c1[1] < ymax ? c1[1] : ymax;
+            for (int64_t z = z0; z <= z1 && !full && x0 <= x1; z++)
+                for (int64_t y = y0; y <= y1 && !full; y++) {
+                    uint64_t row = ((uint64_t)z << by | (uint64_t)y) << bx;
+                    uint64_t first = (row | (uint64_t)x0) << fb, last = (row | (uint64_t)x1) << fb | fmask;
+                    for (Py_ssize_t e = lower_bound(keys, 0, nk, first); e < nk && keys[e] <= last; e++)
+                        if (emit(&E, A, fa, entries + e, keys[e]) < 0) {
+                            full = 1;
+                            break;
+                        }
+                }
+        } else {
+            /* The query's own row after it, then the rows after that row, each from its
+             * cursor: the first entry at or after the row's first cell, which only moves
+             * forward as the queries' cells do (galloping, then a binary search). */
+            Py_ssize_t r = 0;
+            for (int64_t dz = 0; dz <= sz && !full; dz++)
+                for (int64_t dy = dz ? -sy : 0; dy <= sy && !full; dy++) {
+                    int64_t z = c0[2] + dz, y = c0[1] + dy;
+                    int outside = y < 0 || y > ymax || z > zmax;
+                    uint64_t row = outside ? 0 : ((uint64_t)z << by | (uint64_t)y) << bx;
+                    Py_ssize_t e;
+                    if (dz == 0 && dy == 0) {
+                        e = q + 1;
+                    } else {
+                        Py_ssize_t *c = cursor + r++;
+                        if (outside)
+                            continue;
+                        uint64_t first = (row | (uint64_t)x0) << fb;
+                        Py_ssize_t s = *c, step = 1;
+                        while (s + step < nk && keys[s + step] < first) {
+                            s += step;
+                            step <<= 1;
+                        }
+                        e = *c = lower_bound(keys, s, s + step < nk ? s + step + 1 : nk, first);
+                    }
+                    if (outside || x0 > x1)
+                        continue;
+                    uint64_t last = (row | (uint64_t)x1) << fb | fmask;
+                    for (; e < nk && keys[e] <= last; e++) {
+                        if (e >= end) {
+                            short_window = full = 1;
+                            break;
+                        }
+                        if (emit(&E, A, fa, entries + (e - window), keys[e]) < 0) {
+                            full = 1;
+                            break;
+                        }
+                    }
+                }
+        }
+        if (short_window)
+            break;
+        if (full) {
+            E.count = before;
+            written = before ? before : -1;
+            next = q;
+            break;
+        }
+        next = q + 1;
+        written = E.count;
+    }
+    Py_END_ALLOW_THREADS
+    free(cursor);
+    release_all(v, got, ARRAYS);
+    if (short_window) {
+        PyErr_SetString(PyExc_ValueError, "grid_pairs: the entries do not reach the rows the queries scan");
+        return NULL;
+    }
+    return Py_BuildValue("nn", next, written);
+}
 
 static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
@@ -1127,6 +1883,17 @@ static PyMethodDef methods[] = {
     {"forward_block", py_forward_block, METH_VARARGS,
      "forward_block(block, ox, oy, oz, keys, fill, cap, shift) -> block()'s results, balance, backward sides"},
     {"keys_block", py_keys_block, METH_VARARGS, "keys_block(block, keys, fill, cap, shift) -> keys written (-1: overflow)"},
+    {"star_normals", py_star_normals, METH_VARARGS, "star_normals(points, faces, shift, step, normal)"},
+    {"star_signs", py_star_signs, METH_VARARGS,
+     "star_signs(points, faces, normal, bound, g0, g1, good, count, deferred) -> deferred count (-1: too many)"},
+    {"face_extents", py_face_extents, METH_VARARGS,
+     "face_extents(points, faces, live, frame, extent) -> (least lower corner, greatest upper corner)"},
+    {"grid_keys", py_grid_keys, METH_VARARGS, "grid_keys(points, faces, live, frame, members, level, keys) -> span"},
+    {"grid_fill", py_grid_fill, METH_VARARGS,
+     "grid_fill(points, faces, live, frame, keys, fbits, members, certified, entries)"},
+    {"grid_pairs", py_grid_pairs, METH_VARARGS,
+     "grid_pairs(keys, entries, window, members, live, level, query_keys, queries, query_members, at, start, stop, "
+     "out_i, out_j) -> (next, written)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};

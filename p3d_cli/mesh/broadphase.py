@@ -101,24 +101,7 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
     n = len(lo)
     if n < 2:
         return
-    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2])
-    cell = float(np.quantile(extent, TYPICAL)) * SCALE
-    if not cell > 0:
-        positive = extent[extent > 0]
-        cell = float(positive.min()) if positive.size else 1.0
-    # The grid's origin and the cell size: floor((x - origin) / size) for every coordinate.
-    origin = lo.min(axis=0).astype(np.float64)
-    level = np.zeros(n, dtype=np.int16)
-    big = extent > cell
-    level[big] = np.ceil(np.log2(extent[big].astype(np.float64) / cell)).astype(np.int16)
-    # log2 rounds: make sure every box fits its level's cells (at most two per axis).
-    while True:
-        short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
-        if not short.size:
-            break
-        level[short] += 1
-    del big, extent
-    top = hi.max(axis=0).astype(np.float64)
+    cell, origin, level, top = _levels(lo, hi)
     levels = np.unique(level).tolist()
     for L in levels:
         members = np.flatnonzero(level == L).astype(np.int32 if n < 2**31 else np.int64)
@@ -137,6 +120,42 @@ def pair_blocks(lo: np.ndarray, hi: np.ndarray) -> Blocks:
             for start in range(0, finer.size, PAIR_CHUNK):
                 yield from grid.probe(finer[start:start + PAIR_CHUNK])
             del grid
+
+
+def _levels(lo: np.ndarray, hi: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """``(cell, origin, level, top)``: the finest cell size, the grid's origin (cells are
+    ``floor((x - origin) / size)`` per coordinate), each box's level (its cell size
+    ``cell * 2**level`` at least its largest extent), and the boxes' upper corner."""
+    extent = np.maximum(np.maximum(hi[:, 0] - lo[:, 0], hi[:, 1] - lo[:, 1]), hi[:, 2] - lo[:, 2])
+    cell, level = _levels_of(extent)
+    return cell, lo.min(axis=0).astype(np.float64), level, hi.max(axis=0).astype(np.float64)
+
+
+def _levels_of(extent: np.ndarray) -> tuple[float, np.ndarray]:
+    """The finest cell size and each box's level, from the boxes' largest extents."""
+    cell = float(np.quantile(extent, TYPICAL)) * SCALE
+    if not cell > 0:
+        positive = extent[extent > 0]
+        cell = float(positive.min()) if positive.size else 1.0
+    level = np.zeros(len(extent), dtype=np.int16)
+    big = extent > cell
+    level[big] = np.ceil(np.log2(extent[big].astype(np.float64) / cell)).astype(np.int16)
+    # log2 rounds: make sure every box fits its level's cells (at most two per axis).
+    while True:
+        short = np.flatnonzero(big)[extent[big] > cell * np.exp2(level[big])]
+        if not short.size:
+            break
+        level[short] += 1
+    return cell, level
+
+
+def box_frame(points: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(centre, shift)``: the faces' boxes are taken about the points' centre and scaled by
+    ``2**shift`` to a span near 1 (far from the world origin float32 coordinates would be too
+    coarse, every box 8 wide at 1e8; huge or tiny parts would over- or underflow)."""
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(3)
+    span = float(np.abs(points - centre).max()) if len(points) else 0.0
+    return centre, (-int(np.frexp(span)[1]) if 0 < span < np.inf else 0)
 
 
 #: Cells per axis at most: faces beyond are in the last cell (clamping keeps the cells monotone,

@@ -22,12 +22,14 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import in_safe_range, orient2d
-from p3d_cli.mesh.broadphase import outward_boxes, pair_blocks
+from p3d_cli.mesh.broadphase import box_frame, outward_boxes, pair_blocks
+from p3d_cli.mesh.compiled_grid import compiled_pairs
+from p3d_cli.mesh.kernels import compiled
 from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
-from p3d_cli.mesh.stars import certified_vertices
+from p3d_cli.mesh.stars import certified_vertices, paired_vertices
 from p3d_cli.mesh.meeting import meeting_point
-from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify, classify_block, uncertified
+from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, FOLD, KINDS, NONE, classify, uncertified
 
 #: Faces per block when computing boxes, pairs per call of the pair test (bounded temporaries).
 _BLOCK = 1 << 16
@@ -52,8 +54,9 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         given).
     fans : bool
         The mesh is closed, without non-manifold edges or vertices: every vertex's faces form
-        one fan, and the fans whose faces provably meet only as neighbours do
-        (``p3d_cli.mesh.stars``) spare their pairs the pair test.
+        one fan. The fans whose faces provably meet only as neighbours do
+        (``p3d_cli.mesh.stars``) spare their pairs the pair test; without ``fans``, only the
+        vertices whose every edge pairs up one each way are tried (``paired_vertices``).
 
     Returns
     -------
@@ -62,35 +65,52 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     points = np.ascontiguousarray(points, dtype=np.float64)
     faces = np.asarray(faces)
     n = len(faces)
-    safe = in_safe_range(points)
+    # In pieces: the whole array's magnitudes at once would cost twice the points' memory.
+    safe = all(in_safe_range(points[at:at + _BLOCK]) for at in range(0, len(points), _BLOCK))
     if degenerate is None:
         degenerate = zero_area_faces(points, faces, safe)
-    live = np.ones(n, dtype=bool)
-    live[np.asarray(degenerate, dtype=np.int64)] = False
-    live = np.flatnonzero(live).astype(np.int32 if n < 2**31 else np.int64)
+    index = np.int32 if n < 2**31 else np.int64
+    if len(degenerate):
+        live = np.ones(n, dtype=bool)
+        live[np.asarray(degenerate, dtype=np.int64)] = False
+        live = np.flatnonzero(live).astype(index)
+    else:
+        live = np.arange(n, dtype=index)
     if nonmanifold_edges is None:
         nonmanifold_edges = crowded_edges(faces[live])
     crowded = {(min(u, v), max(u, v)) for u, v in np.asarray(nonmanifold_edges).tolist()}
     found: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
     contacts: list[tuple] = []
-    certified = certified_vertices(points, faces, safe) if fans and live.size > 1 else None
+    certified = None
     if live.size > 1:
+        certified = certified_vertices(points, faces, safe)
+        if not fans:                 # only where every edge pairs up (the fans are closed there)
+            certified &= paired_vertices(faces, len(points))
+    fast = compiled()
+    chunks = (compiled_pairs(fast, points, faces, live, certified) if fast is not None and safe and live.size > 1
+              else None)
+    if chunks is not None:
+        # The compiled grid: the pairs to test, the certified fans' set aside, in batches.
+        batch: list[tuple[np.ndarray, np.ndarray]] = []
+        waiting = 0
+        for i, j in chunks:
+            for at in range(0, i.size, _PAIRS):
+                batch.append((i[at:at + _PAIRS], j[at:at + _PAIRS]))
+                waiting += batch[-1][0].size
+                if waiting >= _PAIRS:
+                    _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+                    batch, waiting = [], 0
+        _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+    elif live.size > 1:
         lo, hi = _boxes(points, faces, live)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
         waiting = 0
+        assert certified is not None  # noqa: S101 - made above whenever two faces are live
         for members, p, q in pair_blocks(lo, hi):
             members = live[members]
             corners = faces[members]
-            if certified is None:
-                # Every pair to test: the block's faces gathered once, indexed per pair.
-                coords = np.take(points, corners, axis=0)
-                for at in range(0, p.size, _PAIRS):
-                    kind, edges = classify_block(coords, corners, p[at:at + _PAIRS], q[at:at + _PAIRS], safe)
-                    _keep(kind, edges, members[p[at:at + _PAIRS]], members[q[at:at + _PAIRS]], faces, crowded,
-                          found, kinds, contacts)
-                continue
-            # Few pairs left once the certified fans' are set aside: tested in batches.
+            # The pairs left once the certified fans' are set aside: tested in batches.
             rest = uncertified(corners, p, q, certified)
             pending.append((members[p[rest]], members[q[rest]]))
             waiting += rest.size
@@ -168,9 +188,7 @@ def _boxes(points, faces, live):
     box 8 wide at 1e8; huge or tiny parts would over- or underflow), rounded outwards with a
     float32 step of margin beyond the float64 rounding of the shift, block by block. Boxes only
     choose which pairs are tested: any consistent map that keeps them overlapping does."""
-    centre = (points.min(axis=0) + points.max(axis=0)) / 2 if len(points) else np.zeros(3)
-    span = float(np.abs(points - centre).max()) if len(points) else 0.0
-    shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
+    centre, shift = box_frame(points)
     lo = np.empty((live.size, 3), dtype=np.float32)
     hi = np.empty((live.size, 3), dtype=np.float32)
     for start in range(0, live.size, _BLOCK):

@@ -17,6 +17,10 @@ a zero among them (``R`` along an edge, as seen) leaves the vertex to the pair t
 Every sign is exact (``p3d_cli.geometry.predicates``); the certificate is one determinant of
 each kind per corner, fewer operations than the pair tests it replaces (about a dozen pairs
 per face), and it needs no order of the faces around the vertex.
+
+With the compiled kernels (``p3d_cli.mesh.kernels``) both passes run there, the same float
+operations in the same order; the corners whose signs the float filter leaves unsure come
+back and take the exact road below, so the certified vertices are the same either way.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.geometry.predicates import O3D_BOUND, Planes, turn
+from p3d_cli.mesh.kernels import compiled, key_buffer, sort
 
 #: Corners per vectorised step.
 _STEP = 1 << 15
@@ -40,7 +45,8 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
     points : (m, 3) float64
     faces : (n, 3) int
         A closed mesh without non-manifold vertices or edges: every vertex's faces form one
-        fan (the caller's condition; elsewhere the counting below proves nothing).
+        fan (the caller's condition; elsewhere the counting below proves nothing, except at
+        the ``paired_vertices``, whose faces form closed fans: one wrap in all is one fan).
     safe : bool
         ``predicates.in_safe_range(points)``.
 
@@ -54,6 +60,12 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
     # points scaled by a power of two to a span near 1, it neither over- nor underflows.
     span = float(np.abs(points).max()) if m else 0.0
     shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
+    fast = compiled()
+    if fast is not None and safe and m and len(faces):
+        certified = _compiled(fast, points, faces, shift, normal)
+        if certified is not None:
+            return certified
+        normal[:] = 0.0
     for start in range(0, len(faces), _STEP):
         f = faces[start:start + _STEP]
         with np.errstate(under="ignore"):
@@ -86,6 +98,75 @@ def certified_vertices(points: np.ndarray, faces: np.ndarray, safe: bool = True)
             good[v[bad]] = False
             hits.append(v[(before > 0) & (after > 0)])
     count = np.bincount(np.concatenate(hits), minlength=m) if hits else np.zeros(m, dtype=np.int64)
+    return good & (count == 1)
+
+
+def paired_vertices(faces: np.ndarray, m: int) -> np.ndarray:
+    """Which of the ``m`` vertices have every edge paired once each way: around ``v``, each
+    neighbour is the second corner after ``v`` of exactly one face and the third of exactly
+    one (faces ``(v, b, c)`` read from ``v``). The faces around such a vertex then form closed
+    fans, each face's sides shared with the next, however open or non-manifold the mesh is
+    elsewhere, and ``certified_vertices``'s count (one wrap in all) proves them. A vertex on a
+    boundary, misoriented or non-manifold edge, or of a face with a repeated corner, is not.
+
+    Exact: the keys ``(v, b)`` and ``(v, c)`` of every corner sorted (a vertex has as many of
+    each), equal position by position and ``(v, b)`` never twice.
+    """
+    faces = np.asarray(faces)
+    if m == 0 or len(faces) == 0:
+        return np.zeros(m, dtype=bool)
+    bits = max(int(m - 1).bit_length(), 1)
+    if 2 * bits > 63:
+        return np.zeros(m, dtype=bool)
+    good = np.ones(m, dtype=bool)
+    out, into = key_buffer(3 * len(faces)), key_buffer(3 * len(faces))
+    for start in range(0, len(faces), _STEP):            # bounded temporaries
+        f = faces[start:start + _STEP].astype(np.int64)
+        v = f.ravel() << bits
+        out[3 * start:3 * start + v.size] = (v | np.roll(f, -1, axis=1).ravel()).view(np.uint64)
+        into[3 * start:3 * start + v.size] = (v | np.roll(f, -2, axis=1).ravel()).view(np.uint64)
+        # A face with a repeated corner: an edge (v, v).
+        good[f[(f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 2] == f[:, 0])].ravel()] = False
+    sort(out)
+    sort(into)
+    top = np.uint64(bits)
+    good[(out[np.flatnonzero(out != into)] >> top).astype(np.int64)] = False
+    good[(out[np.flatnonzero(out[1:] == out[:-1])] >> top).astype(np.int64)] = False
+    return good
+
+
+def _compiled(fast, points, faces, shift: int, normal: np.ndarray) -> np.ndarray | None:
+    """``certified_vertices`` by the compiled kernels (``safe`` points), or None when more
+    corners than it keeps room for were unsure (the numpy road then does them all)."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    faces = np.ascontiguousarray(faces)
+    if faces.dtype not in (np.int32, np.int64):
+        faces = faces.astype(np.int64)
+    fast.star_normals(points, faces, shift, _STEP, normal)
+    m = len(points)
+    good = np.ones(m, dtype=bool)
+    count = np.zeros(m, dtype=np.int64)
+    deferred = np.empty(max(1 << 12, len(faces) // 8), dtype=np.int64)
+    unsure = fast.star_signs(points, faces, normal, O3D_BOUND, tuple(_G[0]), tuple(_G[1]), good.view(np.uint8),
+                             count, deferred)
+    if unsure < 0:
+        return None
+    if unsure:
+        # The corners the filter left unsure: the numpy road's signs, exact where they must be.
+        corner = deferred[:unsure]
+        f, k = faces[corner // 3], corner % 3
+        rows = np.arange(unsure)
+        v = f[rows, k]
+        P, B, C = (np.take(points, f[rows, (k + s) % 3], axis=0) for s in range(3))
+        N = np.take(normal, v, axis=0)
+        R = _reference(N)
+        M, Mabs = _minors(R, N)
+        x, y = B - P, C - P
+        sector = _sector(x, y, N, P, B, C, True)
+        before = _turn(x, M, Mabs, P, B, R, N, True)
+        after = -_turn(y, M, Mabs, P, C, R, N, True)
+        good[v[(sector <= 0) | (before == 0) | (after == 0)]] = False
+        count += np.bincount(v[(before > 0) & (after > 0)], minlength=m)
     return good & (count == 1)
 
 
