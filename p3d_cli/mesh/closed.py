@@ -21,30 +21,13 @@ import numpy as np
 
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.kernels import compiled, sort
+from p3d_cli.mesh.splitmix import mix
 
-_M1 = np.uint64(0xBF58476D1CE4E5B9)
-_M2 = np.uint64(0x94D049BB133111EB)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 
-_S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
 _ONE = np.uint64(1)
 _MAX = np.uint64(0xFFFFFFFFFFFFFFFF)
-
-
-def _mix(z: np.ndarray, scratch: np.ndarray | None = None) -> np.ndarray:
-    """The splitmix64 finalizer, in place on a uint64 array (wrapping arithmetic).
-
-    ``scratch``, an array like ``z``, saves the three temporaries of the shifts.
-    """
-    if scratch is None:
-        scratch = np.empty_like(z)
-    z ^= np.right_shift(z, _S30, out=scratch)
-    z *= _M1
-    z ^= np.right_shift(z, _S27, out=scratch)
-    z *= _M2
-    z ^= np.right_shift(z, _S31, out=scratch)
-    return z
 
 
 def corner_hashes(triangles: np.ndarray) -> np.ndarray:
@@ -61,11 +44,11 @@ def corner_hashes(triangles: np.ndarray) -> np.ndarray:
     # Widen, and add 0.0 so that -0.0 and 0.0 (equal coordinates) hash alike.
     coords = np.asarray(triangles, dtype=np.float64) + 0.0
     bits = coords.view(np.uint64)
-    h = _mix(bits[..., 0] ^ _GOLDEN)
+    h = mix(bits[..., 0] ^ _GOLDEN)
     h ^= bits[..., 1]
-    h = _mix(h)
+    h = mix(h)
     h ^= bits[..., 2]
-    return _mix(h)
+    return mix(h)
 
 
 def _column_hashes(columns: np.ndarray, scratch: np.ndarray) -> np.ndarray:
@@ -76,11 +59,11 @@ def _column_hashes(columns: np.ndarray, scratch: np.ndarray) -> np.ndarray:
     coord = np.empty((3, n))
     h = np.add(columns[:, 0], 0.0, out=coord).view(np.uint64).copy()
     h ^= _GOLDEN
-    _mix(h, scratch)
+    mix(h, scratch)
     h ^= np.add(columns[:, 1], 0.0, out=coord).view(np.uint64)
-    _mix(h, scratch)
+    mix(h, scratch)
     h ^= np.add(columns[:, 2], 0.0, out=coord).view(np.uint64)
-    _mix(h, scratch)
+    mix(h, scratch)
     return h
 
 
@@ -101,7 +84,7 @@ def _side_keys(h: np.ndarray, scratch: np.ndarray) -> tuple[np.ndarray, np.ndarr
     high = np.maximum(start, end, out=end)
     key *= _GOLDEN
     key += high
-    _mix(key, scratch)
+    mix(key, scratch)
     key &= ~_ONE
     key |= forward
     return key.reshape(-1), keep

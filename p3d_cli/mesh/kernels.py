@@ -14,6 +14,8 @@ from types import ModuleType
 
 import numpy as np
 
+from p3d_cli.mesh.splitmix import mix
+
 
 def _load() -> ModuleType | None:
     if os.environ.get("P3D_PURE_NUMPY", "") not in ("", "0"):
@@ -146,10 +148,8 @@ class ForwardBuckets(Buckets):
     def add(self, block_keys: np.ndarray) -> None:
         """Deal the forward keys of a block the compiled pass left to the numpy code, and add
         its sides to the balance."""
-        from p3d_cli.mesh.closed import _mix
-
         forward = (block_keys & np.uint64(1)).astype(bool)
-        g = _mix(block_keys | np.uint64(1))
+        g = mix(block_keys | np.uint64(1))
         self.balance = (self.balance + int(g[forward].sum(dtype=np.uint64))
                         - int(g[~forward].sum(dtype=np.uint64))) % (1 << 64)
         self.backward += int(block_keys.size - forward.sum())

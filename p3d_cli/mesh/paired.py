@@ -37,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, _mix, corner_hashes
+from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, corner_hashes
+from p3d_cli.mesh.splitmix import mix
 from p3d_cli.mesh.edges import corner_slot
 from p3d_cli.mesh.faces import zero_area_faces
 from p3d_cli.mesh.columns import columns, origin_from_bounds
@@ -178,7 +179,7 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
             np.minimum(start, end, out=key)
             key *= _GOLDEN
             key += np.maximum(start, end, out=end)
-            _mix(key, scratch)
+            mix(key, scratch)
             key &= ~low
         # Edge keys used once each way cancel in (sum forward - sum backward) mod 2^64; a
         # sum that does not cancel proves some edge is not, before any sort.
