@@ -39,7 +39,7 @@ def solidity(mesh: MeshSource) -> tuple[TopologyReport, Layout | None]:
 _VERBS = {"crossing": "cross", "overlap": "overlap", "fold": "fold"}
 
 
-def solidity_warnings(report: TopologyReport) -> list[str]:
+def solidity_warnings(report: TopologyReport) -> list[CodedWarning]:
     """The ``self-intersecting`` and ``nested-shells`` warnings for what the exact test found."""
     out: list[str] = []
     found, nesting = report.self_intersections, report.nesting
