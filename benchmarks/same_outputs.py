@@ -197,7 +197,8 @@ def output_cases(meshes: list[str]) -> list[tuple]:
 
 
 def run(tree: Path, arguments: list[str], inputs: dict[str, str] | None = None) -> tuple:
-    """Exit status, stdout, stderr and the files written of ``p3d ARGUMENTS`` run from ``tree``."""
+    """Exit status, stdout, stderr and the files written of ``p3d ARGUMENTS`` run from ``tree``
+    (the p3d_cli imported is ``tree``'s: checked by ``main`` before any case runs)."""
     env = {**os.environ, "PYTHONPATH": str(tree), "PYTHONHASHSEED": "0", "COLUMNS": "100"}
     env.pop("P3D_DEBUG", None)
     with tempfile.TemporaryDirectory() as folder:
@@ -207,7 +208,11 @@ def run(tree: Path, arguments: list[str], inputs: dict[str, str] | None = None) 
                 (Path(folder) / name).write_bytes(text)
             else:
                 (Path(folder) / name).write_text(text)
-        done = subprocess.run([sys.executable, "-m", "p3d_cli", *args], cwd=HERE, env=env,
+        # Run from the tree itself: ``python -m`` puts the working folder first on sys.path, ahead
+        # of PYTHONPATH, so from any other folder its p3d_cli (an editable install's own tree)
+        # would answer for both sides. Inputs named relative to the repository are the same
+        # files in either tree (sample_meshes/, examples/).
+        done = subprocess.run([sys.executable, "-m", "p3d_cli", *args], cwd=tree, env=env,
                               capture_output=True, stdin=subprocess.DEVNULL)
         files = {p.name: p.read_bytes() for p in Path(folder).iterdir() if p.is_file() and p.name not in (inputs or {})}
     swap = lambda b: b.replace(folder.encode(), b"{out}")  # noqa: E731
@@ -219,8 +224,14 @@ def main() -> int:
     parser.add_argument("--baseline", required=True, type=Path, help="the other source tree (a worktree)")
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
+    args.baseline = args.baseline.resolve()
     if not (args.baseline / "p3d_cli").is_dir():
         parser.error(f"{args.baseline} holds no p3d_cli")
+    for tree in (HERE, args.baseline):
+        probe = subprocess.run([sys.executable, "-c", "import p3d_cli; print(p3d_cli.__file__)"], cwd=tree,
+                               env={**os.environ, "PYTHONPATH": str(tree)}, capture_output=True, text=True)
+        if not Path(probe.stdout.strip()).resolve().is_relative_to(tree.resolve()):
+            parser.error(f"run from {tree}, python imports p3d_cli from {probe.stdout.strip() or probe.stderr}")
     todo = cases()
 
     def compare(case: tuple) -> str | None:
