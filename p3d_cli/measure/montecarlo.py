@@ -386,24 +386,22 @@ def _check_uncertainty(uncertainty: dict, where: str) -> None:
 
 def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[CodedWarning]:
     """Warnings for too few samples inside, and for a ``tolerance`` the sample cap did not meet."""
-    out = []
+    out: list[tuple[str, str]] = []     # (code, text)
     k, n = estimate.inside, estimate.samples
     if not k > 0:
-        out.append(CodedWarning(f"no Monte Carlo sample of {n} fell inside the solid: centre of mass and inertia "
-                                "are undefined, and the volume's uncertainty is a conservative bound, not a "
-                                "standard error; use more samples or check the mesh", "montecarlo-empty"))
+        out.append(("montecarlo-empty", f"no Monte Carlo sample of {n} fell inside the solid: centre of mass and "
+                    "inertia are undefined, and the volume's uncertainty is a conservative bound, not a standard "
+                    "error; use more samples or check the mesh"))
     elif estimate.conservative:
-        out.append(CodedWarning(f"only {k:g} of {n} Monte Carlo samples fell inside the solid (fewer than "
-                                f"{MIN_INSIDE}): the uncertainties are conservative bounds, not standard errors; "
-                                f"use about {math.ceil(1.25 * MIN_INSIDE * n / k):d} samples or more for standard "
-                                "errors", "montecarlo-few-inside"))
+        out.append(("montecarlo-few-inside", f"only {k:g} of {n} Monte Carlo samples fell inside the solid (fewer "
+                    f"than {MIN_INSIDE}): the uncertainties are conservative bounds, not standard errors; use about "
+                    f"{math.ceil(1.25 * MIN_INSIDE * n / k):d} samples or more for standard errors"))
     volume = estimate.box_volume * estimate.mean[0]
     if tolerance is not None and n >= MAX_SAMPLES and not volume_error <= tolerance * volume:
         got = f"{volume_error / volume:.2g}" if volume > 0 else "unbounded"
-        out.append(CodedWarning(f"tolerance={tolerance:g} needs more than the cap of {MAX_SAMPLES} samples: stopped "
-                                f"there with a relative volume error of {got}; accept it, or loosen the tolerance",
-                                "montecarlo-cap"))
-    return out
+        out.append(("montecarlo-cap", f"tolerance={tolerance:g} needs more than the cap of {MAX_SAMPLES} samples: "
+                    f"stopped there with a relative volume error of {got}; accept it, or loosen the tolerance"))
+    return [CodedWarning(text, code) for code, text in out]
 
 
 def _shape_setup(solid: Solid, placement: Placement):
