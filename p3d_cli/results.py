@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from p3d_cli.records import Record
-from p3d_cli.warning_codes import code_of
+from p3d_cli.warning_codes import CodedWarning, coded
 
 @dataclass(frozen=True)
 class Bounds:
@@ -207,8 +207,8 @@ class PropsResult(Record):
     properties : MassProperties
     method : str
         ``exact`` (divergence theorem / closed form) or ``montecarlo``.
-    warnings : tuple of str
-        Plain-words warnings; ``warning_codes`` gives their stable codes.
+    warnings : tuple of CodedWarning
+        Plain-words warnings, each carrying its stable code (``warning_codes`` lists them).
     uncertainty : dict or None
         Same keys as the estimates (``volume``, ``center_of_mass``, ``inertia``): standard
         errors for Monte Carlo, rounding-error bounds for the exact method.
@@ -226,11 +226,14 @@ class PropsResult(Record):
     facts: MeshFacts
     properties: MassProperties
     method: str = "exact"
-    warnings: tuple[str, ...] = field(default_factory=tuple)
+    warnings: tuple[CodedWarning, ...] = field(default_factory=tuple)
     uncertainty: dict | None = None
     details: dict = field(default_factory=dict)
     units: dict | None = None
     parts: tuple["PropsResult", ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        object.__setattr__(self, "warnings", coded(self.warnings, self.facts.source))
 
     # One step to the common quantities (``properties`` and ``facts`` hold them all).
     @property
@@ -279,7 +282,7 @@ class PropsResult(Record):
     @property
     def warning_codes(self) -> tuple[str, ...]:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
-        return tuple(code_of(w) for w in self.warnings)
+        return tuple(w.code for w in self.warnings)
 
     def _repr_html_(self) -> str:
         """In a notebook: the numbers, and the part with its principal frame and inertia box."""
@@ -303,7 +306,7 @@ class BoundsResult(Record):
     bounds : Bounds
     faces : int
         Triangle (or tetrahedron) count; 0 for a primitive.
-    warnings : tuple of str
+    warnings : tuple of CodedWarning
     """
 
     source: str
@@ -311,7 +314,10 @@ class BoundsResult(Record):
     method: str
     bounds: Bounds
     faces: int = 0
-    warnings: tuple[str, ...] = field(default_factory=tuple)
+    warnings: tuple[CodedWarning, ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        object.__setattr__(self, "warnings", coded(self.warnings, self.source))
 
     # One step to the box's quantities.
     @property
@@ -345,7 +351,7 @@ class BoundsResult(Record):
     @property
     def warning_codes(self) -> tuple[str, ...]:
         """The stable code of each warning, in the same order (``p3d_cli.warning_codes``)."""
-        return tuple(code_of(w) for w in self.warnings)
+        return tuple(w.code for w in self.warnings)
 
     def _repr_html_(self) -> str:
         """In a notebook: the box's numbers, and the part with its box."""

@@ -23,6 +23,7 @@ from fractions import Fraction
 from typing import Any
 
 from p3d_cli.errors import UsageError
+from p3d_cli.warning_codes import CodedWarning
 
 #: Length units of ``units`` and ``output_units``, in metres (the inch and foot are exact by
 #: the 1959 international yard and pound agreement).
@@ -318,12 +319,12 @@ SLIP_SIZE = (10.0, 1000.0)
 SLIP_DENSITY = (500.0, 25_000.0)
 
 
-def slip_warning(size: float, density: float | None) -> str | None:
+def slip_warning(size: float, density: float | None) -> CodedWarning | None:
     """The plausibility warning for a part of largest extent ``size`` (mesh units) measured with
     ``density`` and no units: in millimetres, a density in kg/m³ makes the mass 1e9 too large."""
     if density is None or not (SLIP_SIZE[0] <= size <= SLIP_SIZE[1]) or not (SLIP_DENSITY[0] <= density
                                                                              <= SLIP_DENSITY[1]):
         return None
-    return (f"the part is {size:.3g} across and the density {density:.6g}, with no units given: if the "
-            "mesh is in millimetres and the density in kg/m³, the mass is 1e9 times too large; state "
-            f"both units (the mesh's as mm, the density as {density:g}kg/m^3) for SI results")
+    return CodedWarning(f"the part is {size:.3g} across and the density {density:.6g}, with no units given: if the "
+                        "mesh is in millimetres and the density in kg/m³, the mass is 1e9 times too large; state "
+                        f"both units (the mesh's as mm, the density as {density:g}kg/m^3) for SI results", "unit-slip")

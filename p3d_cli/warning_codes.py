@@ -1,16 +1,13 @@
 """Stable codes for p3d's warnings, so that a user can name one (``--ignore-warning CODE``).
 
 A warning is a sentence for people; its code is a short name for programs and settings
-(``open``, ``coarse-float32``). Warnings p3d makes itself are ``CodedWarning`` strings
-(a ``str`` that also carries ``code`` and, where the warning has a threshold, the measured
-``value``), so every existing use of a warning as text keeps working. Warnings that arrive as
-plain strings (from the mesh readers, from Monte Carlo) get their code from ``code_of``, which
-matches them against ``PATTERNS``; a sentence no pattern knows gets ``FALLBACK``.
+(``open``, ``coarse-float32``). Every warning p3d makes is a ``CodedWarning``: a ``str`` (so
+every use of a warning as text keeps working) that also carries its ``code``, given where the
+warning is made, and, where the warning has a threshold, the measured ``value``. No code is
+ever recovered from a warning's text; the results refuse a warning without one (``coded``).
 """
 
 from __future__ import annotations
-
-import re
 
 #: Every code, with what it means (the order of ``p3d props --help`` and docs/ci.md).
 CODES: dict[str, str] = {
@@ -39,40 +36,16 @@ CODES: dict[str, str] = {
     "reader": "any other warning of a mesh reader (meshio's own messages among them)",
 }
 
-#: The code of a plain-string warning no pattern matches.
-FALLBACK = "reader"
-
 #: Warnings with a threshold: code -> the library's default (a threshold may only be raised:
 #: below the default the library does not warn at all).
 THRESHOLDS: dict[str, float] = {"coarse-float32": 1e-6}
 
-#: Plain-string warnings -> codes: the first pattern (a regular expression, for ``re.search``;
-#: compiled on first use, not at import: start-up time) that matches wins.
-PATTERNS: tuple[tuple[str, str], ...] = (
-    ("montecarlo-winding", r"Monte Carlo's inside test ignores the winding"),
-    ("montecarlo-open", r"Monte Carlo on an open mesh"),
-    ("montecarlo-empty", r"no Monte Carlo sample (of \d+ )?fell inside"),
-    ("montecarlo-few-inside", r"Monte Carlo samples fell inside the solid \(fewer than"),
-    ("montecarlo-cap", r"needs more than the cap of"),
-    ("montecarlo-flat-box", r"bounding box is flat, so nothing was sampled"),
-    ("implausible", r"are not both positive|break the triangle inequality|centre of mass lies outside the bounds"),
-    ("open", r"\bmesh is not closed\b"),
-    ("flat", r"encloses no volume"),
-    ("inward", r"signed volume is negative"),
-    ("self-intersecting", r"inertia is not a solid's|surface intersects itself"),
-    ("nested-shells", r"is wound alike: its volume|wound as a cavity lies in no body"),
-    ("coarse-float32", r"coordinates are float32"),
-    ("inverted-tetrahedra", r"tetrahedra are listed inside out"),
-    ("non-manifold", r"non-manifold"),
-    ("spec-shadows-file", r"is read as a shape spec"),
-    ("unit-slip", r"\bunits?\b"),
-    ("skipped-lines", r"(lines?|statements?)\b.*\b(ignored|skipped)|(ignored|skipped)\b.*\b(lines?|statements?)\b"),
-    ("trailing-data", r"(bytes|values|numbers)\b.*\bignored"),
-)
-
 
 class CodedWarning(str):
     """A warning's text that also knows its code (and its measured value, if it has a threshold).
+
+    Every warning p3d makes is one, made where the condition is found: the code is never
+    guessed from the text afterwards.
 
     Parameters
     ----------
@@ -81,6 +54,11 @@ class CodedWarning(str):
         One of ``CODES``.
     value : float, optional
         The quantity compared with the warning's threshold (``THRESHOLDS``).
+
+    Raises
+    ------
+    ValueError
+        ``code`` is not one of ``CODES``.
     """
 
     code: str
@@ -97,27 +75,34 @@ class CodedWarning(str):
     def __reduce__(self):
         return (CodedWarning, (str(self), self.code, self.value))
 
-
-def code_of(warning: str) -> str:
-    """The code of a warning: its own, or the first of ``PATTERNS`` its text matches, or ``FALLBACK``."""
-    code = getattr(warning, "code", None)
-    if isinstance(code, str):
-        return code
-    for name, pattern in PATTERNS:
-        if re.search(pattern, warning):
-            return name
-    return FALLBACK
+    def named(self, name: str) -> "CodedWarning":
+        """The same warning said of a part: ``"NAME: text"``, with its code and value kept."""
+        return CodedWarning(f"{name}: {self}", self.code, self.value)
 
 
-def is_ignored(warning: str, ignore=frozenset(), thresholds: dict[str, float] | None = None) -> bool:
+def coded(warnings, where: str = "warnings") -> tuple[CodedWarning, ...]:
+    """``warnings`` as a tuple, each checked to carry its code.
+
+    Raises
+    ------
+    TypeError
+        A warning is a plain string (made without a code): a defect of the code that made it.
+    """
+    out = tuple(warnings)
+    for warning in out:
+        if not isinstance(warning, CodedWarning):
+            raise TypeError(f"{where}: a warning without a code (make it a CodedWarning where it is made): "
+                            f"{str(warning)[:80]!r}")
+    return out
+
+
+def is_ignored(warning: CodedWarning, ignore=frozenset(), thresholds: dict[str, float] | None = None) -> bool:
     """Whether ``warning`` is silenced: its code is in ``ignore``, or its value is within the
     caller's threshold for its code (a warning without a value is never within a threshold)."""
-    code = code_of(warning)
-    if code in ignore:
+    if warning.code in ignore:
         return True
-    limit = (thresholds or {}).get(code)
-    value = getattr(warning, "value", None)
-    return limit is not None and value is not None and value <= limit
+    limit = (thresholds or {}).get(warning.code)
+    return limit is not None and warning.value is not None and warning.value <= limit
 
 
 def check_codes(codes, where: str = "ignore_warning") -> tuple[str, ...]:
@@ -132,4 +117,4 @@ def check_codes(codes, where: str = "ignore_warning") -> tuple[str, ...]:
     return tuple(out)
 
 
-__all__ = ["CODES", "FALLBACK", "PATTERNS", "THRESHOLDS", "CodedWarning", "check_codes", "code_of", "is_ignored"]
+__all__ = ["CODES", "THRESHOLDS", "CodedWarning", "check_codes", "coded", "is_ignored"]

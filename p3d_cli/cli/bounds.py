@@ -22,7 +22,6 @@ from p3d_cli.cli.options import (
     warning_options,
 )
 from p3d_cli.cli.output import plural
-from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.settings import WarningFilter, settings_for
 from p3d_cli.results import bounds_record
@@ -69,22 +68,17 @@ Examples:
 @batch_options
 @units_options
 def bounds(inputs, fmt, placement, tessellate, units, output_units, as_json, fields, precision, settings, batch):
-    style = output_style(as_json, batch.csv, fields, "table")
+    style = output.output_style(as_json, batch.csv, fields, "table")
     run = Batch("p3d bounds", inputs, batch)
     if style in ("table", "fields"):
         run.note_settings(settings.config, "bounds", {"units": units})
     if batch.csv:
-        click.echo(output.csv_line(CSV_COLUMNS))
+        click.echo(output.csv_header("bounds"))
     run.report(functools.partial(bounds_report, style=style, placement=placement, tessellate=tessellate,
                                  format=fmt, units=units, output_units=output_units, fields=fields,
                                  precision=precision, settings=settings),
                functools.partial(error_line, style=style))
     return run.finish("failed")
-
-
-#: Columns of ``p3d bounds --csv``.
-CSV_COLUMNS = ("source", "format", "method", "faces", "min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
-               "warnings", "error")
 
 
 def bounds_report(source: str, *, style: str, fields: tuple[str, ...] = (), precision: int | None = None,
@@ -98,33 +92,13 @@ def bounds_report(source: str, *, style: str, fields: tuple[str, ...] = (), prec
         return Report(bounds_table(result, precision or 10), source=result.source, warnings=kept)
     record = bounds_record(result)
     record["settings"] = used
-    if style == "fields":
-        text = "\t".join(output.bare(field(record, name)) for name in fields)
-    elif style == "json":
-        text = output.record_line("bounds", record)
-    else:
-        text = csv_row(record, precision or output.CSV_PRECISION)
-    return Report(text, source=result.source, warnings=kept)
-
-
-def csv_row(record: dict, precision: int | None = None) -> str:
-    """The ``--csv`` row of a JSON record (or of an error record); warnings as their codes."""
-    row = dict.fromkeys(CSV_COLUMNS)
-    row.update({k: v for k, v in record.items() if k in row})
-    for end in ("min", "max"):
-        if record.get(end) is not None:
-            row.update(zip((f"{end}_x", f"{end}_y", f"{end}_z"), (float(x) for x in record[end])))
-    row["warnings"] = " ".join(record.get("warning_codes") or []) or None
-    return output.csv_line((row[k] for k in CSV_COLUMNS), precision)
+    return Report(output.formatted("bounds", record, style, fields, precision), source=result.source, warnings=kept)
 
 
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done: JSON or CSV, an empty line for --field;
     nothing in table style."""
-    record = {"source": outcome.source, "error": error_message(outcome.error)}
-    if style in ("table", "fields"):
-        return None if style == "table" else ""
-    return output.record_line("bounds", record) if style == "json" else csv_row(record)
+    return output.failed("bounds", outcome.source, error_message(outcome.error), style)
 
 
 def bounds_table(result, precision: int = 10) -> str:

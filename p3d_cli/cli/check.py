@@ -19,19 +19,10 @@ from p3d_cli.cli.options import (
     json_option,
 )
 from p3d_cli.cli.output import plural
-from p3d_cli.cli.props import field, output_style
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.settings_file import Config
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.verdicts import CHECKS, SAMPLED_COUNTS as _COUNTS, CheckResult, check_record
-
-#: Columns of ``--csv``, in order (the flat keys of the JSON record, then ``error``).
-CSV_COLUMNS = ("source", "format", "ok", "failed", "faces", "vertices", "edges", "closed", "oriented",
-               "outward", "manifold", "boundary_edges", "nonmanifold_edges", "misoriented_edges",
-               "nonmanifold_vertices", "degenerate_faces", "zero_area_faces",
-               "faces_with_repeated_vertex", "duplicate_faces", "shells", "volume", "error", "signed_volume",
-               "self_intersections")
-
 
 def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), config: Config | None = None,
                  **limits) -> Report:
@@ -50,10 +41,7 @@ def check_report(source: str, *, style: str, fields: tuple[str, ...] = (), confi
     else:
         record = check_record(result)
         record["settings"] = used
-        if style == "fields":
-            text = "\t".join(output.bare(field(record, name)) for name in fields)
-        else:
-            text = output.record_line("check", record) if style == "json" else check_csv_line(record)
+        text = output.formatted("check", record, style, fields)
     return Report(text, passed=result.ok, source=result.source, failures=failure_messages(result))
 
 
@@ -86,10 +74,7 @@ def failure_messages(result: CheckResult) -> tuple[tuple[str, str], ...]:
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be read: JSON or CSV, an empty line for --field;
     nothing in text style."""
-    record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
-    if style in ("text", "fields"):
-        return None if style == "text" else ""
-    return output.record_line("check", record) if style == "json" else check_csv_line(record)
+    return output.failed("check", outcome.source, error_message(outcome.error), style, ok=False)
 
 
 def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[str, ...]:
@@ -109,16 +94,6 @@ def parse_require(values: tuple[str, ...], where: str = "--require") -> tuple[st
                 raise UsageError(where, f"no check named {name!r}",
                                  "checks are: " + ", ".join(CHECKS) + " (or all, none)")
     return tuple(dict.fromkeys(names))
-
-
-def check_csv_line(record: dict) -> str:
-    """The ``--csv`` row of a JSON record (or of an error record)."""
-    row = {key: record.get(key, "") for key in CSV_COLUMNS}
-    if isinstance(row["self_intersections"], dict):
-        row["self_intersections"] = row["self_intersections"]["count"]
-    if isinstance(row["failed"], list):
-        row["failed"] = " ".join(row["failed"])
-    return output.csv_line(row[key] for key in CSV_COLUMNS)
 
 
 #: Digits of the coordinates of problem locations in the text verdict (enough to find them).
@@ -328,7 +303,7 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
       p3d check scan.stl --weld 1e-6
     """
     required = parse_require(require) if require else None   # None: the settings', or all
-    style = output_style(as_json, batch.csv, fields, "text")
+    style = output.output_style(as_json, batch.csv, fields, "text")
     run = Batch("p3d check", inputs, batch)
     if weld is not None and not weld > 0:
         raise UsageError("--weld", f"{weld} is not positive", "give the largest distance of vertices to merge")
@@ -338,6 +313,6 @@ def check(inputs, fmt, require, min_volume, max_faces, as_json, fields, config, 
                              require=required, min_volume=min_volume, max_faces=max_faces,
                              **({"weld": weld} if weld is not None else {}))
     if batch.csv:
-        click.echo(output.csv_line(CSV_COLUMNS))
+        click.echo(output.csv_header("check"))
     run.report(work, functools.partial(error_line, style=style))
     return run.finish("failed check")

@@ -34,7 +34,7 @@ def config(inputs, show, as_json):
     if inputs:
         record["inputs"] = [{"source": source, "settings": settings.for_source(source)} for source in inputs]
     if as_json:
-        click.echo(output.record_line("config", record))
+        click.echo(output.formatted("config", record, "json"))
         return 0
     if settings.path is None:
         click.echo("no settings file (no p3d.toml or [tool.p3d] in pyproject.toml here or in a parent folder)")

@@ -159,7 +159,7 @@ def _tolerances(config, rtol, atol, source: str | None) -> tuple[dict, dict]:
 
 def _report(run: Batch, key: str, changes: list, as_json: bool) -> None:
     for change in changes:
-        run.out(output.record_line("diff", change.record()) if as_json else change_line(change))
+        run.out(output.formatted("diff", change.record(), "json") if as_json else change_line(change))
     failures = tuple((c.quantity, change_line(c)) for c in changes)
     run.record(Report(passed=not changes, source=key, failures=failures), key)
 
@@ -223,7 +223,7 @@ def _write_baseline(path: str, records: dict[str, dict], root: str, inputs=()) -
     the old one; never written over one of the meshes."""
     from p3d_cli.io import atomic
 
-    text = "".join(output.record_line("props", {**record, "source": key}) + "\n"
+    text = "".join(output.formatted("props", {**record, "source": key}, "json") + "\n"
                    for key, record in sorted(records.items()))
     atomic.write_bytes(path, text.encode("utf-8", "surrogateescape"),
                        inputs=[x for x in inputs if isinstance(x, str) and x != "-"], what="the baseline")

@@ -1,5 +1,7 @@
-"""The serialisers every command shares: one JSON writer, numbers and vectors for people, bare
-fields for the shell, CSV rows. Each command's own records and tables live with the command."""
+"""The one writer of records: ``formatted`` prints a record the library built as ``--json``,
+``--csv`` (its layout in ``p3d_cli.cli.columns``) or ``--field``, and ``failed`` the record of
+an input that could not be done; plus numbers and vectors for people. Each command's
+human-readable text lives with the command."""
 
 from __future__ import annotations
 
@@ -9,18 +11,106 @@ from typing import Any
 
 import numpy as np
 
+from p3d_cli.cli.columns import COLUMNS, CSV_PRECISION
+from p3d_cli.errors import FieldError
+
 # The JSON writer is the library's (``to_json`` of every result); this module adds the record's kind.
 from p3d_cli.records import SCHEMA_VERSION, dumps, jsonable  # noqa: F401 (used by every command)
+
+#: The output styles ``formatted`` writes (a command's default text is its own).
+STYLES = ("json", "csv", "fields")
 
 
 #: The kinds of record, each with its schema file.
 RECORD_KINDS = ("props", "bounds", "check", "diff", "solve", "summary", "config", "repair")
+
+#: Kinds of ``--json`` line written without ``schema_version`` and without a schema file
+#: (``p3d robot check``'s link records, ``p3d render``'s line): kept as they were printed.
+UNVERSIONED = ("robot", "render")
 
 
 def record_line(kind: str, record: dict) -> str:
     """One ``--json`` record of ``kind`` (``RECORD_KINDS``) as a line of JSON, with its
     ``schema_version`` first. Every record p3d prints or writes goes through here."""
     return dumps({"schema_version": SCHEMA_VERSION, **{k: v for k, v in record.items() if k != "schema_version"}})
+
+
+def formatted(kind: str, record: dict, style: str, fields: tuple[str, ...] = (), precision: int | None = None,
+              about: bool = False) -> str:
+    """One record of ``kind`` in ``style``: the one writer of every command's records.
+
+    Parameters
+    ----------
+    kind : str
+        One of ``RECORD_KINDS`` or ``UNVERSIONED`` (``--csv``: one of ``p3d_cli.cli.columns.COLUMNS``).
+    record : dict
+        The record as the library builds it (``props_record``, ``check_record``, ...), with
+        the command's additions (``settings``).
+    style : str
+        ``json`` (one line of JSON, ``schema_version`` first), ``csv`` (its rows, in the
+        kind's columns) or ``fields`` (the values of ``fields``, tab-separated, for the shell).
+    fields : tuple of str
+        ``--field`` names: dots for nesting, integers for list items.
+    precision : int, optional
+        ``--csv``: significant digits of floats (default: the kind's, ``CSV_PRECISION``).
+    about : bool
+        ``--csv``: with the ``--about`` columns.
+
+    Raises
+    ------
+    FieldError
+        A name in ``fields`` that the record does not have.
+    """
+    if style == "json":
+        return dumps(record) if kind in UNVERSIONED else record_line(kind, record)
+    if style == "csv":
+        columns = COLUMNS[kind]
+        digits = precision or columns.precision
+        return "\n".join(csv_line(columns.row(row, about), digits) for row in columns.rows(record))
+    if style == "fields":
+        return "\t".join(bare(field(record, name)) for name in fields)
+    raise ValueError(f"no output style {style!r}; styles are: " + ", ".join(STYLES))
+
+
+def failed(kind: str, source: str, message: str, style: str, about: bool = False, **extra) -> str | None:
+    """The record of an input that could not be done (``source``, ``extra``, ``error``) in
+    ``style``: an empty line for ``fields`` (so that lines stay aligned with inputs), nothing
+    for any style but ``STYLES`` (the command's text: the error goes to stderr)."""
+    if style == "fields":
+        return ""
+    if style not in STYLES:
+        return None
+    return formatted(kind, {"source": source, **extra, "error": message}, style, about=about)
+
+
+def csv_header(kind: str, about: bool = False) -> str:
+    """The ``--csv`` header line of ``kind``."""
+    return csv_line(COLUMNS[kind].header(about))
+
+
+def field(record: dict, name: str):
+    """``record``'s field ``name`` (dots for nesting, integers for list items).
+
+    Raises
+    ------
+    FieldError
+        No such field (the message lists the record's fields).
+    """
+    try:
+        return field_value(record, name)
+    except KeyError:
+        raise FieldError("--field", f"no field named {name!r}",
+                         "fields are: " + ", ".join(field_names(record))) from None
+
+
+def output_style(as_json: bool, as_csv: bool, fields, default: str) -> str:
+    """``csv``, ``fields``, ``json`` or ``default`` (the command's text); two at once is a usage error."""
+    from p3d_cli.errors import UsageError
+
+    given = [flag for flag, on in (("--json", as_json), ("--csv", as_csv), ("--field", bool(fields))) if on]
+    if len(given) > 1:
+        raise UsageError("/".join(given), "both given", "choose one output format")
+    return "csv" if as_csv else "fields" if fields else "json" if as_json else default
 
 
 def schema(kind: str) -> dict:
@@ -94,11 +184,6 @@ def bare(value) -> str:
 def _has_object(value: list) -> bool:
     """Whether a list holds an object (a dict) at any depth."""
     return any(isinstance(v, dict) or (isinstance(v, list) and _has_object(v)) for v in value)
-
-
-#: Significant digits of ``--csv`` numbers by default: what a spreadsheet keeps (IEEE doubles
-#: hold 15-17; 15 always round-trips a decimal, so 94.19999999999999 reads back as 94.2).
-CSV_PRECISION = 15
 
 
 def csv_cell(value, precision: int | None = CSV_PRECISION) -> str:

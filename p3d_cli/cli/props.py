@@ -5,7 +5,6 @@ from __future__ import annotations
 import functools
 
 import click
-import numpy as np
 
 from p3d_cli import measure
 from p3d_cli.cli import output
@@ -27,7 +26,7 @@ from p3d_cli.cli.options import (
 from p3d_cli.cli.reporting import Batch, Report
 from p3d_cli.cli.rounding import snapped
 from p3d_cli.cli.settings import WarningFilter, settings_for
-from p3d_cli.errors import CheckFailedError, FieldError, UsageError
+from p3d_cli.errors import CheckFailedError, UsageError
 from p3d_cli.results import INERTIA_CONVENTION, PropsResult, props_record
 
 
@@ -107,7 +106,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
     twice: --intersections tests for that exactly (it also runs when the inertia is not a
     solid's), --shells measures each body of a multi-body export on its own (docs/ci.md).
     """
-    style = output_style(as_json, batch.csv, fields, "table")
+    style = output.output_style(as_json, batch.csv, fields, "table")
     style = f"emit:{emit}" if emit else style
     options = dict(placement=placement, method=method, density=density, mass=mass, about=about,
                    tessellate=tessellate, samples=samples, seed=seed, tolerance=tolerance, format=fmt,
@@ -124,7 +123,7 @@ def props(inputs, fmt, density, mass, about, as_json, fields, precision, strict,
     work = functools.partial(props_report, style=style, fields=fields, strict=strict, settings=settings,
                              precision=precision, **options)
     if batch.csv:
-        click.echo(output.csv_line(csv_columns(about is not None)))
+        click.echo(output.csv_header("props", about=about is not None))
     if combine:
         return combined(run, work)
     run.report(work, functools.partial(error_line, style=style, about=about is not None))
@@ -166,14 +165,6 @@ def combined(run: Batch, work) -> int:
     return 0
 
 
-def output_style(as_json: bool, as_csv: bool, fields, default: str) -> str:
-    """``csv``, ``fields``, ``json`` or ``default``; two of them at once is a usage error."""
-    given = [flag for flag, on in (("--json", as_json), ("--csv", as_csv), ("--field", bool(fields))) if on]
-    if len(given) > 1:
-        raise UsageError("/".join(given), "both given", "choose one output format")
-    return "csv" if as_csv else "fields" if fields else "json" if as_json else default
-
-
 def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, settings: WarningFilter = WarningFilter(),
                  precision: int | None = None, **options) -> Report:
     """One input's output in ``style`` (table, json, csv or fields), formatted where it was
@@ -196,38 +187,16 @@ def props_report(src, *, style: str, fields: tuple[str, ...], strict: bool, sett
     else:
         record = props_record(result)
         record["settings"] = used
-        if style == "csv":
-            about = options.get("about") is not None
-            rows = [{**part, "source": f"{record['source']}#{part['name']}"} for part in record.get("parts", ())]
-            text = "\n".join(output.csv_line(props_row(snapped(row), about), precision or output.CSV_PRECISION)
-                             for row in rows + [record])
-        elif style == "fields":
-            text = "\t".join(output.bare(field(record, name)) for name in fields)
-        else:
-            text = output.record_line("props", record)
+        text = output.formatted("props", record, style, fields, precision, about=options.get("about") is not None)
     failed = strict and bool(kept)
     return Report(text, passed=not failed, source=result.facts.source, warnings=kept,
                   failures=kept if failed else ())
 
 
-def field(record: dict, name: str):
-    """``record``'s field ``name`` (dots for nesting, integers for list items)."""
-    try:
-        return output.field_value(record, name)
-    except KeyError:
-        raise FieldError("--field", f"no field named {name!r}",
-                         "fields are: " + ", ".join(output.field_names(record))) from None
-
-
 def error_line(outcome, *, style: str, about: bool = False) -> str | None:
     """The record of an input that could not be done: JSON or CSV, an empty line for --field
     (so that lines stay aligned with inputs); nothing in the table."""
-    record = {"source": outcome.source, "error": error_message(outcome.error)}
-    if style == "csv":
-        return output.csv_line(props_row(record, about))
-    if style == "fields":
-        return ""
-    return output.record_line("props", record) if style == "json" else None
+    return output.failed("props", outcome.source, error_message(outcome.error), style, about=about)
 
 
 def units_line(units: dict | None) -> list[str]:
@@ -278,53 +247,3 @@ def props_table(result: PropsResult, precision: int = 10) -> str:
         lines.append(f"  bounds min        {vector(f.bounds.min)}")
         lines.append(f"  bounds max        {vector(f.bounds.max)}")
     return "\n".join(blocks + lines)
-
-
-#: Columns of ``p3d props --csv``: inertia about the centre of mass, positive tensor convention;
-#: ``i1..i3`` the principal moments (ascending); ``warnings`` the warnings' codes, space-separated.
-CSV_COLUMNS = ("source", "format", "method", "faces", "closed", "volume", "mass", "density",
-               "com_x", "com_y", "com_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz",
-               "i1", "i2", "i3", "min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
-               "warnings", "error")
-
-#: With ``--about``: the point and the inertia about it, before ``warnings``.
-ABOUT_COLUMNS = ("about_x", "about_y", "about_z", "about_ixx", "about_iyy", "about_izz", "about_ixy",
-                 "about_ixz", "about_iyz")
-
-
-def csv_columns(about: bool = False) -> tuple[str, ...]:
-    """The header of ``--csv`` (with the ``--about`` columns when asked for)."""
-    if not about:
-        return CSV_COLUMNS
-    return CSV_COLUMNS[:-2] + ABOUT_COLUMNS + CSV_COLUMNS[-2:]
-
-
-def _tensor(prefix: str, matrix) -> dict:
-    i = np.asarray(matrix)
-    return {f"{prefix}ixx": i[0, 0], f"{prefix}iyy": i[1, 1], f"{prefix}izz": i[2, 2],
-            f"{prefix}ixy": i[0, 1], f"{prefix}ixz": i[0, 2], f"{prefix}iyz": i[1, 2]}
-
-
-def _xyz(prefix: str, vector) -> dict:
-    return dict(zip((f"{prefix}x", f"{prefix}y", f"{prefix}z"), (float(x) for x in vector)))
-
-
-def props_row(record: dict, about: bool = False) -> list:
-    """The ``--csv`` cells of a ``props_record`` (or of an error record), in column order."""
-    columns = csv_columns(about)
-    row = dict.fromkeys(columns)
-    row.update({k: v for k, v in record.items() if k in row})
-    if record.get("center_of_mass") is not None:
-        row.update(_xyz("com_", record["center_of_mass"]))
-    if record.get("inertia") is not None:
-        row.update(_tensor("", record["inertia"]))
-    if record.get("principal_moments") is not None:
-        row.update(zip(("i1", "i2", "i3"), (float(x) for x in record["principal_moments"])))
-    if record.get("bounds") is not None:
-        row.update(_xyz("min_", record["bounds"]["min"]), **_xyz("max_", record["bounds"]["max"]))
-    if about and record.get("about") is not None:
-        row.update(_xyz("about_", record["about"]))
-        if record.get("inertia_about") is not None:
-            row.update(_tensor("about_", record["inertia_about"]))
-    row["warnings"] = " ".join(record.get("warning_codes") or []) or None
-    return [row[k] for k in columns]

@@ -88,6 +88,8 @@ def render(source, output, as_svg, view, azimuth, elevation, up, size, show, tit
 def output_record(picture, path: str, kind: str) -> str:
     """The ``--json`` line: what was drawn where."""
     width, height = picture.size
-    return output.dumps({"output": path, "format": kind, "width": width, "height": height,
-                         "faces": picture.faces, "azimuth": picture.azimuth, "elevation": picture.elevation,
-                         "overlays": [{"name": layer.key, "label": layer.label} for layer in picture.layers]})
+    return output.formatted("render", {"output": path, "format": kind, "width": width, "height": height,
+                                       "faces": picture.faces, "azimuth": picture.azimuth,
+                                       "elevation": picture.elevation,
+                                       "overlays": [{"name": layer.key, "label": layer.label}
+                                                    for layer in picture.layers]}, "json")

@@ -20,11 +20,6 @@ from p3d_cli.repairs.steps import STEPS
 #: Notes of a step shown in the text report.
 NOTES_SHOWN = 3
 
-#: Columns of ``--csv``, in order.
-CSV_COLUMNS = ("source", "output", "ok", "fixed", "changed", "written", "failed_before", "failed_after",
-               "faces_removed", "faces_flipped", "holes_filled", "holes_left", "faces_added",
-               "volume_before", "volume_after", "relative_volume_change", "error")
-
 def repair_report(source: str, *, style: str, targets: dict, **options) -> Report:
     """One input repaired and its report formatted (module level: workers receive it)."""
     from p3d_cli.repairs import repair_file
@@ -33,41 +28,16 @@ def repair_report(source: str, *, style: str, targets: dict, **options) -> Repor
     if isinstance(target, OutputError):
         raise target
     report = repair_file(source, target, **options)
-    if style == "json":
-        text = output.record_line("repair", report.to_dict())
-    elif style == "csv":
-        text = output.csv_line(csv_row(report.to_dict()).get(key, "") for key in CSV_COLUMNS)
-    else:
-        text = repair_text(report)
+    text = output.formatted("repair", report.to_dict(), style) if style in output.STYLES else repair_text(report)
     failures = tuple(("not-fixed", line) for line in report.unfixed)
     if not report.within_limit:
         failures += (("max-volume-change", f"the volume changed by {report.mass.relative_volume_change:.3g} "
                       f"(relative), over the limit {report.max_volume_change:g}: nothing written"),)
     return Report(text, passed=report.ok, source=source, failures=failures)
 
-def csv_row(record: dict) -> dict:
-    """The ``--csv`` cells of a JSON record."""
-    steps = {s["step"]: s["counts"] for s in record["steps"]}
-    mass = record["mass"]
-    return {"source": record["source"], "output": record["output"] or "", "ok": record["ok"],
-            "fixed": record["fixed"], "changed": record["changed"], "written": record["written"],
-            "failed_before": " ".join(record["before"]["failed"]), "failed_after": " ".join(record["after"]["failed"]),
-            "faces_removed": sum(steps.get(n, {}).get("faces_removed", 0) for n in ("degenerate", "duplicate")),
-            "faces_flipped": sum(steps.get(n, {}).get("faces_flipped", 0) for n in ("orient", "outward")),
-            "holes_filled": steps.get("holes", {}).get("holes_filled", 0),
-            "holes_left": steps.get("holes", {}).get("holes_left", 0),
-            "faces_added": steps.get("holes", {}).get("faces_added", 0),
-            "volume_before": mass["before"]["volume"], "volume_after": mass["after"]["volume"],
-            "relative_volume_change": mass["relative_volume_change"]}
-
 def error_line(outcome, *, style: str) -> str | None:
     """The record of an input that could not be done (JSON or CSV; nothing in text)."""
-    record = {"source": outcome.source, "ok": False, "error": error_message(outcome.error)}
-    if style == "json":
-        return output.record_line("repair", record)
-    if style == "csv":
-        return output.csv_line(record.get(key, "") for key in CSV_COLUMNS)
-    return None
+    return output.failed("repair", outcome.source, error_message(outcome.error), style, ok=False)
 
 def repair_text(report: RepairReport) -> str:
     """The human report of one repair."""
@@ -259,6 +229,6 @@ def repair(inputs, out, in_place, dry_run, only_if_needed, output_format, steps,
                              fill_holes=fill_holes, flatness=flatness, max_hole_edges=max_hole_edges,
                              format=fmt, create_folders=mirror)
     if batch.csv:
-        click.echo(output.csv_line(CSV_COLUMNS))
+        click.echo(output.csv_header("repair"))
     run.report(work, functools.partial(error_line, style=style))
     return run.finish("not fixed")

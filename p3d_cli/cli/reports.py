@@ -141,7 +141,8 @@ def prepare_reports(options: ReportOptions, command: str, inputs=()) -> None:
         elif kind == "github":
             text = "".join(line + "\n" for line in github_lines(command, [entry]))
         else:
-            text = output.record_line("summary", {"command": command, "complete": False, "exit_status": None}) + "\n"
+            text = output.formatted("summary", {"command": command, "complete": False, "exit_status": None},
+                                    "json") + "\n"
         _write(path, text, kind, inputs)
 
 
@@ -192,8 +193,8 @@ def write_reports(options: ReportOptions, command: str, entries, skipped: dict[s
             else:
                 _write(path, text, kind, inputs)
     if options.summary is not None:
-        _write(options.summary, output.record_line("summary", summary_record(command, entries, skipped, status)) + "\n",
-               "summary", inputs)
+        record = summary_record(command, entries, skipped, status)
+        _write(options.summary, output.formatted("summary", record, "json") + "\n", "summary", inputs)
 
 
 def summary_record(command: str, entries, skipped: dict[str, list[str]], status: int) -> dict:

@@ -143,7 +143,7 @@ def check(description, package_paths, xacro_args, role, require_inertial, open_m
                          require_inertial=require_inertial, open_mesh=open_mesh)
     for c in checks:
         if as_json:
-            click.echo(output.dumps(_record(robot_.path, c)))
+            click.echo(output.formatted("robot", _record(robot_.path, c), "json"))
             continue
         for p in c.problems:
             click.echo(f"{robot_.path}: link {c.link!r}: {p.message} (rule: {p.rule}; from {c.basis})")

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from p3d_cli.cli.settings_file import Config
-from p3d_cli.warning_codes import THRESHOLDS, check_codes, code_of, is_ignored
+from p3d_cli.warning_codes import THRESHOLDS, check_codes, is_ignored
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ class WarningFilter:
         settings = self.config.for_source(source)
         ignore = self.ignore | frozenset(settings.get("ignore-warnings", ()))
         thresholds = {**settings.get("warning-thresholds", {}), **self.thresholds}
-        return tuple((code_of(w), str(w)) for w in warnings if not is_ignored(w, ignore, thresholds))
+        return tuple((w.code, str(w)) for w in warnings if not is_ignored(w, ignore, thresholds))
 
 
 def parse_thresholds(values, where: str = "--warning-threshold") -> dict[str, float]:

@@ -65,7 +65,7 @@ def solve(scene, steps, dt, trajectory, plot, animate, as_json):
         with trajectory_writer(trajectory, inputs=[scene]) as record:
             result = solve_scene(parsed, steps=steps, dt=dt, on_step=record)
     if as_json:
-        click.echo(output.record_line("solve", solve_record(result)))
+        click.echo(output.formatted("solve", solve_record(result), "json"))
     else:
         click.echo(solve_table(scene, result))
 

@@ -163,7 +163,6 @@ def _parts_inertial(body) -> Inertial:
     whole's; ``inertia`` and ``center_of_mass``, when given, override what the parts give.
     """
     from p3d_cli.measure import props
-    from p3d_cli.warning_codes import code_of
 
     where = f"{body.where}.parts"
     try:
@@ -176,7 +175,7 @@ def _parts_inertial(body) -> Inertial:
     # A scene has nowhere to show a warning, and a body needs a solid: a part that is not one
     # (open, wound inward, flat, self-intersecting) is refused, as a body's shape: is.
     for index, part in enumerate(result.parts):
-        bad = [w for w in part.warnings if code_of(w) in NOT_A_SOLID]
+        bad = [w for w in part.warnings if w.code in NOT_A_SOLID]
         if bad:
             raise SceneError(f"{where}[{index}]" if len(body.parts.parts) == len(result.parts) else where,
                              f"{part.details.get('name', part.facts.source)}: {bad[0]}",

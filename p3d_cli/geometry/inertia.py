@@ -11,6 +11,7 @@ import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
 from p3d_cli.results import MassProperties, Moments
+from p3d_cli.warning_codes import CodedWarning
 
 
 def inertia_from_second_moments(second: np.ndarray) -> np.ndarray:
@@ -208,7 +209,7 @@ def _check_finite(where: str, what: str, *values) -> None:
                          "measure in a larger unit, or nearer the origin, or with a smaller density")
 
 
-def implausibilities(props: MassProperties, bounds=None, method: str = "exact") -> list[str]:
+def implausibilities(props: MassProperties, bounds=None, method: str = "exact") -> list[CodedWarning]:
     """Plain-words warnings for a result no solid can have: only a bad mesh gives one.
 
     A solid has positive volume and mass, principal moments that are positive and satisfy the
@@ -225,18 +226,18 @@ def implausibilities(props: MassProperties, bounds=None, method: str = "exact") 
     """
     out = []
     if props.volume <= 0 or props.mass <= 0:
-        out.append(f"volume {props.volume:.6g} and mass {props.mass:.6g} are not both positive, as a "
-                   "solid's are: the mesh is inside out or not a solid")
+        out.append(CodedWarning(f"volume {props.volume:.6g} and mass {props.mass:.6g} are not both positive, as a "
+                                "solid's are: the mesh is inside out or not a solid", "implausible"))
     if (props.principal_moments is not None and method == "exact" and props.mass > 0
             and breaks_triangle_inequality(props.principal_moments)):
-        out.append("principal moments break the triangle inequality (or one is negative), which no "
-                   "solid's do: the mesh probably intersects itself")
+        out.append(CodedWarning("principal moments break the triangle inequality (or one is negative), which no "
+                                "solid's do: the mesh probably intersects itself", "implausible"))
     if props.center_of_mass is not None and bounds is not None:
         slack = 1e-9 * max(bounds.diagonal, float(np.abs(bounds.max).max()), float(np.abs(bounds.min).max()))
         c = props.center_of_mass
         if np.any(c < bounds.min - slack) or np.any(c > bounds.max + slack):
-            out.append("the centre of mass lies outside the bounds, which no solid's does: the mesh is "
-                       "not a solid (inside-out or overlapping parts)")
+            out.append(CodedWarning("the centre of mass lies outside the bounds, which no solid's does: the mesh is "
+                                    "not a solid (inside-out or overlapping parts)", "implausible"))
     return out
 
 

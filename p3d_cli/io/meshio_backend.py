@@ -25,6 +25,7 @@ from p3d_cli.errors import FormatError, InputError, MissingExtraError, UsageErro
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
+from p3d_cli.warning_codes import CodedWarning
 
 #: Formats p3d reads with its own loaders; meshio is never asked about these.
 OWN = {"stl", "obj", "ply", "off"}
@@ -176,7 +177,7 @@ def load(raw: RawInput, name: str | None = None) -> MeshSource:
         detail = str(exc).strip().splitlines()[0][:120] if str(exc).strip() else type(exc).__name__
         raise FormatError(raw.where, f"meshio could not read it as {name} ({detail})",
                           "the file is corrupt or not in this format; check --format or export it again") from None
-    notes = tuple("meshio: " + line.strip().removeprefix("Warning:").strip()
+    notes = tuple(CodedWarning("meshio: " + line.strip().removeprefix("Warning:").strip(), "reader")
                   for line in captured.getvalue().splitlines() if line.strip())
     return _source(raw.where, name, mesh, notes)
 
@@ -231,8 +232,8 @@ def _source(where: str, name: str, mesh, notes=()) -> MeshSource:
             # Volume meshes often carry their boundary (or named patches) as surface cells too:
             # adding them would count nothing (they hold no volume) but say which was measured.
             held = ", ".join(f"{n} {t}" for t, n in sorted(surface.items()))
-            notes = notes + (f"the mesh holds {len(tets)} tetrahedra and surface cells ({held}): the "
-                             "tetrahedra were measured, the surface cells were not",)
+            notes = notes + (CodedWarning(f"the mesh holds {len(tets)} tetrahedra and surface cells ({held}): the "
+                                          "tetrahedra were measured, the surface cells were not", "reader"),)
         return MeshSource(fmt, len(tets), dtype, lambda: iter(()), tets, notes)
     triangles = []
     for kind, data in blocks:

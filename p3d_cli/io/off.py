@@ -22,6 +22,7 @@ from p3d_cli.io.numbers import fromstring, lone_sign, saturated, to_float, to_in
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
+from p3d_cli.warning_codes import CodedWarning
 
 _KEYWORD = re.compile(rb"^(ST)?C?N?(4)?(n)?OFF$")
 _COMMENT = re.compile(rb"#[^\n]*")
@@ -56,9 +57,9 @@ def load(raw: RawInput) -> MeshSource:
                           f"only {len(body)} lines follow", "the file is truncated; export it again")
     vertices = _vertices(raw.where, body[:nv])
     faces = _faces(raw.where, body[nv:nv + nf], nv)
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[CodedWarning, ...] = ()
     if len(body) > nv + nf:
-        warnings = (f"{len(body) - nv - nf} lines after the last face were ignored",)
+        warnings = (CodedWarning(f"{len(body) - nv - nf} lines after the last face were ignored", "skipped-lines"),)
     return indexed_source("off", vertices, faces, "float64", warnings)
 
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.source import BLOCK, MeshSource
+from p3d_cli.warning_codes import CodedWarning
 
 #: Relative tolerance for recognising a declared unit as one of ``LENGTHS`` (``0.0254`` as
 #: written in a file is the inch).
@@ -142,7 +143,7 @@ def object_source(fmt: str, where: str, vertices: np.ndarray, faces: np.ndarray,
 
 
 def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float, kind: str,
-                 warnings=()) -> MeshSource:
+                 warnings: tuple[CodedWarning, ...] = ()) -> MeshSource:
     """One ``MeshSource`` for a scene's objects (see the module's description).
 
     Parameters

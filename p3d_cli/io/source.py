@@ -8,6 +8,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from p3d_cli.errors import InputError
+from p3d_cli.warning_codes import CodedWarning
 
 #: Triangles handed to the integrals per block: large enough that numpy's per-call overhead
 #: vanishes, small enough that a block's float64 columns (~1 MB) and the integrals' temporaries
@@ -33,8 +34,9 @@ class MeshSource:
         in file order. Calling it again reads again (streams may read once only).
     tetrahedra : (n, 4, 3) float64 or None
         For volume meshes: the tetrahedra, whose integrals are used directly.
-    warnings : tuple of str
-        Things the loader noticed that the user should hear about (trailing bytes, ...).
+    warnings : tuple of CodedWarning
+        Things the loader noticed that the user should hear about (trailing bytes, ...), each
+        with its code (``p3d_cli.warning_codes``).
     where : str
         The input's name in messages: its path, ``<stdin>``, or ``<array>`` for arrays given
         from Python (set by ``p3d_cli.io.load_mesh``).
@@ -59,7 +61,7 @@ class MeshSource:
     coordinate_dtype: str
     read_blocks: Callable[[], Iterator[np.ndarray]]
     tetrahedra: np.ndarray | None = None
-    warnings: tuple[str, ...] = field(default_factory=tuple)
+    warnings: tuple[CodedWarning, ...] = field(default_factory=tuple)
     where: str = "<array>"
     length_unit: str | None = None
     objects: tuple[tuple[str, "MeshSource"], ...] = field(default_factory=tuple)
@@ -124,7 +126,8 @@ def nonfinite_error(where: str, index: int, cell: str = "face") -> InputError:
     return InputError(where, f"{cell} {index} has a NaN or infinite coordinate", "repair or re-export the mesh")
 
 
-def indexed_source(fmt: str, vertices: np.ndarray, faces, dtype: str, warnings=()) -> MeshSource:
+def indexed_source(fmt: str, vertices: np.ndarray, faces, dtype: str,
+                   warnings: tuple[CodedWarning, ...] = ()) -> MeshSource:
     """A ``MeshSource`` over an indexed mesh, yielding ``vertices[faces]`` block by block.
 
     Parameters
@@ -166,7 +169,7 @@ def _blocks_of(pieces: list[np.ndarray], size: int) -> Iterator[np.ndarray]:
         yield carry
 
 
-def array_source(fmt: str, triangles: np.ndarray, dtype: str, warnings=()) -> MeshSource:
+def array_source(fmt: str, triangles: np.ndarray, dtype: str, warnings: tuple[CodedWarning, ...] = ()) -> MeshSource:
     """A ``MeshSource`` over an in-memory ``(n, 3, 3)`` triangle array."""
 
     def read_blocks() -> Iterator[np.ndarray]:

@@ -32,6 +32,7 @@ from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.limits import check_declared, inflate
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
+from p3d_cli.warning_codes import CodedWarning
 
 _TYPES = {"int8": "i1", "uint8": "u1", "int16": "i2", "uint16": "u2", "int32": "i4", "uint32": "u4",
           "int64": "i8", "uint64": "u8", "float32": "f4", "float64": "f8",
@@ -114,7 +115,8 @@ def _mesh(where: str, fmt: str, points: np.ndarray, triangles: list[np.ndarray],
     dtype = "float32" if points.dtype == np.float32 else "float64"
     if points.dtype not in (np.float32, np.float64):
         points = points.astype(np.float64)
-    notes = (f"{skipped} vertex or line cells hold no volume and are left out",) if skipped else ()
+    left_out = CodedWarning(f"{skipped} vertex or line cells hold no volume and are left out", "reader")
+    notes = (left_out,) if skipped else ()
     return indexed_source(fmt, np.ascontiguousarray(points), faces.astype(np.intp), dtype, notes)
 
 

@@ -39,9 +39,9 @@ def solidity(mesh: MeshSource) -> tuple[TopologyReport, Layout | None]:
 _VERBS = {"crossing": "cross", "overlap": "overlap", "fold": "fold"}
 
 
-def solidity_warnings(report: TopologyReport) -> list[str]:
+def solidity_warnings(report: TopologyReport) -> list[CodedWarning]:
     """The ``self-intersecting`` and ``nested-shells`` warnings for what the exact test found."""
-    out: list[str] = []
+    out: list[CodedWarning] = []
     found, nesting = report.self_intersections, report.nesting
     if found is not None and found.count:
         first = found.samples[0]
@@ -84,7 +84,7 @@ def with_solidity_warnings(result: PropsResult, mesh: MeshSource) -> PropsResult
     return dataclasses.replace(result, warnings=tuple(kept + extra))
 
 
-def shell_parts(mesh: MeshSource) -> tuple[list[tuple[str, MeshSource]], list[str]]:
+def shell_parts(mesh: MeshSource) -> tuple[list[tuple[str, MeshSource]], list[CodedWarning]]:
     """Each body of ``mesh`` as ``(name, MeshSource)``, and the exact test's warnings."""
     report, layout = solidity(mesh)
     warnings = solidity_warnings(report)

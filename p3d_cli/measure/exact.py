@@ -202,10 +202,10 @@ def refuse_tessellate(solid: Solid, tessellate: int | None) -> None:
                          f"tessellate= applies to shape specs ({round_names})")
 
 
-def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[str]:
+def mesh_warnings(moments: Moments, facts: MeshFacts) -> list[CodedWarning]:
     """Plain-words warnings for results that are not a clean solid's, each a ``CodedWarning``
     (``p3d_cli.warning_codes``: open, flat, inward, self-intersecting, coarse-float32)."""
-    out: list[str] = []
+    out: list[CodedWarning] = []
     if facts.closed is False and facts.bounding:
         out.append(CodedWarning("mesh is non-manifold but bounding (some edge is used by more than two faces, "
                                 "but every edge is used as often in each direction, vertices matched by exact "

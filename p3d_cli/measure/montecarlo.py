@@ -41,6 +41,7 @@ from p3d_cli.measure.confidence import _PAIRS, ALPHA, _central, clopper_pearson,
 from p3d_cli.measure.solid import Solid
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.results import Bounds, MeshFacts, Moments, PropsResult
+from p3d_cli.warning_codes import CodedWarning
 
 #: Points drawn per chunk (the random stream is consumed chunk by chunk, so the chunk size is
 #: part of what "the same seed gives the same numbers" means: do not change it lightly).
@@ -363,8 +364,8 @@ def _montecarlo_props(solid, placement, samples, seed, tolerance, density, mass,
     props = mass_properties(moments, density=density, mass=mass, about=about, where=solid.source)
     if estimate is None:
         uncertainty = {"volume": 0.0, "mass": 0.0, "center_of_mass": None, "inertia": None}
-        warnings.append("the solid's bounding box is flat, so nothing was sampled: centre of mass "
-                        "and inertia are undefined")
+        warnings.append(CodedWarning("the solid's bounding box is flat, so nothing was sampled: centre of mass "
+                                     "and inertia are undefined", "montecarlo-flat-box"))
     else:
         uncertainty = estimate.uncertainty(density=props.density if mass is None else None, mass=mass)
         warnings += sampling_warnings(estimate, uncertainty["volume"], tolerance)
@@ -383,24 +384,24 @@ def _check_uncertainty(uncertainty: dict, where: str) -> None:
                              "measure in units that keep the numbers nearer 1")
 
 
-def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[str]:
+def sampling_warnings(estimate: Estimate, volume_error: float, tolerance: float | None = None) -> list[CodedWarning]:
     """Warnings for too few samples inside, and for a ``tolerance`` the sample cap did not meet."""
-    out = []
+    out: list[tuple[str, str]] = []     # (code, text)
     k, n = estimate.inside, estimate.samples
     if not k > 0:
-        out.append(f"no Monte Carlo sample of {n} fell inside the solid: centre of mass and inertia "
-                   "are undefined, and the volume's uncertainty is a conservative bound, not a "
-                   "standard error; use more samples or check the mesh")
+        out.append(("montecarlo-empty", f"no Monte Carlo sample of {n} fell inside the solid: centre of mass and "
+                    "inertia are undefined, and the volume's uncertainty is a conservative bound, not a standard "
+                    "error; use more samples or check the mesh"))
     elif estimate.conservative:
-        out.append(f"only {k:g} of {n} Monte Carlo samples fell inside the solid (fewer than "
-                   f"{MIN_INSIDE}): the uncertainties are conservative bounds, not standard errors; "
-                   f"use about {math.ceil(1.25 * MIN_INSIDE * n / k):d} samples or more for standard errors")
+        out.append(("montecarlo-few-inside", f"only {k:g} of {n} Monte Carlo samples fell inside the solid (fewer "
+                    f"than {MIN_INSIDE}): the uncertainties are conservative bounds, not standard errors; use about "
+                    f"{math.ceil(1.25 * MIN_INSIDE * n / k):d} samples or more for standard errors"))
     volume = estimate.box_volume * estimate.mean[0]
     if tolerance is not None and n >= MAX_SAMPLES and not volume_error <= tolerance * volume:
         got = f"{volume_error / volume:.2g}" if volume > 0 else "unbounded"
-        out.append(f"tolerance={tolerance:g} needs more than the cap of {MAX_SAMPLES} samples: stopped there "
-                   f"with a relative volume error of {got}; accept it, or loosen the tolerance")
-    return out
+        out.append(("montecarlo-cap", f"tolerance={tolerance:g} needs more than the cap of {MAX_SAMPLES} samples: "
+                    f"stopped there with a relative volume error of {got}; accept it, or loosen the tolerance"))
+    return [CodedWarning(text, code) for code, text in out]
 
 
 def _shape_setup(solid: Solid, placement: Placement):
@@ -428,11 +429,11 @@ def _mesh_setup(solid: Solid, placement: Placement):
     facts = mesh_facts(solid, found)
     warnings = list(mesh.warnings) + mesh_warnings(found.moments, facts)
     if not found.moments.is_empty and found.moments.volume < 0:
-        warnings.append("Monte Carlo's inside test ignores the winding, so its volume and mass "
-                        "are positive (about |exact signed volume|)")
+        warnings.append(CodedWarning("Monte Carlo's inside test ignores the winding, so its volume and mass "
+                                     "are positive (about |exact signed volume|)", "montecarlo-winding"))
     if facts.closed is False:
-        warnings.append("Monte Carlo on an open mesh: a point whose up and down rays disagree "
-                        "(the ray escapes through a hole) counts as half inside")
+        warnings.append(CodedWarning("Monte Carlo on an open mesh: a point whose up and down rays disagree "
+                                     "(the ray escapes through a hole) counts as half inside", "montecarlo-open"))
     # Sample about the scaled, rotated mesh's box centre; the translation is added once, at the end.
     flat = Placement(placement.scale, placement.rotation).points(np.asarray(triangles, dtype=np.float64).reshape(-1, 3))
     lo, hi = flat.min(axis=0), flat.max(axis=0)

@@ -20,6 +20,7 @@ import numpy as np
 from p3d_cli.errors import InputError, SpecError, UsageError
 from p3d_cli.io.source import MeshSource, array_source, indexed_source
 from p3d_cli.shapes import SHAPES, Shape, looks_like_spec, parse_spec
+from p3d_cli.warning_codes import CodedWarning
 
 #: What ``as_solid`` takes: a path or spec, a shape, triangles, an indexed mesh, a loaded mesh.
 Thing = Union[str, "os.PathLike[str]", Shape, np.ndarray, tuple, MeshSource]
@@ -37,14 +38,14 @@ class Solid:
         An analytic shape (closed forms).
     mesh : MeshSource or None
         Triangles (or tetrahedra) streamed in blocks.
-    warnings : tuple of str
+    warnings : tuple of CodedWarning
         What resolving noticed (a spec that shadows a file of the same name).
     """
 
     source: str
     shape: Shape | None = None
     mesh: MeshSource | None = None
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[CodedWarning, ...] = ()
 
     @property
     def where(self) -> str:
@@ -158,11 +159,11 @@ def resolve_spec(source: str) -> Shape | None:
     return shape
 
 
-def spec_warnings(source: str) -> list[str]:
+def spec_warnings(source: str) -> list[CodedWarning]:
     """A file named like a spec is shadowed by the spec; say so and how to reach it."""
     if os.path.exists(source):
-        return [f"{source!r} is read as a shape spec, not as the file of that name; "
-                f"write ./{source} for the file"]
+        return [CodedWarning(f"{source!r} is read as a shape spec, not as the file of that name; "
+                             f"write ./{source} for the file", "spec-shadows-file")]
     return []
 
 

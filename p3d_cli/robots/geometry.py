@@ -130,7 +130,7 @@ def _measured(assembly: Assembly, link: Link, role: str, source: str, density, m
     except OverflowError:
         raise RangeError(assembly.source, "a geometry's size overflows float64 in its moments",
                          "check the sizes and their unit (metres)") from None
-    problems = list(result.warnings)
+    problems: list[str] = list(result.warnings)
     if result.facts.closed is False and not problems:
         problems.append("a mesh is not closed")
     if mass is not None and result.properties.mass > 0:

@@ -41,6 +41,7 @@ from p3d_cli.io.limits import check_instances
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, instance_totals, scene_source, unique_names
 from p3d_cli.io.source import MeshSource
+from p3d_cli.warning_codes import CodedWarning
 
 _HINT = "the file is corrupt; export it again"
 #: The transform elements of a node, applied in document order.
@@ -241,10 +242,12 @@ def _visual_scene(document: Document, where: str):
         geometries = sum(len(children(lib, "geometry")) for lib in children(root, "library_geometries"))
         raise InputError(where, f"holds no <visual_scene> to place its {geometries} geometries",
                          "export the model with its scene")
-    return found[0], (("the file has no <scene>: its first visual scene is measured",) if len(found) > 1 else ())
+    return found[0], ((CodedWarning("the file has no <scene>: its first visual scene is measured", "reader"),)
+                      if len(found) > 1 else ())
 
 
-def placements(document: Document, where: str) -> tuple[list[tuple[str, GeometryMesh, np.ndarray]], tuple[str, ...]]:
+def placements(document: Document,
+               where: str) -> tuple[list[tuple[str, GeometryMesh, np.ndarray]], tuple[CodedWarning, ...]]:
     """``(name, mesh, whole transform)`` for every geometry instance of the visual scene, in
     document order, with the file's unit folded out (transforms map the geometry's own unit to
     the root's), and the warnings.
@@ -310,7 +313,8 @@ def load(raw: RawInput) -> MeshSource:
                          + (f" (only {lines} line primitives)" if lines else ""),
                          "export the model as a triangle mesh")
     if lines:
-        notes += (f"{lines} line primitives (<lines>, <linestrips>) hold no volume and are left out",)
+        notes += (CodedWarning(f"{lines} line primitives (<lines>, <linestrips>) hold no volume and are left out",
+                               "reader"),)
     names = unique_names([name for name, _, _ in found])
     objects = [SceneObject(n, mesh.vertices, mesh.faces, matrix) for n, (_, mesh, matrix) in zip(names, found)]
     return scene_source("dae", raw.where, objects, document.unit(root), "geometry instances", notes)

@@ -37,6 +37,7 @@ from p3d_cli.io.gltf.meshes import Meshes
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, scene_source, unique_names
 from p3d_cli.io.source import MeshSource
+from p3d_cli.warning_codes import CodedWarning
 
 __all__ = ["APPLIED", "load", "is_glb"]
 
@@ -122,7 +123,7 @@ class _Scene:
             self._global[i] = matrix
         return matrix
 
-    def roots(self) -> tuple[list[int], str | None]:
+    def roots(self) -> tuple[list[int], CodedWarning | None]:
         """The nodes the scene starts from, and a note when the file names no scene."""
         doc = self.doc
         scenes = doc.items("scenes")
@@ -131,14 +132,15 @@ class _Scene:
             scene = doc.entry("scenes", chosen, "scene")
             note = None
             if "scene" not in doc.json and len(scenes) > 1:
-                note = f"the file names no default scene: its first scene of {len(scenes)} is measured"
+                note = CodedWarning(f"the file names no default scene: its first scene of {len(scenes)} is measured",
+                                    "reader")
             nodes = doc.items("nodes", scene, f"scenes[{chosen}].")
             for n in nodes:
                 doc.entry("nodes", n, f"scenes[{chosen}].nodes")
             return list(nodes), note
         if self.nodes:
             roots = [i for i in range(len(self.nodes)) if i not in self.parent]
-            return roots, "the file has no scene: all its root nodes are measured"
+            return roots, CodedWarning("the file has no scene: all its root nodes are measured", "reader")
         return [], None
 
     def walk(self, roots: list[int]):
@@ -253,7 +255,7 @@ def load(raw: RawInput) -> MeshSource:
     if not scene.nodes and "scene" not in document and not doc.items("scenes"):
         entries = [(f"mesh {m}", m, f"meshes[{m}]", None, np.eye(4), None) for m in range(len(doc.items("meshes")))]
         if entries:
-            notes.append("the file has no nodes: each of its meshes is measured once, unplaced")
+            notes.append(CodedWarning("the file has no nodes: each of its meshes is measured once, unplaced", "reader"))
     else:
         for index, node in scene.walk(roots):
             if "mesh" not in node:
@@ -291,15 +293,17 @@ def load(raw: RawInput) -> MeshSource:
     return scene_source("gltf", raw.where, objects, 1.0, "nodes", tuple(notes))
 
 
-def _warnings(meshes: Meshes) -> list[str]:
+def _warnings(meshes: Meshes) -> list[CodedWarning]:
     out = []
     if meshes.lines:
-        out.append(f"{meshes.lines} primitives of points or lines (modes 0-3) hold no triangles and are left out")
+        out.append(CodedWarning(f"{meshes.lines} primitives of points or lines (modes 0-3) hold no triangles and are "
+                                "left out", "reader"))
     if meshes.empty:
-        out.append(f"{meshes.empty} primitives without POSITION hold no triangles and are left out")
+        out.append(CodedWarning(f"{meshes.empty} primitives without POSITION hold no triangles and are left out",
+                                "reader"))
     if meshes.ragged:
-        out.append(f"{meshes.ragged} triangle lists have an index count that is not a multiple of 3; "
-                   "the last 1 or 2 values were ignored")
+        out.append(CodedWarning(f"{meshes.ragged} triangle lists have an index count that is not a multiple of 3; "
+                                "the last 1 or 2 values were ignored", "trailing-data"))
     return out
 
 

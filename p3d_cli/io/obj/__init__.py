@@ -32,6 +32,7 @@ from p3d_cli.io.obj.fast import CONTINUATION, IGNORED, chunks_of, parse_chunk
 from p3d_cli.io.polygons import fan_triangles
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, indexed_source
+from p3d_cli.warning_codes import CodedWarning
 
 _IGNORED = frozenset(IGNORED)
 _HINT = "fix the file or export it again"
@@ -358,17 +359,18 @@ def _check_range(where: str, corners: np.ndarray, sizes: np.ndarray, face_line, 
                           f"{vertex_count} vertices", "fix the face or export the mesh again")
 
 
-def _warnings(skipped: _Skipped) -> tuple[str, ...]:
+def _warnings(skipped: _Skipped) -> tuple[CodedWarning, ...]:
     warnings = []
     if skipped.unknown:
         names = ", ".join(sorted(skipped.unknown))
-        warnings.append(f"ignored {sum(skipped.unknown.values())} OBJ statements p3d does not read ({names}; "
-                        f"the first on line {skipped.first_unknown}); free-form curves and surfaces are not "
-                        "part of the mass properties")
+        warnings.append(CodedWarning(f"ignored {sum(skipped.unknown.values())} OBJ statements p3d does not read "
+                                     f"({names}; the first on line {skipped.first_unknown}); free-form curves and "
+                                     "surfaces are not part of the mass properties", "skipped-lines"))
     if skipped.garbled:
         assert skipped.first_garbled is not None
         number, words = skipped.first_garbled
         many = skipped.garbled > 1
-        warnings.append(f"skipped {skipped.garbled} line{'s that are' if many else ' that is'} no OBJ "
-                        f"statement ({'the first is ' if many else ''}line {number}: {_text(words)!r})")
+        warnings.append(CodedWarning(f"skipped {skipped.garbled} line{'s that are' if many else ' that is'} no OBJ "
+                                     f"statement ({'the first is ' if many else ''}line {number}: {_text(words)!r})",
+                                     "skipped-lines"))
     return tuple(warnings)

@@ -17,6 +17,7 @@ import numpy as np
 from p3d_cli.errors import FormatError
 from p3d_cli.io.numbers import fromstring, lone_sign, saturated, to_float
 from p3d_cli.io.ply.header import HINT, Element, Header, is_kept, list_positions, wanted
+from p3d_cli.warning_codes import CodedWarning
 
 _NUMBERS_HINT = "PLY ASCII data holds only numbers; fix or export the file again"
 #: Float values of integer data past this are beyond every index and count a mesh can hold.
@@ -76,9 +77,10 @@ def _read_lines(where: str, header: Header, data: bytes):
             tables[element.name] = columns
         line += element.size
     rest = body[int(starts[line]):] if line < len(starts) else b""
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[CodedWarning, ...] = ()
     if rest.strip():
-        warnings = (f"{len(rest.split())} values after the last PLY element were ignored",)
+        warnings = (CodedWarning(f"{len(rest.split())} values after the last PLY element were ignored",
+                                 "trailing-data"),)
     return tables, warnings
 
 
@@ -94,9 +96,10 @@ def _read_stream(where: str, header: Header, data: bytes):
         columns, pos = ascii_element(where, element, numbers, pos)
         if is_kept(element):
             tables[element.name] = columns
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[CodedWarning, ...] = ()
     if pos < numbers.size:
-        warnings = (f"{numbers.size - pos} numbers after the last PLY element were ignored",)
+        warnings = (CodedWarning(f"{numbers.size - pos} numbers after the last PLY element were ignored",
+                                 "trailing-data"),)
     return tables, warnings
 
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError
 from p3d_cli.io.ply.header import FORMATS, HINT, ITEMSIZE, Element, Header, is_kept, list_positions, wanted
+from p3d_cli.warning_codes import CodedWarning
 
 
 def read_binary(where: str, header: Header, data: bytes):
@@ -36,9 +37,10 @@ def read_binary(where: str, header: Header, data: bytes):
         columns, offset = _element(where, element, data, offset, order)
         if is_kept(element):
             tables[element.name] = columns
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[CodedWarning, ...] = ()
     if offset < len(data):
-        warnings = (f"{len(data) - offset} trailing bytes after the PLY data were ignored",)
+        warnings = (CodedWarning(f"{len(data) - offset} trailing bytes after the PLY data were ignored",
+                                 "trailing-data"),)
     return tables, warnings
 
 

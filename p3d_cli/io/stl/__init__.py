@@ -18,6 +18,7 @@ import numpy as np
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import BLOCK, MeshSource
+from p3d_cli.warning_codes import CodedWarning
 
 _HEADER = 84
 _RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
@@ -72,7 +73,7 @@ def load(raw: RawInput) -> MeshSource:
                           f"has {raw.size} bytes (room for {max(whole, 0)})",
                           "the file is truncated or not an STL; export it again")
     extra = raw.size - expected
-    warning = f"{extra} trailing bytes after the last of {n} triangles were ignored"
+    warning = CodedWarning(f"{extra} trailing bytes after the last of {n} triangles were ignored", "trailing-data")
     return _load_binary(raw, n, (warning,))
 
 

@@ -29,6 +29,7 @@ from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io.numbers import fromstring, to_float
 from p3d_cli.io.raw import RawInput
 from p3d_cli.io.source import MeshSource, array_source
+from p3d_cli.warning_codes import CodedWarning
 
 #: Bytes of text parsed at a time by the fast path: small enough to stay in cache between the
 #: few passes each chunk gets, large enough that the per-chunk overhead is nothing.
@@ -89,7 +90,7 @@ def load_ascii(raw: RawInput) -> MeshSource:
         No facets.
     """
     warnings = () if _ends_with_endsolid(raw) else (
-        "the ASCII STL does not end with an 'endsolid' line: the file may be truncated",)
+        CodedWarning("the ASCII STL does not end with an 'endsolid' line: the file may be truncated", "reader"),)
     blocks = _fast(raw)
     if blocks is None:
         with raw.open() as stream:

@@ -39,6 +39,7 @@ from p3d_cli.io.raw import RawInput
 from p3d_cli.io.scene import SceneObject, scene_source, unique_names
 from p3d_cli.io.source import MeshSource
 from p3d_cli.io.threemf.model import CORE, PRODUCTION, Model, Object, parse
+from p3d_cli.warning_codes import CodedWarning
 
 #: The ``unit`` values of the 3MF core specification, in metres.
 UNITS = {"micron": 1e-6, "millimeter": 1e-3, "centimeter": 1e-2, "inch": 0.0254, "foot": 0.3048, "meter": 1.0}
@@ -262,14 +263,15 @@ def _load(raw: RawInput, package: _Package) -> MeshSource:
     if not items:
         raise InputError(raw.where, "its build lists no items (the package prints nothing)",
                          "export the 3MF with the objects placed on the build plate")
-    notes = [f"{count} placed objects are of type {kind!r}; they are measured with the rest"
+    notes = [CodedWarning(f"{count} placed objects are of type {kind!r}; they are measured with the rest", "reader")
              for kind, count in sorted(kinds.items())]
     if lowres:
-        notes.append(f"{lowres} placed meshes are marked low resolution (their slices are the real geometry)")
+        notes.append(CodedWarning(f"{lowres} placed meshes are marked low resolution (their slices are the real "
+                                  "geometry)", "reader"))
     units = {m.unit.strip().lower() for m in package.models.values()}
     if len(units) > 1:
-        notes.append(f"the model parts declare different units ({', '.join(sorted(units))}); the root part's "
-                     f"{unit} is used for all")
+        notes.append(CodedWarning(f"the model parts declare different units ({', '.join(sorted(units))}); the root "
+                                  f"part's {unit} is used for all", "unit-slip"))
     names = unique_names([name for name, _, _ in found])
     empty = np.zeros((0, 3))
     # scene_source checks every face against its object's vertices before anything is placed.

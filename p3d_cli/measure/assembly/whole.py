@@ -196,7 +196,7 @@ def assembly_props(assembly: Assembly, placement: Placement, *, units=None, outp
     uncertainty = whole_uncertainty(results, props) if method == "exact" else None
     facts = MeshFacts(assembly.source, "assembly", sum(r.facts.faces for r in results), _closed(results),
                       _union([r.facts.bounds for r in results]))
-    warnings = [f"{r.details['name']}: {w}" for r in results for w in r.warnings]
+    warnings = [w.named(r.details['name']) for r in results for w in r.warnings]
     if not warnings:
         warnings += implausibilities(props, facts.bounds, method)
     units_record = results[0].units
@@ -343,7 +343,7 @@ def assembly_bounds(assembly: Assembly, placement: Placement, *, units=None, out
         solid = as_solid(leaf.part.thing)
         total = declared_scale(solid, leaf.part, leaf.units, system, leaf.placement)
         result = solid_bounds(solid, total, tessellate if solid.shape is not None else None)
-        found.append(replace(result, warnings=tuple(f"{leaf.name}: {w}" for w in result.warnings)))
+        found.append(replace(result, warnings=tuple(w.named(leaf.name) for w in result.warnings)))
     methods = {r.method for r in found}
     from p3d_cli.geometry.bounding import checked_bounds
 
