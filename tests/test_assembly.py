@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_ascii_stl
+from helpers.meshes import write_ascii_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
 from p3d_cli.geometry.inertia import implausibilities

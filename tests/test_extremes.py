@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
-from conftest import write_ascii_stl, write_binary_stl
+from helpers.meshes import write_ascii_stl, write_binary_stl
 from exact import exact_moments
 from hypothesis import given, settings
 from hypothesis import strategies as st

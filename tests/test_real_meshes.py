@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import REAL_MESHES
+from helpers.real_meshes import REAL_MESHES
 from exact import exact_moments
 from p3d_cli.io import load_mesh
 from p3d_cli.geometry.inertia import mass_properties

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from doc_examples import assert_as_shown
 from doc_examples import examples as doc_examples
 

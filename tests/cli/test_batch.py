@@ -15,7 +15,7 @@ import time
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli import reporting as batch_module
 from p3d_cli.batch import run_each
 from p3d_cli.measure import check as check_file

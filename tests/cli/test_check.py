@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.cli.main import cli
 
 REQUIRED_KEYS = {"source", "ok", "closed", "boundary_edges", "nonmanifold_edges", "misoriented_edges",

@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_ascii_stl, write_binary_stl
+from helpers.meshes import write_ascii_stl, write_binary_stl
 from helpers.solids import box
 from p3d_cli.cli.main import cli
 

@@ -6,7 +6,7 @@ import json
 
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
 
@@ -59,7 +59,7 @@ def test_a_list_line_with_a_nul_byte_is_that_input_s_error_not_a_bug(tmp_path):
     """Issue 27: a --files-from line holding a NUL byte was an internal error (exit 3)."""
     from click.testing import CliRunner
 
-    from conftest import cube_triangles, write_binary_stl
+    from helpers.meshes import cube_triangles, write_binary_stl
     from p3d_cli.cli.main import cli
 
     write_binary_stl(tmp_path / "a.stl", cube_triangles())

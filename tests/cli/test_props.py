@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
 REPO_SAMPLE = __import__("pathlib").Path(__file__).resolve().parents[2] / "sample_meshes" / "bracket.stl"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_ascii_stl
+from helpers.meshes import cube_triangles, write_ascii_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 

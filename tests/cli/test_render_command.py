@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 from click.testing import CliRunner
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 
 from p3d_cli.cli.main import cli
 from p3d_cli.render.overlays import COLOURS

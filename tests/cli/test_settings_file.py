@@ -8,7 +8,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
 CUBE = cube_triangles()   # the unit cube: volume 1

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from p3d_cli.cli.main import cli
 
 EXAMPLES = REPO / "examples"

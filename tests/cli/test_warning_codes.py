@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli import warning_codes
 from p3d_cli.cli.main import cli
 from p3d_cli.warning_codes import CODES, CodedWarning, code_of

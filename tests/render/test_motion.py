@@ -8,7 +8,7 @@ import shutil
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 import p3d_cli as p3d
 from p3d_cli.cli.main import cli

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 from click.testing import CliRunner
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from helpers.html_pages import Resources
 
 from p3d_cli.cli.main import cli
