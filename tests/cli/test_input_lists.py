@@ -4,14 +4,9 @@ from __future__ import annotations
 
 import json
 
-from click.testing import CliRunner
 
+from helpers.cli import run
 from helpers.meshes import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 def test_nul_separated_list_keeps_spaces_and_newlines(tmp_path):
