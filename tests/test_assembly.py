@@ -265,7 +265,7 @@ def test_a_mass_given_twice_over_nested_parts_is_refused(tmp_path):
 def test_the_whole_has_a_bound_that_covers_its_error(tmp_path, offset):
     """Mesh parts far from the origin: the whole's error against exact rational arithmetic on
     the union's triangles (the parts do not overlap) is within its stated bound."""
-    from exact import exact_moments
+    from helpers.exact import exact_moments
 
     rng = np.random.default_rng(7)
     torus = p3d.parse_shape("ellipsoid:1,2,0.5").tessellate(24)

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from strategies import rotations, scales
+from helpers.strategies import rotations, scales
 
 from p3d_cli.geometry.bounding import triangles_bounds
 from p3d_cli.geometry.placement import placed_bounds

@@ -10,7 +10,7 @@ import pytest
 
 from helpers.meshes import CUBE_FACES, CUBE_VERTICES, write_binary_stl
 from helpers.real_meshes import REPO
-from doc_examples import assert_as_shown, examples
+from helpers.doc_examples import assert_as_shown, examples
 
 DOC = (REPO / "docs" / "repair.md").read_text()
 BOX = CUBE_VERTICES[CUBE_FACES] * 10.0
