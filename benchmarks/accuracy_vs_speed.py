@@ -3,7 +3,7 @@
 Measures, on this machine:
 
 - the exact divergence-theorem method (float64, local origin) on an 82k-face ellipsoid mesh,
-  against the exact rational oracle (tests/exact.py);
+  against the exact rational oracle (tests/helpers/exact.py);
 - Monte Carlo with 1e3 ... 1e6 samples on the same mesh, and 1e3 ... 1e7 on the analytic
   sphere (its inside test is cheap, so the 1e7 point stays within seconds), against the exact
   values, with the standard error each run states;
@@ -33,7 +33,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests"))
 
-from exact import exact_moments  # noqa: E402
+from helpers.exact import exact_moments  # noqa: E402
 
 from p3d_cli.geometry.inertia import inertia_from_second_moments, mass_properties  # noqa: E402
 from p3d_cli.measure.montecarlo import sample, triangles_inside  # noqa: E402

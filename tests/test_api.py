@@ -17,7 +17,7 @@ from p3d_cli.cli.main import cli
 from p3d_cli.cli.props import props_record
 from p3d_cli.cli.output import jsonable
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 CUBE_V = np.array([[x, y, z] for x in (0.0, 2.0) for y in (0.0, 3.0) for z in (0.0, 5.0)]) + [10.0, -4.0, 1.5]
 # Outward triangles of the box above (vertex i has bits x=4, y=2, z=1).

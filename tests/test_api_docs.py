@@ -11,7 +11,7 @@ import pytest
 
 import p3d_cli as p3d
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 PAGE = (REPO / "docs" / "api.md").read_text()
 REFERENCE = PAGE[PAGE.index("## Reference"):]

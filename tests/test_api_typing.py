@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 SCRIPT = REPO / "tests" / "typed_user_script.py"
 

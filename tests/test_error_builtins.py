@@ -16,7 +16,8 @@ import p3d_cli as p3d
 from p3d_cli import errors
 from p3d_cli.cli.main import cli
 
-from conftest import REPO, cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.real_meshes import REPO
 from helpers.cli_errors import one_error
 
 

@@ -14,16 +14,11 @@ import sys
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
+from helpers.cli import run
 import p3d_cli as p3d
-from p3d_cli.cli.main import cli
 
 BASE = "bodies:\n  a: {mass: 1, inertia: [1, 1, 1]}\n  b: {mass: 1, inertia: [1, 1, 1], position: [1, 0, 0]}\n"
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def one_error_line(result, *parts):

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 PACKAGE = REPO / "p3d_cli"
 MAX_LINES = 450

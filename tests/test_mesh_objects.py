@@ -13,7 +13,7 @@ import pytest
 
 import p3d_cli as p3d
 
-from conftest import CUBE_FACES, CUBE_VERTICES
+from helpers.meshes import CUBE_FACES, CUBE_VERTICES
 
 V = CUBE_VERTICES * [2.0, 3.0, 5.0] + [1.0, -2.0, 0.5]
 F = CUBE_FACES

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import re
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 try:
     import tomllib

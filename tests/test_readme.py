@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 README = (REPO / "README.md").read_text()
 

@@ -13,7 +13,7 @@ from click.testing import CliRunner
 import p3d_cli as p3d
 from p3d_cli.cli.main import cli
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from helpers.record_schemas import validate
 
 SAMPLES = sorted(str(p.relative_to(REPO)) for p in (REPO / "sample_meshes").iterdir()

@@ -8,7 +8,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from helpers import record_schemas
 from p3d_cli.cli import output
 from p3d_cli.cli.main import cli

@@ -8,21 +8,16 @@ import re
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_ascii_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import write_ascii_stl
 from p3d_cli.errors import UsageError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.geometry.rotation import rotation_from_rpy
 from p3d_cli.units import EXAMPLES, LENGTHS, quantity_si, resolve
 
 WEDGE = p3d.parse_shape("wedge:20,35,50").triangles() + [40.0, -10.0, 5.0]      # millimetres
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(args))
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import CUBE_FACES, CUBE_VERTICES, write_binary_stl
+from helpers.meshes import CUBE_FACES, CUBE_VERTICES, write_binary_stl
 from p3d_cli.cli.main import cli
 
 CUBE = CUBE_VERTICES[CUBE_FACES] * [1.0, 2.0, 3.0]

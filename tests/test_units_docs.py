@@ -7,9 +7,9 @@ import re
 
 import pytest
 
-from conftest import REPO
-from doc_examples import assert_as_shown
-from doc_examples import examples as doc_examples
+from helpers.real_meshes import REPO
+from helpers.doc_examples import assert_as_shown
+from helpers.doc_examples import examples as doc_examples
 
 DOCS = {name: (REPO / "docs" / name).read_text() for name in ("units.md", "assemblies.md")}
 

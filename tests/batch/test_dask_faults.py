@@ -13,7 +13,7 @@ import time
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.batch import ClusterLost, run_each
 from p3d_cli.batch import runner
 from p3d_cli.cli.main import cli

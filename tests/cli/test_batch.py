@@ -13,20 +13,15 @@ import sys
 import time
 
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli import reporting as batch_module
 from p3d_cli.batch import run_each
 from p3d_cli.measure import check as check_file
-from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
 
 CUBE = cube_triangles()
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 @pytest.fixture

@@ -10,14 +10,9 @@ import os
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_ascii_stl
-from p3d_cli.cli.main import cli
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, list(args), input=input)
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_ascii_stl
 
 
 def record(*args):

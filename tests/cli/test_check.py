@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.cli.main import cli
 
 REQUIRED_KEYS = {"source", "ok", "closed", "boundary_edges", "nonmanifold_edges", "misoriented_edges",
@@ -18,10 +19,6 @@ REQUIRED_KEYS = {"source", "ok", "closed", "boundary_edges", "nonmanifold_edges"
 COUNT_KEYS = ("boundary_edges", "nonmanifold_edges", "misoriented_edges", "nonmanifold_vertices",
               "degenerate_faces", "zero_area_faces", "faces_with_repeated_vertex", "duplicate_faces")
 ZERO = dict.fromkeys(COUNT_KEYS, 0)
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 def flipped(t, i):

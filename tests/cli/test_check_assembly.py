@@ -5,16 +5,11 @@ from __future__ import annotations
 
 import json
 
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
 CUBE = cube_triangles()
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def _assembly(tmp_path):

@@ -6,16 +6,11 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_ascii_stl, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import write_ascii_stl, write_binary_stl
 from helpers.solids import box
-from p3d_cli.cli.main import cli
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 OVERLAP = np.concatenate([box([0, 0, 0], [2, 2, 2]), box([1, 1, 1], [3, 3, 3])])

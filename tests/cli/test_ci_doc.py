@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 DOC = (REPO / "docs" / "ci.md").read_text()
 SCRIPT = re.findall(r"```sh\n(.*?)\n```", DOC, re.S)[0]

@@ -5,14 +5,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
 
 @pytest.fixture

@@ -4,14 +4,9 @@ from __future__ import annotations
 
 import json
 
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
 
 def test_nul_separated_list_keeps_spaces_and_newlines(tmp_path):
@@ -59,7 +54,7 @@ def test_a_list_line_with_a_nul_byte_is_that_input_s_error_not_a_bug(tmp_path):
     """Issue 27: a --files-from line holding a NUL byte was an internal error (exit 3)."""
     from click.testing import CliRunner
 
-    from conftest import cube_triangles, write_binary_stl
+    from helpers.meshes import cube_triangles, write_binary_stl
     from p3d_cli.cli.main import cli
 
     write_binary_stl(tmp_path / "a.stl", cube_triangles())

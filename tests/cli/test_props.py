@@ -8,19 +8,15 @@ import sys
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
 REPO_SAMPLE = __import__("pathlib").Path(__file__).resolve().parents[2] / "sample_meshes" / "bracket.stl"
 
 REQUIRED_KEYS = {"source", "faces", "closed", "volume", "mass", "density", "center_of_mass", "inertia",
                  "inertia_origin", "principal_moments", "principal_axes", "bounds", "warnings"}
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, list(args), input=input)
 
 
 @pytest.fixture

@@ -7,15 +7,10 @@ import math
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_ascii_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_ascii_stl
 from p3d_cli.geometry.rotation import rotation_from_axis_degrees
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, list(args), input=input)
 
 
 def record(*args):

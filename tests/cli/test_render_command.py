@@ -5,16 +5,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from click.testing import CliRunner
-from conftest import cube_triangles, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
-from p3d_cli.cli.main import cli
 from p3d_cli.render.overlays import COLOURS
 from p3d_cli.render.png import decode_png
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 def test_writes_a_png_of_the_size_asked(tmp_path):

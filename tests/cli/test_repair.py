@@ -8,18 +8,13 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import CUBE_FACES, CUBE_VERTICES, write_binary_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import CUBE_FACES, CUBE_VERTICES, write_binary_stl
 
 CUBE = CUBE_VERTICES[CUBE_FACES]
 BENT = np.delete(CUBE, [0, 4], axis=0)        # a hole across the cube's edge: not flat, left
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 def test_fixed_not_fixed_and_usage_exit_statuses(tmp_path):

@@ -14,16 +14,11 @@ import time
 import xml.etree.ElementTree as ET
 
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
 CUBE = cube_triangles()
-
-
-def run(*args, **kwargs):
-    return CliRunner().invoke(cli, [str(a) for a in args], **kwargs)
 
 
 @pytest.fixture

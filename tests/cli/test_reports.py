@@ -9,19 +9,14 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 
 CUBE = cube_triangles()
 SCHEMA = Path(__file__).with_name("data") / "junit.xsd"
 #: The documented syntax: ::error file=NAME,title=TITLE::MESSAGE, properties and data escaped.
 ANNOTATION = re.compile(r"^::(error|warning) file=[^,:\n]+,title=[^,:\n]+::[^\n]+$")
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 @pytest.fixture

@@ -11,15 +11,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from conftest import REPO
+from helpers.cli import run
+from helpers.real_meshes import REPO
 from p3d_cli.cli.main import cli
 
 EXAMPLES = REPO / "examples"
 DOCS = (REPO / "docs" / "solve.md").read_text()
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 @pytest.mark.parametrize("name, rank, equations", [

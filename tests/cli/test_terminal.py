@@ -17,7 +17,7 @@ import termios
 import pytest
 from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli.cli.main import cli
 
 CUBE = cube_triangles()

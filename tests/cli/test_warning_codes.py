@@ -7,18 +7,13 @@ import pickle
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from conftest import cube_triangles, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 from p3d_cli import warning_codes
-from p3d_cli.cli.main import cli
 from p3d_cli.warning_codes import CODES, CodedWarning
 
 CUBE = cube_triangles()
-
-
-def run(*args, input=None):
-    return CliRunner().invoke(cli, [str(a) for a in args], input=input)
 
 
 @pytest.fixture

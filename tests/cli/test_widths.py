@@ -39,7 +39,7 @@ def test_every_line_fits_80_columns(args, monkeypatch):
 def test_check_locations_wrap_within_80_columns(tmp_path, monkeypatch):
     import numpy as np
 
-    from conftest import cube_triangles, write_binary_stl
+    from helpers.meshes import cube_triangles, write_binary_stl
 
     monkeypatch.chdir(tmp_path)
     write_binary_stl(tmp_path / "open.stl", cube_triangles()[4:] * [1234.5678, 2.2, 3.3] + [1e5, -2e4, np.pi])
@@ -55,7 +55,7 @@ def test_check_locations_wrap_within_80_columns(tmp_path, monkeypatch):
 
 
 def test_no_singular_plural_slips(monkeypatch, tmp_path):
-    from conftest import cube_triangles, write_binary_stl
+    from helpers.meshes import cube_triangles, write_binary_stl
 
     write_binary_stl(tmp_path / "one.stl", cube_triangles()[:1])
     for command in ("props", "bounds", "check"):

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import cube_triangles, write_binary_stl
+from helpers.meshes import cube_triangles, write_binary_stl
 
 from p3d_cli.constraints import load_scene, parse_scene, solve_scene
 from p3d_cli.constraints.bodies import resolve_inertials

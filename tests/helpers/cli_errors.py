@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from click.testing import CliRunner
-
-from p3d_cli.cli.main import cli
+from helpers.cli import run as run_p3d
 
 
 def one_error(path, match: str) -> str:
     """Run ``p3d props path``: exit status 2, one ``p3d: error:`` line holding ``match``, no
     traceback; the line."""
-    run = CliRunner().invoke(cli, ["props", str(path)])
+    run = run_p3d("props", path)
     lines = [line for line in run.output.splitlines() if line.strip()]
     assert run.exit_code == 2, run.output
     assert len(lines) == 1 and lines[0].startswith("p3d: error:") and "Traceback" not in run.output, run.output

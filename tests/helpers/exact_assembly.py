@@ -16,7 +16,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from exact import exact_moments
+from helpers.exact import exact_moments
 
 #: Length units in metres, exactly (the inch and the foot by the 1959 agreement).
 EXACT_LENGTHS = {"mm": Fraction(1, 1000), "cm": Fraction(1, 100), "m": Fraction(1),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from exact import exact_moments
+from helpers.exact import exact_moments
 
 RTOL = 1e-12
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import p3d_cli as p3d
-from exact import exact_moments
+from helpers.exact import exact_moments
 from p3d_cli.errors import FormatError
 
 TET_V = np.array([[0.5, 0.25, -1.0], [3.0, 0.5, -0.75], [0.25, 2.0, -1.0], [0.75, 0.5, 4.0]])

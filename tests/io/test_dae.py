@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from exact import exact_moments
+from helpers.exact import exact_moments
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.mesh.verdicts import CHECKS, SOLIDITY

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import check_reference
+from helpers.real_meshes import check_reference
 
 import p3d_cli as p3d
 from p3d_cli.errors import FormatError, InputError

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import check_reference
+from helpers.real_meshes import check_reference
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh, ply
 import p3d_cli as p3d

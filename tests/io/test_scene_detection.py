@@ -14,7 +14,7 @@ import trimesh
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_binary_stl
+from helpers.meshes import write_binary_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import FormatError, UnknownFormatError
 from p3d_cli.io import detect_format, format_names, is_mesh_path, open_input

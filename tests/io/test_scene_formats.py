@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
-from exact import exact_moments
+from helpers.exact import exact_moments
 
 import p3d_cli as p3d
 from p3d_cli.cli.main import cli

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.errors import FormatError, InputError
 from p3d_cli.io import load_mesh
 import p3d_cli as p3d

@@ -17,7 +17,7 @@ import pytest
 import trimesh
 
 import p3d_cli as p3d
-from exact import exact_moments
+from helpers.exact import exact_moments
 from p3d_cli.errors import FormatError
 
 BLOB = trimesh.creation.icosphere(1, radius=0.7)

@@ -18,8 +18,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import write_ascii_stl
-from exact import exact_moments
+from helpers.meshes import write_ascii_stl
+from helpers.exact import exact_moments
 import p3d_cli as p3d
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh import boundary, boundary_terms as terms_module

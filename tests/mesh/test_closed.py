@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.closed import (closed_exact, column_edge_keys, doubtful_edges, keys_pair_up,

@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import write_ascii_stl
+from helpers.meshes import write_ascii_stl
 from p3d_cli.io import load_mesh
 from p3d_cli.mesh.faces import zero_area_faces
 from p3d_cli.mesh.columns import columns

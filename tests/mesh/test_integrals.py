@@ -10,8 +10,8 @@ import trimesh
 from hypothesis import given
 from hypothesis import strategies as st
 
-from exact import exact_moments
-from conftest import cube_triangles
+from helpers.exact import exact_moments
+from helpers.meshes import cube_triangles
 from p3d_cli.geometry.inertia import inertia_from_second_moments, mass_properties, shifted_inertia
 from p3d_cli.mesh.integrals import tetrahedron_moments, triangle_moments
 

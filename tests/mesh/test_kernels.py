@@ -16,7 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from p3d_cli.io import load_mesh
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh import kernels

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
 from p3d_cli.mesh.topology import _array_blocks, topology

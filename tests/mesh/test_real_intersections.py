@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import p3d_cli as p3d
-from conftest import real_meshes_dir
+from helpers.real_meshes import real_meshes_dir
 from helpers.triangle_oracle import CONTACT, NONE, classify as oracle, shared_vertices
 from p3d_cli.io import load_mesh
 

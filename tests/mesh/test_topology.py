@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 from p3d_cli.errors import UnknownFormatError
 from p3d_cli.mesh.closed import closed_exact
 from p3d_cli.mesh.topology import SAMPLES, components, corner_vertex_ids, topology

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 import p3d_cli.mesh.fans as fans
 import p3d_cli.mesh.vertices as vertices
 from p3d_cli.mesh.edges import group_edges

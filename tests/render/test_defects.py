@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 
 import p3d_cli as p3d
 from p3d_cli.render.defects import defect_geometry

@@ -7,19 +7,14 @@ import shutil
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from conftest import REPO
+from helpers.cli import run
+from helpers.real_meshes import REPO
 
 import p3d_cli as p3d
-from p3d_cli.cli.main import cli
 from p3d_cli.constraints.motion import record_motion
 from p3d_cli.render.png import decode_png
 
 PENDULUM = REPO / "examples" / "pendulum.yaml"
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def test_a_pendulum_keeps_its_energy_and_its_bar(tmp_path):

@@ -5,17 +5,12 @@ from __future__ import annotations
 import re
 
 import numpy as np
-from click.testing import CliRunner
-from conftest import cube_triangles, write_binary_stl
+from helpers.cli import run
+from helpers.meshes import cube_triangles, write_binary_stl
 from helpers.html_pages import Resources
 
-from p3d_cli.cli.main import cli
 from p3d_cli.render.overlays import COLOURS
 from p3d_cli.render.png import decode_png
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def inputs(tmp_path):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from conftest import cube_triangles
+from helpers.meshes import cube_triangles
 
 from p3d_cli.render.camera import make_camera
 from p3d_cli.render.compose import compose

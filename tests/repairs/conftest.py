@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import CUBE_FACES, CUBE_VERTICES
+from helpers.meshes import CUBE_FACES, CUBE_VERTICES
 
 
 @pytest.fixture

@@ -8,8 +8,9 @@ import re
 import numpy as np
 import pytest
 
-from conftest import CUBE_FACES, CUBE_VERTICES, REPO, write_binary_stl
-from doc_examples import assert_as_shown, examples
+from helpers.meshes import CUBE_FACES, CUBE_VERTICES, write_binary_stl
+from helpers.real_meshes import REPO
+from helpers.doc_examples import assert_as_shown, examples
 
 DOC = (REPO / "docs" / "repair.md").read_text()
 BOX = CUBE_VERTICES[CUBE_FACES] * 10.0

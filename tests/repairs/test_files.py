@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 import p3d_cli as p3d
-from conftest import write_binary_stl
+from helpers.meshes import write_binary_stl
 from p3d_cli.errors import OutputError
 from p3d_cli.repairs import repair_file
 from p3d_cli.io.writers import write_mesh
@@ -129,7 +129,7 @@ def test_what_a_file_holds_beyond_positions_and_faces_is_never_dropped_in_place(
 
 
 def test_an_ascii_stl_repaired_in_place_stays_ascii_and_keeps_its_decimals(tmp_path, cube):
-    from conftest import write_ascii_stl
+    from helpers.meshes import write_ascii_stl
 
     source = tmp_path / "part.stl"
     part = cube * 0.1 + 0.3                                 # decimals no float32 holds

@@ -22,7 +22,7 @@ def test_weld_groups_are_every_pair_within_the_tolerance_joined(seed, tolerance)
 
 
 def box(lo: float, hi: float, inward: bool) -> np.ndarray:
-    from conftest import CUBE_FACES, CUBE_VERTICES
+    from helpers.meshes import CUBE_FACES, CUBE_VERTICES
 
     triangles = (CUBE_VERTICES * (hi - lo) + lo)[CUBE_FACES]
     return triangles[:, [0, 2, 1]] if inward else triangles

@@ -8,19 +8,14 @@ import json
 import numpy as np
 
 import pytest
-from click.testing import CliRunner
 
-from p3d_cli.cli.main import cli
+from helpers.cli import run
 from p3d_cli.robots import check_robot, load_robot
 
 
 def _failures(path, packages=None, **options):
     checks = check_robot(load_robot(path, packages), **options)
     return {c.link: sorted({p.rule for p in c.problems}) for c in checks if not c.ok}
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(map(str, args)))
 
 
 def test_plausible_description_passes(arm):

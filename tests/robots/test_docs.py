@@ -7,7 +7,7 @@ import re
 import shutil
 from pathlib import Path
 
-from doc_examples import assert_as_shown, examples
+from helpers.doc_examples import assert_as_shown, examples
 
 REPO = Path(__file__).resolve().parents[2]
 DOC = (REPO / "docs" / "robots.md").read_text()

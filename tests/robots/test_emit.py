@@ -7,17 +7,12 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from p3d_cli.cli.main import cli
 from p3d_cli.robots import load_robot
+from helpers.cli import run
 from helpers.robot_arm import box_mesh, write_stl
 
 ARGS = ("--units", "mm", "--density", "2700kg/m^3", "--rpy", "0.1,0.2,0.3", "--translate", "5,0,-3")
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(map(str, args)))
 
 
 @pytest.fixture

@@ -8,20 +8,15 @@ import re
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
 from p3d_cli.robots import fill_robot, load_robot
 from p3d_cli.robots.xmltree import parse_xml
 from helpers import robot_oracle as oracle
+from helpers.cli import run
 from helpers.robot_arm import DENSITY
 
 INERTIAL = re.compile(r"\s*<inertial\b(?:[^>]*/>|.*?</inertial>)", re.S)
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(map(str, args)))
 
 
 def _filled(arm, kind, **options):

@@ -18,11 +18,10 @@ import stat
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from p3d_cli.cli.main import cli
+from helpers.cli import run as _run
 from p3d_cli.errors import OutputError
 from p3d_cli.robots import fill_robot, load_robot
 from p3d_cli.robots.fill import write_fill
@@ -264,10 +263,6 @@ def test_a_stateful_encoding_is_refused_rather_than_damaged(tmp_path):
     assert result.data.decode("iso-2022-jp").replace(re.search(r"\n *<inertial[^>]*/>",
                                                                result.data.decode("iso-2022-jp")).group(0), "") \
         == text
-
-
-def _run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def test_in_place_keeps_permissions_and_refuses_output_over_the_input(arm, tmp_path):

@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from helpers.cli import run
 from helpers.html_pages import assert_stands_alone, drawing, extent, mask
 from robots.test_check import ROTOR
 from robots.test_real_robots import folder
 
-from p3d_cli.cli.main import cli
 from p3d_cli.render.draw import RING_COLOUR
 from p3d_cli.render.overlays import COLOURS
 from p3d_cli.render.pages import PICTURE_SIZE
@@ -27,10 +27,6 @@ DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: The colours docs/render.md gives the two boxes.
 DECLARED, COMPUTED = COLOURS["declared"], COLOURS["inertia"]
 AXIAL, RADIAL = 0.2 * 0.02 ** 2 / 2, 0.2 * (3 * 0.02 ** 2 + 0.2 ** 2) / 12
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def rows_of(page: str) -> list[str]:

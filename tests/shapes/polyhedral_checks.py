@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from exact import exact_moments
-from rational_oracle import directed_edges_pair_up, rational_moments
+from helpers.exact import exact_moments
+from helpers.rational_oracle import directed_edges_pair_up, rational_moments
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.geometry.rotation import rotation_from_axis_degrees
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rational_oracle import directed_edges_pair_up
+from helpers.rational_oracle import directed_edges_pair_up
 from p3d_cli.mesh.integrals import triangle_moments
 
 

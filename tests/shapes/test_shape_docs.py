@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from conftest import REPO
-from doc_examples import assert_as_shown, examples
+from helpers.real_meshes import REPO
+from helpers.doc_examples import assert_as_shown, examples
 
 DOC = (REPO / "docs" / "shapes.md").read_text()
 

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from exact import exact_moments
-from strategies import rotations, scales
+from helpers.exact import exact_moments
+from helpers.strategies import rotations, scales
 from p3d_cli.mesh.integrals import triangle_moments
 from p3d_cli.geometry.moments import scale_moments
 from p3d_cli.geometry.placement import place_moments
@@ -51,7 +51,7 @@ def test_closed_form_scaled_equals_scaled_closed_form(name, s):
 def test_placement_equals_exact_integration_of_the_placed_mesh(name, s, r, t):
     """Scale, rotation and translation of the moments equal the placed mesh's exact integrals.
 
-    The reference is tests/exact.py (rational arithmetic on the placed float coordinates):
+    The reference is tests/helpers/exact.py (rational arithmetic on the placed float coordinates):
     triangle_moments itself loses accuracy on rotated needles (its error bound covers it: below). The
     placed coordinates are rounded to float64, by up to eps·|coordinate|; relative to the
     part's thinnest extent that is eps·(largest coordinate / smallest scale), which bounds

@@ -8,16 +8,11 @@ import math
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
+from helpers.cli import run
 import p3d_cli as p3d
-from p3d_cli.cli.main import cli
 
 CUBE = p3d.parse_shape("box:1,1,1").triangles()
-
-
-def run(*args):
-    return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def write_obj(path, triangles) -> str:

@@ -7,17 +7,12 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
+from helpers.cli import run
 import p3d_cli as p3d
-from p3d_cli.cli.main import cli
 from p3d_cli.errors import InputError
 from p3d_cli.geometry.placement import Placement
 from p3d_cli.measure.assembly.parts import MAX_NESTING, MAX_PARTS, Assembly, Part, expanded_parts
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(args))
 
 
 def laughs(folder, levels: int) -> str:

@@ -3,7 +3,7 @@
 Tolerances are those of the issue: 1e-12 relative for the volume, the centre of mass relative
 to the bounding-box diagonal, the inertia relative to its norm. The same meshes translated by
 1e8 or scaled by 1e-6 and 1e6 are held to the same tolerance against the exact rational value
-of the transformed (rounded) coordinates (tests/exact.py), since translating by 1e8 in float64
+of the transformed (rounded) coordinates (tests/helpers/exact.py), since translating by 1e8 in float64
 itself moves coordinates by up to 7.5e-9.
 """
 
@@ -14,8 +14,8 @@ import json
 import numpy as np
 import pytest
 
-from conftest import REAL_MESHES
-from exact import exact_moments
+from helpers.real_meshes import REAL_MESHES
+from helpers.exact import exact_moments
 from p3d_cli.io import load_mesh
 from p3d_cli.geometry.inertia import mass_properties
 from p3d_cli.mesh.integrals import triangle_moments

@@ -1,6 +1,6 @@
 """Where peers quietly fail: far placements, tiny and huge scales, needles and pancakes, slivers,
 many triangles, float32 files far from the origin. Every case is checked against the exact
-rational oracle (tests/exact.py) and against two promises (docs/accuracy.md):
+rational oracle (tests/helpers/exact.py) and against two promises (docs/accuracy.md):
 
 1. The exact method's ``uncertainty`` (an a-priori rounding bound) is never smaller than the
    true error of any reported quantity.
@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
-from conftest import write_ascii_stl, write_binary_stl
-from exact import exact_moments
+from helpers.meshes import write_ascii_stl, write_binary_stl
+from helpers.exact import exact_moments
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

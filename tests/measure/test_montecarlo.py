@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats

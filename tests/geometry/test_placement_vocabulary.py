@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import cube_triangles, write_ascii_stl
+from helpers.meshes import cube_triangles, write_ascii_stl
 from p3d_cli.cli.main import cli
 from p3d_cli.errors import UsageError
 from p3d_cli.mesh.integrals import triangle_moments

@@ -1,7 +1,7 @@
 """Issue 12 (items 1-4, 6): bounding non-manifold meshes, open meshes far from the origin, one
 volume for check and props, honest placed centres, inward-wound meshes measured positive.
 
-Every oracle is exact rational arithmetic on the triangles' own floats (tests/exact.py sums
+Every oracle is exact rational arithmetic on the triangles' own floats (tests/helpers/exact.py sums
 signed tetrahedra from the world origin: the convention p3d keeps for open meshes).
 """
 
@@ -13,7 +13,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from exact import exact_moments
+from helpers.exact import exact_moments
 import p3d_cli as p3d
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh.analysis import analyze

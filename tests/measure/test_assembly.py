@@ -8,11 +8,10 @@ import math
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 import p3d_cli as p3d
-from conftest import write_ascii_stl
-from p3d_cli.cli.main import cli
+from helpers.cli import run
+from helpers.meshes import write_ascii_stl
 from p3d_cli.errors import InputError
 from p3d_cli.geometry.inertia import implausibilities
 from p3d_cli.mesh.integrals import triangle_moments
@@ -22,10 +21,6 @@ from p3d_cli.geometry.rotation import rotation_from_axis_degrees, rotation_from_
 MM = 1e-3
 #: The base plate's triangles (mm): a box 100 x 80 x 10 centred below the origin.
 BASE = p3d.parse_shape("box:50,40,5").triangles() + [0.0, 0.0, -5.0]
-
-
-def run(*args):
-    return CliRunner().invoke(cli, list(args))
 
 
 @pytest.fixture
@@ -270,7 +265,7 @@ def test_a_mass_given_twice_over_nested_parts_is_refused(tmp_path):
 def test_the_whole_has_a_bound_that_covers_its_error(tmp_path, offset):
     """Mesh parts far from the origin: the whole's error against exact rational arithmetic on
     the union's triangles (the parts do not overlap) is within its stated bound."""
-    from exact import exact_moments
+    from helpers.exact import exact_moments
 
     rng = np.random.default_rng(7)
     torus = p3d.parse_shape("ellipsoid:1,2,0.5").tessellate(24)

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from strategies import rotations, scales
+from helpers.strategies import rotations, scales
 
 from p3d_cli.geometry.bounding import triangles_bounds
 from p3d_cli.geometry.placement import placed_bounds
@@ -101,7 +101,7 @@ def test_examples():
 
 
 # [-1, 1, 1] was refused until negative factors became mirrors (issue 13): see
-# tests/test_placement_vocabulary.py.
+# tests/geometry/test_placement_vocabulary.py.
 @pytest.mark.parametrize("bad", [[0, 1, 1], [1, 1], [np.inf, 1, 1]])
 def test_bad_scales_refused(bad):
     with pytest.raises(UsageError, match="^scale: "):

@@ -7,7 +7,7 @@ origin, some placed far out and brought back by an outer rotation and translatio
 in mm or inches, with densities and masses with units), measure them, and compare with the
 rational oracle of ``helpers.exact_assembly``: the error never exceeds the stated bound.
 
-``HYPOTHESIS_PROFILE=thorough pytest tests/test_composition_bounds.py -s`` prints the worst
+``HYPOTHESIS_PROFILE=thorough pytest tests/measure/test_composition_bounds.py -s`` prints the worst
 error/bound ratio seen (docs/accuracy.md quotes it).
 """
 
