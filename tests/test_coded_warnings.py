@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import p3d_cli as p3d
-from conftest import cube_triangles, write_ascii_stl, write_binary_stl
+from helpers.meshes import cube_triangles, write_ascii_stl, write_binary_stl
 from p3d_cli.results import Bounds, BoundsResult, MeshFacts, PropsResult
 from p3d_cli.warning_codes import CODES, CodedWarning, coded
 

@@ -37,6 +37,7 @@ TOP_LEVEL = {
     "test_error_builtins.py": "errors",
     "test_hostile_inputs.py": "errors",
     "test_result_records.py": "results",
+    "test_coded_warnings.py": "warning_codes",
     "test_schemas.py": "records",
     "test_units.py": "units",
     "test_units_convention.py": "units",

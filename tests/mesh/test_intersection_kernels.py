@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 from helpers.solids import box, indexed
 from p3d_cli.geometry.predicates import O3D_BOUND, in_safe_range
 from p3d_cli.mesh import kernels

@@ -19,7 +19,7 @@ from p3d_cli.shapes import SHAPES, register
 from p3d_cli.shapes.box import Box
 from p3d_cli.shapes.record import DECLARED
 
-from conftest import REPO
+from helpers.real_meshes import REPO
 
 
 @dataclass(frozen=True)
