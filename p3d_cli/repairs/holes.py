@@ -150,17 +150,17 @@ def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
     """The holes, with those whose filling crosses or overlaps another face left."""
     if len(draft.faces) == start:
         return found
-    crossing = solidity.new_face_crossings(draft.points, draft.faces, np.arange(start, len(draft.faces)))
-    if crossing.size == 0:
-        return found
-    out, position = [], start
-    for hole, around in found:
+    fillings, position = [], start
+    for hole, _ in found:
         if hole.filled:
-            own = np.arange(position, position + len(hole.triangles))
-            position += own.size
-            if np.isin(own, crossing).any():
-                hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces",
-                                           replaced=None)
+            fillings.append(np.arange(position, position + len(hole.triangles)))
+            position += len(hole.triangles)
+    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings).tolist())
+    out = []
+    for hole, around in found:
+        if hole.filled and next(crossing):
+            hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces",
+                                       replaced=None)
         out.append((hole, around))
     return out
 

@@ -4,8 +4,8 @@
 - ``nesting_depths``: how many closed shells lie around each closed shell, by exact winding
   numbers (``p3d_cli.mesh.nesting``), for the ``outward`` step (a shell inside an odd number of
   others is a cavity);
-- ``new_face_crossings``: the new faces of filled holes whose interiors cross or overlap
-  another face (``p3d_cli.mesh.intersections``, on the faces near the holes only): a filled
+- ``crossing_fillings``: the fillings of holes with a face whose interior crosses or overlaps
+  another face (``p3d_cli.mesh.intersections``, on the faces near the fillings only): a filled
   hole must add no self-intersection.
 
 The modules are imported where they are used: a repair that needs none of them does not load
@@ -13,6 +13,8 @@ the self-intersection machinery.
 """
 
 from __future__ import annotations
+
+from typing import Sequence
 
 import numpy as np
 
@@ -66,68 +68,91 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     return depth
 
 
-def new_face_crossings(points: np.ndarray, faces: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """The faces among ``new`` (indices into ``faces``) whose interiors cross or overlap
-    another face. Only the faces whose boxes may meet a new face's box take part
-    (``near_new_faces``)."""
-    new = np.asarray(new, dtype=np.int64)
-    if new.size == 0:
-        return new
-    from p3d_cli.mesh.intersections import self_intersections
+#: Fillings of at least this many faces are first screened pair by pair (below); a smaller
+#: one (the many one-face holes of a damaged file) goes straight to the whole test.
+SCREENED = 16
+#: Faces of a screened filling touching old faces along lines, probed first (below).
+PROBES = 8
+
+
+def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[np.ndarray]) -> np.ndarray:
+    """Which fillings (each an array of face ids into ``faces``) have a face whose interior
+    crosses or overlaps another face: ``(len(fillings),)`` bool, decided exactly.
+
+    A filling is refused when ``p3d check``'s self-intersection test of the whole mesh
+    (``p3d_cli.mesh.intersections``) would report a pair with one of its faces. The test is run
+    on fewer faces, with the same answer:
+
+    1. Every new face is paired with the faces whose boxes meet its triangle
+       (``p3d_cli.repairs.near``), a superset of the faces that touch it.
+    2. A filling of ``SCREENED`` faces or more is screened first: its faces' pairs with old,
+       non-degenerate faces go through the exact pair test (``triangle_pairs.classify``); a pair
+       that crosses or overlaps is one that the whole test reports (those kinds are final there),
+       so such a filling is refused at once. Where faces only touch along lines (the contact
+       pairs), the first ``PROBES`` faces of the filling that do are tested with every face
+       that touches them (their pairs of step 1, and the whole filling) by the whole test: the
+       pairs with those faces are the whole mesh's, so one found refuses the filling. A hole too
+       large for its rim (a flat disc through the far side of a tube) is so refused on a few
+       of its faces, where the lines of contact of all of them cost the most of the test.
+    3. The fillings left are tested with the faces paired with them (step 1) by the whole
+       self-intersection test (``self_intersections``). Every face that touches one of their
+       faces is there, so the pairs with their faces, and the lines of contact along them, are
+       those of the whole mesh.
+    """
+    sizes = np.array([len(f) for f in fillings], dtype=np.int64)
+    crossing = np.zeros(len(sizes), dtype=bool)
+    if sizes.sum() == 0:
+        return crossing
+    from p3d_cli.geometry.predicates import in_safe_range
+    from p3d_cli.mesh.intersections import self_intersections, zero_area_faces
+    from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, OVERLAP, classify
+    from p3d_cli.repairs.near import near_pairs
 
     points = np.asarray(points, dtype=np.float64)
     faces = np.asarray(faces)
-    chosen = near_new_faces(points, faces, new)
+    new = np.concatenate([np.asarray(f, dtype=np.int64) for f in fillings])
+    owner = np.repeat(np.arange(len(sizes)), sizes)
+    group = np.full(len(faces), -1, dtype=np.int64)
+    group[new] = owner
+    at, near = near_pairs(points, faces, new, group)
+    screened = (sizes >= SCREENED)[owner[at]] & (group[near] < 0)
+    if screened.any():
+        i, j = new[at[screened]], near[screened]
+        safe = in_safe_range(points)
+        others = np.unique(j)
+        flat = others[zero_area_faces(points, faces[others], safe)]
+        live = ~np.isin(j, flat)
+        kind, _ = classify(points, faces, i[live], j[live], safe)
+        crossing[owner[at[screened][live][(kind == CROSSING) | (kind == OVERLAP)]]] = True
+        touching = i[live][kind == CONTACT]
+        probes = touching[~crossing[group[touching]]]
+        if probes.size:
+            crossing |= _probed(points, faces, new, owner, group, at, near, probes)
+    left = ~crossing[owner]
+    if left.any():
+        chosen = np.union1d(new[left], near[left[at]])
+        found = self_intersections(points, faces[chosen])
+        if len(found.pairs):
+            hit = chosen[found.pairs.ravel()]
+            crossing[group[hit[group[hit] >= 0]]] = True
+    return crossing
+
+
+def _probed(points: np.ndarray, faces: np.ndarray, new: np.ndarray, owner: np.ndarray, group: np.ndarray,
+            at: np.ndarray, near: np.ndarray, touching: np.ndarray) -> np.ndarray:
+    """The fillings refused by the whole self-intersection test of their first ``PROBES``
+    faces in ``touching`` (face ids, in order), with every face that touches those."""
+    from p3d_cli.mesh.intersections import self_intersections
+
+    labels = group[touching]
+    probes = np.concatenate([np.unique(touching[labels == g])[:PROBES] for g in np.unique(labels)])
+    refused = np.zeros(int(owner.max()) + 1, dtype=bool)
+    probed = np.zeros(len(faces), dtype=bool)
+    probed[probes] = True
+    whole = np.isin(group[new], np.unique(labels))
+    chosen = np.union1d(new[whole], near[probed[new[at]]])
     found = self_intersections(points, faces[chosen])
-    hit = np.unique(chosen[found.pairs].ravel()) if len(found.pairs) else np.zeros(0, dtype=np.int64)
-    return np.intersect1d(hit, new)
-
-
-#: Odd 64-bit multipliers mixing a grid cell's three indices into one key.
-_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
-
-
-def near_new_faces(points: np.ndarray, faces: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """The faces (sorted ids, ``new`` among them) whose boxes may meet the box of a face in
-    ``new``: a superset of those that do, never missing one.
-
-    A grid of cells as large as the largest new face's box: a new face's box covers at most
-    two cells along each axis, and two boxes that meet share a cell (the cell of a point in
-    both). An old face is kept when one of its cells holds a new face (cell keys are hashed:
-    a collision keeps a face too many, never one too few), or when it is larger than a cell
-    (kept without looking). Many small holes spread over a large mesh thus test only the faces
-    around each hole, where one box around all of them would take in the whole mesh.
-    """
-    corners = [points[faces[:, k]] for k in range(3)]
-    lo = np.minimum(np.minimum(corners[0], corners[1]), corners[2])
-    hi = np.maximum(np.maximum(corners[0], corners[1]), corners[2])
-    del corners
-    size = float((hi[new] - lo[new]).max())
-    if not np.isfinite(size) or size <= 0.0:
-        size = 1.0
-    origin = lo[new].min(axis=0)
-    with np.errstate(over="ignore", invalid="ignore"):
-        first = np.floor((lo - origin) / size)
-        last = np.floor((hi - origin) / size)
-    # Cells far beyond int64 (a face 1e300 away) are far from every new face: clipped, they
-    # still compare as different cells from the new faces' (which lie near the origin).
-    first = np.clip(np.nan_to_num(first, nan=-2.0**62), -2.0**62, 2.0**62).astype(np.int64)
-    last = np.clip(np.nan_to_num(last, nan=2.0**62), -2.0**62, 2.0**62).astype(np.int64)
-    occupied = np.unique(np.concatenate([_keys(first[new], last[new], corner) for corner in range(8)]))
-    small = ((last - first) <= 1).all(axis=1)
-    near = ~small
-    for corner in range(8):
-        keys = _keys(first, last, corner)
-        at = np.searchsorted(occupied, keys)
-        at[at == len(occupied)] = 0
-        near |= small & (occupied[at] == keys)
-    near[new] = True
-    return np.flatnonzero(near)
-
-
-def _keys(first: np.ndarray, last: np.ndarray, corner: int) -> np.ndarray:
-    """The hashed key of each box's cell at ``corner`` (bit k: the last cell along axis k)."""
-    cell = np.where([(corner >> k) & 1 for k in range(3)], last, first).astype(np.uint64)
-    with np.errstate(over="ignore"):
-        mixed = cell * _MIX
-    return mixed[:, 0] ^ (mixed[:, 1] >> np.uint64(1)) ^ (mixed[:, 2] << np.uint64(1))
+    if len(found.pairs):
+        hit = chosen[found.pairs.ravel()]
+        refused[group[hit[probed[hit]]]] = True
+    return refused

@@ -1,0 +1,206 @@
+"""The faces near given faces: a box tree of all the faces, walked by each given triangle.
+
+Filling a hole adds faces that must cross no other face (``p3d_cli.repairs.solidity``). The
+exact pair test only needs, for each new face, the faces that could touch it: the faces whose
+box meets the new *triangle*. A box around the new face would do for a small, compact face,
+but the filling of a long loop is a fan of slivers whose boxes span the whole hole and meet
+most of the mesh, while the slivers themselves pass near few faces.
+
+So the other faces go into a tree of boxes (a bounding volume hierarchy, C. Ericson,
+*Real-Time Collision Detection*, Morgan Kaufmann 2005, ch. 6): sorted along a Morton curve of
+their boxes' centres (G. M. Morton, IBM technical report, 1966), cut into leaves of ``LEAF``
+consecutive faces, and joined two by two up to one root. Every new triangle walks down from
+the root, all of them at once, level by level, into the nodes whose boxes it meets, and at the
+leaves keeps the faces whose boxes it meets.
+
+"Meets" is the separating-axis test of a triangle and a box (T. Akenine-Möller, "Fast 3D
+triangle-box overlap testing", *Journal of Graphics Tools* 6(1), 2001: the box's three axes,
+the triangle's normal and the nine products of a triangle edge with a box axis), in floating
+point on boxes grown by ``MARGIN`` of the largest coordinate, far beyond the rounding of the
+projections: a box is passed over only when the triangle is certainly clear of it, so a face
+that touches a new face is never missed. The answer is a superset of the faces that can touch
+a new face; which of them do is decided exactly after (``p3d_cli.mesh.intersections``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Faces per leaf of the tree.
+LEAF = 16
+#: Bits per axis of the Morton code (a 30-bit key).
+MORTON_BITS = 10
+#: Boxes are grown by this fraction of the largest absolute coordinate: the projections'
+#: rounding is a few units of 2**-53 of it, so a triangle and a box that touch always pass.
+MARGIN = 2.0 ** -40
+#: The label of a node whose faces have different labels.
+MIXED = np.iinfo(np.int64).min
+#: Pairs (triangle, node) tested per batch (bounded temporaries).
+BATCH = 1 << 18
+
+
+def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
+               group: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(k, f)`` where the box of face ``f`` meets the triangle of face
+    ``query[k]``: every face that touches a query face is among them, with that face.
+
+    Parameters
+    ----------
+    points : (m, 3) float64
+        Finite coordinates by vertex id.
+    faces : (n, 3) int
+        Vertex ids of every face.
+    query : (k,) int
+        The faces whose neighbourhoods are wanted (ids into ``faces``).
+    group : (n,) int, optional
+        A label per face (negative: none): a face is not paired with a query face of its own
+        label, nor with itself.
+
+    Returns
+    -------
+    at, face : (p,) int64
+        Positions in ``query``, and face ids; sorted by position, then face.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    faces = np.asarray(faces)
+    query = np.asarray(query, dtype=np.int64)
+    none = np.zeros(0, dtype=np.int64)
+    if query.size == 0 or len(faces) == 0:
+        return none, none
+    scale = float(np.abs(points).max()) if len(points) else 0.0
+    margin = MARGIN * scale if scale > 0 else MARGIN
+    triangles = points[faces[query]]
+    lo, hi = _boxes(points, faces)
+    # Only the faces whose boxes meet the box of all the query triangles can meet one of them.
+    inside = np.flatnonzero(((lo <= triangles.max(axis=(0, 1)) + margin)
+                             & (hi >= triangles.min(axis=(0, 1)) - margin)).all(axis=1))
+    # A face of the query's own label is dropped at the leaves, before the geometry: a fan's
+    # faces all meet each other's boxes at its apex.
+    label = np.full(len(faces), -1, dtype=np.int64) if group is None else np.asarray(group, dtype=np.int64)
+    mine = np.where(label[query] >= 0, label[query], -2 - np.arange(query.size))
+    theirs = label.copy()
+    theirs[query] = mine
+    at, position = _tree_query(triangles, lo[inside], hi[inside], margin, mine, theirs[inside])
+    face = inside[position]
+    order = np.lexsort((face, at))
+    return at[order], face[order]
+
+
+def _boxes(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exact boxes ``(n, 3)`` of the faces."""
+    a, b, c = (points[faces[:, k]] for k in range(3))
+    lo = np.minimum(np.minimum(a, b), c)
+    hi = np.maximum(np.maximum(a, b), c)
+    return lo, hi
+
+
+def _tree_query(triangles: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
+                mine: np.ndarray, theirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(triangle, box)`` of the triangles ``(k, 3, 3)`` and the boxes ``lo``/``hi``
+    that meet (grown by ``margin``), but those where the triangle's label ``mine`` is the
+    box's ``theirs``."""
+    none = np.zeros(0, dtype=np.int64)
+    if len(lo) == 0:
+        return none, none
+    order = np.argsort(_morton((lo + hi) / 2), kind="stable")
+    lo, hi = lo[order], hi[order]
+    starts = np.arange(0, len(order), LEAF)
+    # Each node's boxes, and the one label all its faces have (else MIXED): a triangle skips
+    # the nodes of its own label (the other faces of its fan).
+    label = theirs[order]
+    low_label, high_label = np.minimum.reduceat(label, starts), np.maximum.reduceat(label, starts)
+    levels = [(np.minimum.reduceat(lo, starts, axis=0), np.maximum.reduceat(hi, starts, axis=0),
+               np.where(low_label == high_label, low_label, MIXED))]
+    while len(levels[-1][0]) > 1:
+        low, high, same = levels[-1]
+        pairs = np.arange(0, len(low), 2)
+        sibling = np.minimum(pairs + 1, len(low) - 1)
+        levels.append((np.minimum.reduceat(low, pairs, axis=0), np.maximum.reduceat(high, pairs, axis=0),
+                       np.where(same[pairs] == same[sibling], same[pairs], MIXED)))
+    levels.reverse()
+    # The frontier: (triangle, node) pairs whose boxes meet, from the root down to the leaves.
+    tri = np.arange(len(triangles), dtype=np.int64)
+    node = np.zeros(len(triangles), dtype=np.int64)
+    keep = _meets(triangles, tri, levels[0][0], levels[0][1], node, margin)
+    tri, node = tri[keep], node[keep]
+    for low, high, same in levels[1:]:
+        tri = np.repeat(tri, 2)
+        node = (np.repeat(node, 2) * 2) + np.tile(np.array([0, 1]), node.size)
+        real = node < len(low)
+        tri, node = tri[real], node[real]
+        other = same[node] != mine[tri]
+        tri, node = tri[other], node[other]
+        keep = _meets(triangles, tri, low, high, node, margin)
+        tri, node = tri[keep], node[keep]
+    # The leaves' faces: positions leaf * LEAF + 0..LEAF-1 in the sorted order.
+    tri = np.repeat(tri, LEAF)
+    face = np.repeat(node * LEAF, LEAF) + np.tile(np.arange(LEAF), node.size)
+    real = face < len(order)
+    tri, face = tri[real], face[real]
+    other = mine[tri] != theirs[order[face]]
+    tri, face = tri[other], face[other]
+    keep = _meets(triangles, tri, lo, hi, face, margin)
+    return tri[keep], order[face[keep]]
+
+
+def _morton(centres: np.ndarray) -> np.ndarray:
+    """30-bit Morton keys (``uint64``) of points quantised to their box."""
+    low = centres.min(axis=0)
+    span = centres.max(axis=0) - low
+    span[span <= 0] = 1.0
+    cells = (1 << MORTON_BITS) - 1
+    q = np.clip(((centres - low) / span * cells), 0, cells).astype(np.uint64)
+    key = np.zeros(len(centres), dtype=np.uint64)
+    for bit in range(MORTON_BITS):
+        for axis in range(3):
+            key |= ((q[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    return key
+
+
+def _meets(triangles: np.ndarray, tri: np.ndarray, lo: np.ndarray, hi: np.ndarray, box: np.ndarray,
+           margin: float) -> np.ndarray:
+    """Whether triangle ``tri[i]`` may meet box ``box[i]`` (grown by ``margin``), in batches:
+    the triangle's own box first, the separating-axis test on the pairs it leaves."""
+    out = np.zeros(tri.size, dtype=bool)
+    low, high = triangles.min(axis=1) - margin, triangles.max(axis=1) + margin
+    for at in range(0, tri.size, BATCH):
+        t, b = tri[at:at + BATCH], box[at:at + BATCH]
+        rows = np.flatnonzero(((low[t] <= hi[b]) & (lo[b] <= high[t])).all(axis=1))
+        out[at + rows] = _triangle_meets_box(triangles[t[rows]], lo[b[rows]], hi[b[rows]], margin)
+    return out
+
+
+def _triangle_meets_box(corners: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
+    """The separating-axis test (module docstring) of triangles ``(p, 3, 3)`` against boxes
+    ``(p, 3)`` grown by ``margin``: False only where an axis certainly separates them
+    (comparisons with NaN or overflow say they meet). The box's own axes first, the other
+    ten axes only on the pairs those leave."""
+    centre = (lo + hi) / 2
+    half = (hi - lo) / 2 + margin
+    v = corners - centre[:, None, :]
+    out = ~((v.min(axis=1) > half) | (v.max(axis=1) < -half)).any(axis=1)
+    rows = np.flatnonzero(out)
+    if rows.size == 0:
+        return out
+    h = [half[rows, a] for a in range(3)]
+    x = [[v[rows, k, a] for a in range(3)] for k in range(3)]   # x[corner][axis]
+    e = [[x[(k + 1) % 3][a] - x[k][a] for a in range(3)] for k in range(3)]
+    # The triangle's normal.
+    n = [e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+         e[0][0] * e[1][1] - e[0][1] * e[1][0]]
+    p = [n[0] * x[k][0] + n[1] * x[k][1] + n[2] * x[k][2] for k in range(3)]
+    apart = _clear(p, np.abs(n[0]) * h[0] + np.abs(n[1]) * h[1] + np.abs(n[2]) * h[2])
+    # Each edge crossed with each box axis: the axis's own component is zero, so the
+    # projection and the box's radius have two terms.
+    for edge in e:
+        for a in range(3):
+            b, c = (a + 1) % 3, (a + 2) % 3
+            p = [edge[c] * x[k][b] - edge[b] * x[k][c] for k in range(3)]
+            apart |= _clear(p, np.abs(edge[c]) * h[b] + np.abs(edge[b]) * h[c])
+    out[rows[apart]] = False
+    return out
+
+
+def _clear(p: list, r: np.ndarray) -> np.ndarray:
+    """Whether the projections ``p`` (three corners) lie beyond ``[-r, r]``."""
+    return (np.minimum(np.minimum(p[0], p[1]), p[2]) > r) | (np.maximum(np.maximum(p[0], p[1]), p[2]) < -r)

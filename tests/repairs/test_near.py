@@ -1,0 +1,140 @@
+"""The faces near new faces (``p3d_cli.repairs.near``) and the fillings' crossing test built on
+them (``p3d_cli.repairs.solidity.crossing_fillings``): never missing a face, and deciding as
+the whole mesh's self-intersection test does."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from p3d_cli.mesh.intersections import self_intersections
+from p3d_cli.repairs.near import near_pairs
+from p3d_cli.repairs.solidity import PROBES, SCREENED, crossing_fillings
+
+
+def meets_exactly(triangle: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """The separating-axis test of a triangle and a closed box in rational arithmetic."""
+    c = [(Fraction(a) + Fraction(b)) / 2 for a, b in zip(lo.tolist(), hi.tolist())]
+    h = [(Fraction(b) - Fraction(a)) / 2 for a, b in zip(lo.tolist(), hi.tolist())]
+    v = [[Fraction(x) - c[i] for i, x in enumerate(p)] for p in triangle.tolist()]
+    e = [[v[(k + 1) % 3][i] - v[k][i] for i in range(3)] for k in range(3)]
+
+    def cross(a, b):
+        return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+    units = [(1, 0, 0), (0, 1, 0), (0, 0, 1)]
+    axes = units + [cross(e[0], e[1])] + [cross(edge, u) for edge in e for u in units]
+    for a in axes:
+        p = [sum(a[i] * x[i] for i in range(3)) for x in v]
+        r = sum(abs(a[i]) * h[i] for i in range(3))
+        if min(p) > r or max(p) < -r:
+            return False
+    return True
+
+
+def soup(seed: int, n: int = 300):
+    """Small triangles spread in a box, some long slivers among them, some turned to lines."""
+    rng = np.random.default_rng(seed)
+    base = rng.random((n, 3)) * 10 + rng.normal(size=3) * 10.0 ** rng.integers(0, 6)
+    points = np.concatenate([base, base + rng.normal(size=(n, 3)) * 0.5, base + rng.normal(size=(n, 3)) * 0.5])
+    faces = np.stack([np.arange(n), np.arange(n) + n, np.arange(n) + 2 * n], axis=1)
+    points[faces[:20, 1]] = points[faces[:20, 0]] + rng.normal(size=(20, 3)) * 8
+    if seed % 2:
+        points[faces[40:60, 2]] = points[faces[40:60, 0]]
+    return points, faces
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_every_face_whose_box_meets_a_query_triangle_is_paired(seed):
+    points, faces = soup(seed)
+    query = np.arange(0, 25)
+    group = np.full(len(faces), -1)
+    group[:10] = 0                      # the first ten are one filling: not paired together
+    at, face = near_pairs(points, faces, query, group)
+    got = set(zip(at.tolist(), face.tolist()))
+    want = set()
+    for k, q in enumerate(query.tolist()):
+        for f in range(len(faces)):
+            if f == q or (group[f] >= 0 and group[f] == group[q]):
+                continue
+            corners = points[faces[f]]
+            if meets_exactly(points[faces[q]], corners.min(axis=0), corners.max(axis=0)):
+                want.add((k, f))
+    assert want <= got
+    assert all(f != query[k] and not (group[f] >= 0 and group[f] == group[query[k]]) for k, f in got)
+    # The tree's margin adds no more than a few faces beyond the exact answer.
+    assert len(got - want) <= 0.05 * len(want) + 2
+
+
+def holed_torus(u: int, v: int, rows: tuple[int, ...]):
+    """A grid torus with whole rows of quads removed, and each of the rings left open filled
+    with a fan from its first corner (what ear clipping gives a convex loop): flat discs, some
+    through the far side of the tube, some in the torus's hole."""
+    i, j = np.meshgrid(np.arange(u), np.arange(v), indexing="ij")
+    theta, phi = 2 * np.pi * i / u, 2 * np.pi * j / v
+    ring = 3.0 + np.cos(phi)
+    points = np.stack([ring * np.cos(theta), ring * np.sin(theta), np.sin(phi)], axis=-1).reshape(-1, 3)
+    points = points.astype(np.float32).astype(np.float64)
+    a = (i * v + j)
+    b = ((i + 1) % u) * v + j
+    c = ((i + 1) % u) * v + (j + 1) % v
+    d = i * v + (j + 1) % v
+    keep = ~np.isin(j, rows).ravel()
+    faces = np.concatenate([np.stack([a.ravel(), b.ravel(), c.ravel()], 1)[keep],
+                            np.stack([a.ravel(), c.ravel(), d.ravel()], 1)[keep]])
+    fillings, start = [], len(faces)
+    fans = []
+    for row in rows:
+        for at, up in ((row, False), ((row + 1) % v, True)):
+            loop = np.arange(u) * v + at
+            loop = loop if up else loop[::-1]
+            fan = np.stack([np.full(u - 2, loop[0]), loop[1:-1], loop[2:]], axis=1)
+            fans.append(fan)
+            fillings.append(np.arange(start, start + len(fan)))
+            start += len(fan)
+    return points, np.concatenate([faces] + fans), fillings
+
+
+def whole_test(points, faces, fillings) -> np.ndarray:
+    """The oracle: the whole mesh's self-intersection test, a filling refused when a reported
+    pair has one of its faces."""
+    found = self_intersections(points, faces)
+    hit = set(found.pairs.ravel().tolist())
+    return np.array([bool(hit & set(f.tolist())) for f in fillings])
+
+
+@pytest.mark.parametrize("u, v, rows", [(40, 10, (0, 2, 4, 6, 8)), (36, 12, (0, 3, 6)), (60, 20, (1, 7, 13))])
+def test_fillings_of_a_holed_torus_are_refused_as_the_whole_test_does(u, v, rows):
+    """Discs through the tube touch rings of vertices lying exactly in their planes (contacts
+    along lines, decided by the probe) or cross it (decided by the screen); discs in the
+    torus's hole cross nothing."""
+    points, faces, fillings = holed_torus(u, v, rows)
+    assert min(len(f) for f in fillings) >= SCREENED > PROBES
+    want = whole_test(points, faces, fillings)
+    assert want.any() and not want.all()
+    assert crossing_fillings(points, faces, fillings).tolist() == want.tolist()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fillings_in_a_soup_are_refused_as_the_whole_test_does(seed):
+    """Fans of many faces and single faces among random triangles."""
+    rng = np.random.default_rng(seed)
+    points, faces = soup(seed, 200)
+    start, fillings, extra = len(points), [], []
+    for k in range(6):
+        size = int(rng.choice([1, 2, SCREENED, 40]))
+        centre = rng.random(3) * 10
+        angle = np.linspace(0, 2 * np.pi, size + 2, endpoint=False)
+        rim = centre + rng.random() * 3 * np.stack([np.cos(angle), np.sin(angle), 0 * angle], 1)
+        rim = rim @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        ids = start + np.arange(size + 2)
+        start += size + 2
+        points = np.concatenate([points, rim])
+        fan = np.stack([np.full(size, ids[0]), ids[1:-1], ids[2:]], axis=1)
+        fillings.append(len(faces) + sum(len(e) for e in extra) + np.arange(size))
+        extra.append(fan)
+    faces = np.concatenate([faces] + extra)
+    want = whole_test(points, faces, fillings)
+    assert crossing_fillings(points, faces, fillings).tolist() == want.tolist()
