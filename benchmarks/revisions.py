@@ -5,7 +5,8 @@ Usage::
     git worktree add /tmp/p3d-before <commit>
     python benchmarks/revisions.py --baseline /tmp/p3d-before [--runs 15]
 
-Each case runs ``python -m p3d_cli ...`` with ``PYTHONPATH`` set to one tree, then the other,
+Each case runs ``p3d ...`` from one tree, then the other (through ``tree.py``, which checks
+that the p3d_cli imported is the tree's),
 alternating, so both see the same machine load. Reported: median wall and CPU (user + system)
 seconds of each tree, and the ratio after/before; and the machine's load average. Cases: start-up
 on a tiny STL (``props --json``), ``p3d --help``, and 1M-triangle binary STL props (closed).
@@ -55,10 +56,11 @@ def torus(n: int) -> np.ndarray:
 
 
 def timed(tree: Path, args: list[str]) -> tuple[float, float]:
-    env = dict(os.environ, PYTHONPATH=str(tree))
+    # Through tree.py: ``PYTHONPATH=TREE python -m p3d_cli`` runs the working folder's or an
+    # editable install's p3d_cli, not TREE's, and both sides would time the same code.
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "p3d_cli", *args], env=env, check=True,
+    subprocess.run([sys.executable, str(HERE / "benchmarks" / "tree.py"), str(tree), *args], check=True,
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
