@@ -153,7 +153,9 @@ def positions(source, document, where: str) -> np.ndarray:
     if len(picks) < 3 or count < 0 or offset < 0 or stride < len(params) or stride < 1:
         raise FormatError(where, f"accessor of {source.get('id')!r} does not yield X, Y, Z positions (count "
                           f"{count}, stride {stride}, offset {offset}, {len(named)} named params)", _HINT)
-    needed = offset + (count - 1) * stride + max(picks) + 1 if count else 0
+    if count == 0:  # no element: the stride and offset index nothing (a huge stride overflows int64)
+        return np.zeros((0, 3))
+    needed = offset + (count - 1) * stride + max(picks) + 1
     if needed > len(values):
         raise FormatError(where, f"accessor of {source.get('id')!r} reads {count} elements of {stride} values from "
                           f"offset {offset}, but its array holds {len(values)} values", _HINT)
