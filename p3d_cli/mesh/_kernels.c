@@ -447,6 +447,19 @@ static PyObject *py_bounds(PyObject *self, PyObject *args) {
                          c.finite ? Py_True : Py_False);
 }
 
+/* The block's pass: bounds, sums (pairwise, as numpy's) and edge keys, without the GIL. */
+static void integrate(Pass *c, double *sums) {
+    start_bounds(c);
+    Py_BEGIN_ALLOW_THREADS
+    memset(sums, 0, NSUMS * sizeof *sums);
+    if (c->b->n)
+        pairwise(c, 0, c->b->n, sums);
+    /* numpy's reduction starts from the identity: 0.0 + sum (a sum of -0.0 is 0.0) */
+    for (int r = 0; r < NSUMS; r++)
+        sums[r] = 0.0 + sums[r];
+    Py_END_ALLOW_THREADS
+}
+
 /* block(tri, ox, oy, oz, keys or None, offset) ->
  *   ((lo0, lo1, lo2, hi0, hi1, hi2), finite, (10 sums), magnitude sum, (3 weighted), keys written)
  * The sums are those of p3d_cli.mesh.integrals.MomentSums.add_columns about the origin o, the
@@ -498,15 +511,7 @@ static PyObject *py_block(PyObject *self, PyObject *args) {
     }
     double sums[NSUMS];
     Pass c = {&b, {o[0], o[1], o[2]}, keys, 0, fill, cap, shift, 0};
-    start_bounds(&c);
-    Py_BEGIN_ALLOW_THREADS
-    memset(sums, 0, sizeof sums);
-    if (b.n)
-        pairwise(&c, 0, b.n, sums);
-    /* numpy's reduction starts from the identity: 0.0 + sum (a sum of -0.0 is 0.0) */
-    for (int r = 0; r < NSUMS; r++)
-        sums[r] = 0.0 + sums[r];
-    Py_END_ALLOW_THREADS
+    integrate(&c, sums);
     release_block(&view, &b);
     if (have_keys)
         PyBuffer_Release(&kview);
@@ -2002,14 +2007,7 @@ static PyObject *py_forward_block(PyObject *self, PyObject *args) {
     double sums[NSUMS];
     Pass c = {&b, {o[0], o[1], o[2]}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
     c.forward_only = 1;
-    start_bounds(&c);
-    Py_BEGIN_ALLOW_THREADS
-    memset(sums, 0, sizeof sums);
-    if (b.n)
-        pairwise(&c, 0, b.n, sums);
-    for (int r = 0; r < NSUMS; r++)
-        sums[r] = 0.0 + sums[r];
-    Py_END_ALLOW_THREADS
+    integrate(&c, sums);
     release_block(&view, &b);
     PyBuffer_Release(&kview);
     PyBuffer_Release(&fview);
