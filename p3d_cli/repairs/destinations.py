@@ -5,7 +5,8 @@ A file found in a folder the user named keeps its place below that folder (``par
 any other file keeps the relative path it was given by (``parts/a.stl`` ->
 ``fixed/parts/a.stl``), or its name when that path is absolute or climbs out of the working
 folder. ``output_format`` changes the extension. Two inputs that would land on one output are
-an error for the second (``OutputError``), never an overwrite, and so is an input that lies in
+an error for the second (``OutputError``), never an overwrite (one input named twice is one
+input: its repair, the same both times, goes to its one place), and so is an input that lies in
 the output folder itself (a repair written by an earlier run into a folder inside the inputs').
 """
 
@@ -55,7 +56,7 @@ def mirrored(items: Iterable[str], roots: Iterable[str], folder: str, extension:
             relative = os.path.splitext(relative)[0] + extension
         target = os.path.join(folder, relative)
         key = os.path.normcase(os.path.normpath(target))
-        if key in taken:
+        if key in taken and taken[key] != item:
             out[item] = OutputError(target, f"is already the output of {taken[key]}",
                                     "give the inputs distinct paths or names")
             continue

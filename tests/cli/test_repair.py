@@ -230,3 +230,22 @@ def test_an_output_slot_taken_by_a_folder_loses_only_that_file(tmp_path):
            "regular file" in result.stderr
     assert p3d.check(str(tmp_path / "out" / "b.stl")).ok
     assert "2 files: 1 ok, 1 error" in result.stderr
+
+
+def test_one_input_named_twice_is_repaired_into_its_one_place(tmp_path):
+    write_binary_stl(tmp_path / "open.stl", CUBE[2:])
+    write_binary_stl(tmp_path / "b.stl", CUBE[2:])
+    (tmp_path / "sub").mkdir()
+    write_binary_stl(tmp_path / "sub" / "b.stl", CUBE[2:])
+    out = tmp_path / "out"
+    result = run("repair", tmp_path / "open.stl", tmp_path / "open.stl", tmp_path / "b.stl", tmp_path / "sub" / "b.stl",
+                 "-o", out, "--csv")
+    assert result.exit_code == 2, result.output
+    rows = list(csv.DictReader(io.StringIO(result.stdout)))
+    assert [(row["source"], bool(row["error"])) for row in rows] == [
+        (str(tmp_path / "open.stl"), False), (str(tmp_path / "open.stl"), False),
+        (str(tmp_path / "b.stl"), False), (str(tmp_path / "sub" / "b.stl"), True)]   # two files, one name
+    assert "is already the output of" in rows[3]["error"]
+    assert sorted(p.name for p in out.iterdir()) == ["b.stl", "open.stl"]
+    assert p3d.check(str(out / "open.stl")).ok and p3d.props(str(out / "open.stl")).volume == 1
+    assert "4 files: 3 ok, 1 error" in result.stderr
