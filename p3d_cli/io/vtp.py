@@ -129,7 +129,8 @@ class _Xml:
     def __init__(self, where: str, root, appended: bytes, appended_base64: bool) -> None:
         self.where = where
         self.order = "<" if root.get("byte_order", "LittleEndian") == "LittleEndian" else ">"
-        self.header = np.dtype(self.order + _TYPES[root.get("header_type", "UInt32").lower()])
+        # Checked by _load_xml: UInt32 or UInt64, an empty attribute taken as absent.
+        self.header = np.dtype(self.order + _TYPES[(root.get("header_type") or "UInt32").lower()])
         compressor = root.get("compressor")
         if compressor not in (None, "", "vtkZLibDataCompressor"):
             raise FormatError(where, f"its data are compressed by {compressor}, which p3d does not decode",

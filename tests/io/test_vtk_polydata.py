@@ -89,6 +89,12 @@ def test_vtp_layouts(tmp_path, fmt, header, compressed, apart):
     assert_blob(result, "float64" if fmt == "ascii" else "float32")
 
 
+def test_an_empty_header_type_is_the_default_uint32(tmp_path):
+    path = tmp_path / "blob.vtp"
+    path.write_bytes(vtp("binary", "UInt32", True, False).replace(b'header_type="UInt32"', b'header_type=""'))
+    assert_blob(p3d.props(path), "float32")
+
+
 def legacy(binary: bool, new_layout: bool, strips: bool = False) -> bytes:
     version = "5.1" if new_layout else "3.0"
     out = f"# vtk DataFile Version {version}\nblob\n{'BINARY' if binary else 'ASCII'}\nDATASET POLYDATA\n".encode()
@@ -144,6 +150,9 @@ def test_triangle_strips_and_polygons(tmp_path):
      "outside"),
     (b'<VTKFile type="PolyData" compressor="vtkLZ4DataCompressor"><PolyData/></VTKFile>', "LZ4"),
     (b'<VTKFile type="PolyData"><PolyData><Piece>', "valid VTK XML"),
+    (b'<VTKFile type="PolyData" header_type="UInt16"><PolyData/></VTKFile>', "not UInt32 or UInt64"),
+    (b'<VTKFile type="PolyData" header_type="x"><PolyData/></VTKFile>', "header_type 'x' is not"),
+    (b"# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 1 quad\n0 0 0\n", "POINTS section"),
 ])
 def test_corrupt_polydata_is_one_error(tmp_path, text, match):
     path = tmp_path / ("bad.vtk" if text.startswith(b"#") else "bad.vtp")

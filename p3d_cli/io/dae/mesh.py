@@ -159,7 +159,10 @@ def positions(source, document, where: str) -> np.ndarray:
     if needed > len(values):
         raise FormatError(where, f"accessor of {source.get('id')!r} reads {count} elements of {stride} values from "
                           f"offset {offset}, but its array holds {len(values)} values", _HINT)
-    return values[offset + np.arange(count)[:, None] * stride + np.array(picks)]
+    # With one element the stride steps nowhere (and may be past int64); with more, the check
+    # above bounds it by the array's length.
+    step = 0 if count == 1 else stride
+    return values[offset + np.arange(count)[:, None] * step + np.array(picks)]
 
 
 def geometry_mesh(geometry, document, where: str) -> GeometryMesh:
