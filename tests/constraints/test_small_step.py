@@ -13,12 +13,13 @@ import math
 
 import numpy as np
 import pytest
+from helpers.joints import make_joint
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import scenes, unit_quats
 
 from p3d_cli.constraints import parse_scene, scalar, small_step, solve_scene
+from p3d_cli.constraints.hinge import frames as hinge_frames
 from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by_many
-from p3d_cli.constraints.rows import hinge_frames
 from p3d_cli.constraints.solver import RANK_RTOL
 from p3d_cli.errors import RangeError, SceneError
 
@@ -195,7 +196,7 @@ def test_hinge_frames_agree(axis, tilt, flip):
     zb /= (-1 if flip else 1) * np.linalg.norm(zb)
     x, y, _, s = hinge_frames(za[None], zb[None])
     identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-    hinge = scalar.make_joint("hinge", 0, 1, [0.0] * 3, [0.0] * 3, True, True, [0.0] * 6, [identity, identity], "",
+    hinge = make_joint("hinge", 0, 1, [0.0] * 3, [0.0] * 3, True, True, [0.0] * 6, [identity, identity], "",
                               (za.tolist(), zb.tolist()))
     errors = hinge.evaluate([0.0] * 6, [identity, identity])
     _, _, fx, fy = hinge._state
