@@ -4,8 +4,8 @@ scalar form (its module's ``SmallJoint``, a ``Joint``) shares.
 For a scene of a few bodies, a numpy call (~1 µs of overhead on arrays of 3-20 numbers) costs
 more than the arithmetic it does: a quaternion update is ~50 float operations, ~2 µs in Python
 and ~15 µs as a dozen numpy calls. ``small_step`` therefore keeps a small scene's state as lists
-of floats and does everything per constraint here (per body in ``body_kernels``), leaving numpy only the
-island-sized linear algebra. The formulas are those of ``rotation`` and of the constraint type
+of floats and does everything per constraint in the joints (per body in ``body_kernels``),
+leaving numpy only the island-sized linear algebra. The formulas are those of ``rotation`` and of the constraint type
 modules' array forms, in the same order of operations where that is cheap, so results agree
 with the array code to rounding (~1e-16 relative).
 

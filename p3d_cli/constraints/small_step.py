@@ -4,9 +4,10 @@
 which is what a large scene needs; but a scene of a few bodies then pays ~1-2 µs of call
 overhead for arrays of 3-20 numbers, about 150 calls a step. Here the per-body and
 per-constraint work (drift, quaternions, the constraints' errors and the variable entries of
-their rows) is plain float arithmetic (``scalar``, ``body_kernels``), and numpy does only what
-grows with the square of an island's rows (``small_islands``): its dense system ``J W Jᵀ``,
-factorised once per step, and the products with it. The step is the one of ``simulation``
+their rows) is plain float arithmetic (each type's ``SmallJoint`` on ``scalar.Joint``, and
+``body_kernels``), and numpy does only what grows with the square of an island's rows
+(``small_islands``): its dense system ``J W Jᵀ``, factorised once per step, and the products
+with it. The step is the one of ``simulation``
 (docs/solve.md, "Stepping"), with the same position-correction iterates: some sums are taken
 in another order, and a few formulas are cheaper ones equal to rounding (the correction's
 unrefined gain, its small turns by series, bodies of revolution's inertia along their axis),
