@@ -125,6 +125,13 @@ class MassProperties:
         largest-magnitude component positive.
     second_moments : (3, 3) float64 or None
         ``∫ (x - c)(x - c)ᵀ dm`` about the centre of mass (``inertia = tr(S) E - S``).
+    principal_quaternion : (4,) float64 or None
+        The principal frame as a unit quaternion ``[w, x, y, z]`` (``w >= 0``): the rotation
+        taking the world axes to the principal axes (its matrix has the axes as columns, so it
+        is MJCF's ``<inertial quat=...>``, and ``I = R diag(principal_moments) Rᵀ``). Set with
+        ``principal_axes`` by what computes them (``p3d_cli.geometry.inertia.principal_rotation``).
+    principal_rpy : (3,) float64 or None
+        The same rotation as URDF roll, pitch, yaw (radians).
     """
 
     volume: float
@@ -138,26 +145,8 @@ class MassProperties:
     second_moments: np.ndarray | None
     about: np.ndarray | None = None
     inertia_about: np.ndarray | None = None
-
-    @property
-    def principal_quaternion(self) -> np.ndarray | None:
-        """The principal frame as a unit quaternion ``[w, x, y, z]`` (``w >= 0``): the rotation
-        taking the world axes to the principal axes (its matrix has the axes as columns, so it
-        is MJCF's ``<inertial quat=...>``, and ``I = R diag(principal_moments) Rᵀ``)."""
-        if self.principal_axes is None:
-            return None
-        from p3d_cli.geometry.rotation import matrix_quaternion
-
-        return matrix_quaternion(self.principal_axes.T)
-
-    @property
-    def principal_rpy(self) -> np.ndarray | None:
-        """The same rotation as ``principal_quaternion`` as URDF roll, pitch, yaw (radians)."""
-        if self.principal_axes is None:
-            return None
-        from p3d_cli.geometry.rotation import matrix_rpy
-
-        return matrix_rpy(self.principal_axes.T)
+    principal_quaternion: np.ndarray | None = None
+    principal_rpy: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -42,11 +42,7 @@ CALLBACK = re.compile(r"^_repr_[a-z]+_$")
 
 #: Imports from a higher floor that stand today, each with its reason. Keep it short: a new
 #: entry needs the lead's word.
-KNOWN_CLIMBS = {
-    # MassProperties.principal_quaternion / principal_rpy convert the principal axes with the
-    # rotation maths below them (results is a leaf that geometry imports for its value types).
-    ("p3d_cli.results", "p3d_cli.geometry.rotation"),
-}
+KNOWN_CLIMBS: set[tuple[str, str]] = set()
 
 
 def module_name(path: Path) -> str:

@@ -21,6 +21,6 @@ def solve_with_pictures(path: str, scene, steps: int, dt: float, trajectory: str
     if plot:
         write_plot(motion, plot, title=os.path.basename(path), inputs=[path])
     if animate:
-        write_animation(motion, body_triangles(scene, os.path.dirname(os.path.abspath(path))), animate,
+        write_animation(motion, body_triangles(scene), animate,
                         inputs=[path], scene=scene)
     return result

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.constraints import scalar
 from p3d_cli.constraints.rotation import skew
 
 #: The keys of its scene entry besides ``type``, ``a`` and ``b`` (docs/solve.md).
@@ -45,3 +46,42 @@ def position_error(spec, geo) -> np.ndarray:
 def impulse(geo, lam: np.ndarray) -> dict:
     """The impulse on body ``b`` (world frame)."""
     return {"impulse": lam.copy()}
+
+
+class Rows:
+    """The array form (``rows.RowSet``): the rows of every ball joint of a scene at once.
+
+    Also a hinge's first three rows (``hinge.Rows`` holds one for its hinges).
+    """
+
+    body_vectors: tuple = ()
+
+    def __init__(self, specs, ks: np.ndarray, offsets: np.ndarray) -> None:
+        self.ks = ks
+        self.rows = offsets[ks][:, None] + np.arange(3)
+        self.flat = self.rows.ravel()
+
+    def template(self, ja: np.ndarray, jb: np.ndarray) -> None:
+        ja[self.rows, np.arange(3)] = -1.0
+        jb[self.rows, np.arange(3)] = 1.0
+
+    def errors(self, geo, g: int, out: np.ndarray) -> None:
+        out[self.rows] = geo.gap[self.ks]
+
+    def jacobian(self, geo, g: int, ja: np.ndarray, jb: np.ndarray) -> None:
+        # [-E, [r_a]ₓ] and [E, -[r_b]ₓ] (the ±E are the template's).
+        ja[self.flat, 3:] = (geo.r_a[self.ks][:, _SKEW_PICK] * _SKEW_SIGN).reshape(-1, 3)
+        jb[self.flat, 3:] = (geo.r_b[self.ks][:, _SKEW_PICK] * -_SKEW_SIGN).reshape(-1, 3)
+
+
+#: ``[r]ₓ`` row-major as ``r[_SKEW_PICK] * _SKEW_SIGN`` (``rotation.skew``).
+_SKEW_PICK = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
+_SKEW_SIGN = np.array([0.0, -1, 1, 1, 0, -1, -1, 1, 0])
+
+
+class SmallJoint(scalar.Joint):
+    """The scalar form (``small_step``): its errors are the gap, its rows ``scalar.Joint``'s."""
+
+    __slots__ = ()
+    rows = EQUATIONS
+    evaluate = scalar.Joint.points

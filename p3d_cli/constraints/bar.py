@@ -8,10 +8,12 @@ apart (the bar in compression), negative pulls them together; ``a`` receives ``-
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from p3d_cli.constraints import values
-from p3d_cli.constraints.rotation import cross, quat_to_matrix
+from p3d_cli.constraints import scalar, values
+from p3d_cli.constraints.rotation import cross, cross_rows, quat_to_matrix
 from p3d_cli.errors import SceneError
 
 #: The keys of its scene entry besides ``type``, ``a`` and ``b`` (docs/solve.md).
@@ -54,9 +56,14 @@ def direction(geo) -> np.ndarray:
     d = geo.p_b - geo.p_a
     norm = float(np.linalg.norm(d))
     if norm == 0.0:
-        raise SceneError(geo.where or "bar", "the attachment points have come together, so the bar has "
-                         "no direction", "use a ball joint to join two points, or a smaller --dt")
+        raise met_error(geo.where)
     return d / norm
+
+
+def met_error(where: str) -> SceneError:
+    """The error of a bar whose attachment points have met (it has no direction)."""
+    return SceneError(where or "bar", "the attachment points have come together, so the bar has "
+                      "no direction", "use a ball joint to join two points, or a smaller --dt")
 
 
 def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
@@ -75,3 +82,75 @@ def position_error(spec, geo) -> np.ndarray:
 def impulse(geo, lam: np.ndarray) -> dict:
     """The impulse on ``b`` along the bar (scalar) and as a world vector."""
     return {"impulse": float(lam[0]), "impulse_vector": lam[0] * direction(geo)}
+
+
+class Rows:
+    """The array form (``rows.RowSet``): the rows of every bar of a scene at once."""
+
+    body_vectors: tuple = ()
+
+    def __init__(self, specs, ks: np.ndarray, offsets: np.ndarray) -> None:
+        self.ks = ks
+        self.rows = offsets[ks]
+        self.length = np.array([specs[k].length for k in ks], dtype=np.float64)
+        self.where = [specs[k].where for k in ks]
+
+    def template(self, ja: np.ndarray, jb: np.ndarray) -> None:
+        """No constant entries."""
+
+    def errors(self, geo, g: int, out: np.ndarray) -> None:
+        gap = geo.gap[self.ks]
+        out[self.rows] = np.sqrt((gap * gap).sum(axis=1)) - self.length
+
+    def jacobian(self, geo, g: int, ja: np.ndarray, jb: np.ndarray) -> None:
+        d = directions(geo.gap[self.ks], self.where)
+        rows = self.rows
+        ja[rows, :3], jb[rows, :3] = -d, d
+        ja[rows, 3:] = -cross_rows(geo.r_a[self.ks], d)
+        jb[rows, 3:] = cross_rows(geo.r_b[self.ks], d)
+
+
+def directions(gap: np.ndarray, where) -> np.ndarray:
+    """Unit vectors along (b, 3) bar gaps; a bar whose points met is one ``SceneError``."""
+    norm = np.sqrt((gap * gap).sum(axis=1))
+    if not norm.all():
+        raise met_error(where[int(np.flatnonzero(norm == 0.0)[0])])
+    return gap / norm[:, None]
+
+
+class SmallJoint(scalar.Joint):
+    """The scalar form (``small_step``): the distance minus the length; ``[-d, -(r_a × d)]`` and
+    ``[d, r_b × d]``."""
+
+    __slots__ = ("length",)
+    rows = EQUATIONS
+    constants = ()
+    single_row = True
+    length: float
+
+    def configure(self, spec, rot) -> None:
+        self.length = float(spec.length or 0.0)
+
+    def evaluate(self, com, rot) -> list[float]:
+        gap = self.points(com, rot)
+        ra, rb = self._state
+        norm = math.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
+        self._state = (ra, rb, gap, norm)
+        return [norm - self.length]
+
+    def columns(self) -> list[tuple[int, int]]:
+        return [(0, j) for j in range(6)]
+
+    def entries(self) -> list[float]:
+        """``[-d, -(r_a × d)]`` and ``[d, r_b × d]``, ``d`` the unit vector from ``p_a`` to ``p_b``."""
+        ra, rb, gap, norm = self._state
+        if norm == 0.0:
+            raise met_error(self.where)
+        d = (gap[0] / norm, gap[1] / norm, gap[2] / norm)
+        out: list[float] = []
+        if self.free_a:
+            ca = scalar.cross(ra, d)
+            out += [-d[0], -d[1], -d[2], -ca[0], -ca[1], -ca[2]]
+        if self.free_b:
+            out += [*d, *scalar.cross(rb, d)]
+        return out

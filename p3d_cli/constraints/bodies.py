@@ -51,13 +51,13 @@ def parse_shape_spec(text: str, where: str):
         raise SceneError(where, f"{text!r}: {exc.what}", exc.hint) from None
 
 
-def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
-    """Volume moments of a primitive spec, or of a mesh file relative to ``scene_dir``.
+def shape_moments(spec_or_path: str, where: str) -> Moments:
+    """Volume moments of a primitive spec, or of a mesh file.
 
     Parameters
     ----------
     spec_or_path : str
-    scene_dir : str
+        A primitive spec, or a mesh path as the scene resolved it (``BodySpec.shape_path``).
     where : str
         The place in the scene, for messages.
 
@@ -78,11 +78,10 @@ def shape_moments(spec_or_path: str, scene_dir: str, where: str) -> Moments:
             except RangeError as exc:      # named by the body that gives the shape
                 raise RangeError(where, f"{spec_or_path!r}: {exc.what}", exc.hint) from None
         else:
-            path = spec_or_path if os.path.isabs(spec_or_path) else os.path.join(scene_dir, spec_or_path)
             from p3d_cli.measure import as_solid, solid_moments
 
             try:
-                moments = solid_moments(as_solid(path))
+                moments = solid_moments(as_solid(spec_or_path))
             except P3DError as exc:
                 raise SceneError(where, f"cannot use mesh {spec_or_path!r}: {exc.message}",
                                  "fix or re-export the mesh") from None
@@ -99,7 +98,7 @@ def shape_key(body) -> str:
     return os.path.realpath(body.shape_path) if body.shape_path else body.shape
 
 
-def resolve_inertials(bodies, scene_dir: str, counter: dict | None = None) -> dict:
+def resolve_inertials(bodies) -> dict:
     """``Inertial`` of each body given, integrating each distinct shape once.
 
     Parameters
@@ -107,9 +106,6 @@ def resolve_inertials(bodies, scene_dir: str, counter: dict | None = None) -> di
     bodies : iterable of BodySpec
         Free bodies whose mass properties are needed, or fixed ones whose centre is needed
         (a fixed body gets an ``Inertial`` with mass ``inf``).
-    scene_dir : str
-    counter : dict, optional
-        Filled with shape key -> number of integrations (for tests and diagnostics).
 
     Returns
     -------
@@ -119,11 +115,11 @@ def resolve_inertials(bodies, scene_dir: str, counter: dict | None = None) -> di
     cache: dict[str, Moments] = {}
     out = {}
     for body in bodies:
-        out[body.name] = _inertial(body, scene_dir, cache, counter)
+        out[body.name] = _inertial(body, cache)
     return out
 
 
-def _inertial(body, scene_dir, cache, counter) -> Inertial:
+def _inertial(body, cache) -> Inertial:
     if body.parts is not None:
         return _parts_inertial(body)
     need_shape = body.shape is not None and (
@@ -132,9 +128,7 @@ def _inertial(body, scene_dir, cache, counter) -> Inertial:
     if need_shape:
         key = shape_key(body)
         if key not in cache:
-            cache[key] = shape_moments(body.shape_path or body.shape, scene_dir, f"{body.where}.shape")
-            if counter is not None:
-                counter[key] = counter.get(key, 0) + 1
+            cache[key] = shape_moments(body.shape_path or body.shape, f"{body.where}.shape")
         moments = cache[key]
     com = body.center_of_mass
     if com is None:

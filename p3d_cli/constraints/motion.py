@@ -9,7 +9,6 @@ gravity (``-Σ m g·x``, zero at the world origin), and every constraint's posit
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,8 +81,7 @@ class Motion:
         return axis * angle
 
 
-def record_motion(scene, *, steps: int, dt: float, samples: int = SAMPLES, on_step=None,
-                  scene_dir: str | None = None):
+def record_motion(scene, *, steps: int, dt: float, samples: int = SAMPLES, on_step=None):
     """Step ``scene`` as ``solve_scene`` does and keep its motion.
 
     Parameters
@@ -121,9 +119,8 @@ def record_motion(scene, *, steps: int, dt: float, samples: int = SAMPLES, on_st
         if round(t / dt) % every == 0 or round(t / dt) == steps:
             states.append((t, bodies))
 
-    folder = scene_dir or os.getcwd()
-    result = solve_scene(scene, steps=steps, dt=dt, on_step=keep, scene_dir=folder)
-    inertials = resolve_inertials(needed_bodies(scene, True, True), folder)
+    result = solve_scene(scene, steps=steps, dt=dt, on_step=keep)
+    inertials = resolve_inertials(needed_bodies(scene, True, True))
     world = World(scene, inertials)
     start = (0.0, tuple(_initial(world)))
     return result, _motion(world, [start] + states, every)

@@ -1,15 +1,25 @@
 """Every constraint's rows at once: the arrays of one scene, prepared once, evaluated per step.
 
-``ball``, ``hinge`` and ``bar`` define each constraint type one constraint at a time, which is
-the clearest statement of its equations and what reporting uses. Stepping evaluates the same
-equations thousands of times, where a Python loop over constraints costs far more than the
-arithmetic; ``RowSet`` holds the per-scene constants (body indices, attachment offsets from the
-centres of mass, axes, lengths, where each row goes) as arrays, so that one evaluation is a
-fixed handful of numpy calls whatever the number of constraints.
+A constraint type's module defines it one constraint at a time (``jacobian``, ``position_error``),
+which is the clearest statement of its equations and what reporting uses. Stepping evaluates the
+same equations thousands of times, where a Python loop over constraints costs far more than the
+arithmetic; so each type's module also gives its array form, ``Rows``: the per-scene constants
+of that type's constraints as arrays, and their errors and rows for all of them in a fixed
+handful of numpy calls. ``RowSet`` holds what every type shares (body indices, attachment
+offsets from the centres of mass, where each constraint's rows go) and asks each type present in
+the scene, in the registry's order, for its part.
 
 Rows are in scene order: constraint 0's rows, then constraint 1's, and within a constraint in
-the order of its module (ball: the gap x, y, z; hinge: the gap, then the axis rows along
-``x`` and ``y``; bar: one row). The formulas are those of the modules, written over arrays.
+the order of its module.
+
+A type's ``Rows(specs, ks, offsets)`` (``ks`` the scene indices of its constraints) has:
+
+- ``body_vectors``: a tuple of ``(side, (t, 3) vectors)``, body-frame vectors (such as a hinge's
+  axes) of side ``"a"`` or ``"b"`` that ``geometry`` turns into the world frame with the
+  attachment offsets, in one product; the type reads them back as ``geo.turned[g]``, in order;
+- ``template(ja, jb)``: writes its rows' constant entries (the ``±E`` of a ball's rows);
+- ``errors(geo, g, out)`` and ``jacobian(geo, g, ja, jb)``: write its rows' position errors and
+  variable entries (``g`` is its place in ``geo.turned`` and ``geo.memo``).
 """
 
 from __future__ import annotations
@@ -17,7 +27,6 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
-from p3d_cli.errors import SceneError
 
 
 class Geometry:
@@ -29,21 +38,18 @@ class Geometry:
         Attachment points minus centres of mass, world frame.
     gap : (c, 3) float64
         ``p_b - p_a``, the attachment points' separation.
-    z_a, z_b : (h, 3) float64
-        World hinge axes of the hinges (in the order of ``RowSet.hinges``).
+    turned : list of tuple
+        Per type present (``RowSet.groups``' order), its ``body_vectors`` in the world frame.
+    memo : list of dict
+        Per type present, what its ``errors`` and ``jacobian`` share at this instant (a hinge's
+        frames), computed once.
     """
 
-    __slots__ = ("r_a", "r_b", "gap", "z_a", "z_b", "_frames")
+    __slots__ = ("r_a", "r_b", "gap", "turned", "memo")
 
-    def __init__(self, r_a, r_b, gap, z_a, z_b) -> None:
-        self.r_a, self.r_b, self.gap, self.z_a, self.z_b = r_a, r_b, gap, z_a, z_b
-        self._frames = None
-
-    def frames(self):
-        """``hinge_frames`` of the hinges, computed once (errors and rows both need them)."""
-        if self._frames is None:
-            self._frames = hinge_frames(self.z_a, self.z_b)
-        return self._frames
+    def __init__(self, r_a, r_b, gap, turned) -> None:
+        self.r_a, self.r_b, self.gap, self.turned = r_a, r_b, gap, turned
+        self.memo: list[dict] = [{} for _ in turned]
 
 
 class RowSet:
@@ -67,6 +73,8 @@ class RowSet:
         Constraint of each row.
     offsets : (c + 1,) int
         First row of each constraint.
+    groups : list
+        The ``Rows`` of each constraint type present, in the registry's order.
     """
 
     def __init__(self, scene, index: dict, com_body: np.ndarray) -> None:
@@ -82,114 +90,53 @@ class RowSet:
         # Attachment offsets from the centres of mass, body frames: constant for the scene.
         self.off_a = np.array([c.attach_a for c in specs]).reshape(-1, 3) - com_body[self.a]
         self.off_b = np.array([c.attach_b for c in specs]).reshape(-1, 3) - com_body[self.b]
-        kinds = [c.type for c in specs]
-        self.balls = np.array([k for k, t in enumerate(kinds) if t == "ball"], dtype=np.intp)
-        self.hinges = np.array([k for k, t in enumerate(kinds) if t == "hinge"], dtype=np.intp)
-        self.bars = np.array([k for k, t in enumerate(kinds) if t == "bar"], dtype=np.intp)
-        # Rows of each type, so that per-type results land in scene order in one assignment.
-        self.gap_rows = self.offsets[np.concatenate([self.balls, self.hinges])][:, None] + np.arange(3)
-        self.gap_of = np.concatenate([self.balls, self.hinges])
-        self.axis_rows = self.offsets[self.hinges][:, None] + np.array([3, 4])
-        self.bar_rows = self.offsets[self.bars]
-        self.axis_a = np.array([specs[k].axis_a for k in self.hinges]).reshape(-1, 3)
-        self.axis_b = np.array([specs[k].axis_b for k in self.hinges]).reshape(-1, 3)
-        self.length = np.array([specs[k].length for k in self.bars], dtype=np.float64)
-        self.rot_index = np.concatenate([self.a, self.b, self.a[self.hinges], self.b[self.hinges]])
+        self.groups = []
+        # Every body-frame vector (attachment offsets, then each type's own) turned in one product.
+        rot_index, vectors = [self.a, self.b], [self.off_a, self.off_b]
+        self._turned: list[list[tuple[int, int]]] = []
+        start = 2 * len(specs)
+        for name, module in CONSTRAINT_TYPES.items():
+            ks = np.array([k for k, c in enumerate(specs) if c.type == name], dtype=np.intp)
+            if not len(ks):
+                continue
+            rows = module.Rows(specs, ks, self.offsets)
+            self.groups.append(rows)
+            spans = []
+            for side, v in rows.body_vectors:
+                rot_index.append((self.a if side == "a" else self.b)[ks])
+                vectors.append(np.asarray(v, dtype=np.float64).reshape(-1, 3))
+                spans.append((start, start + len(ks)))
+                start += len(ks)
+            self._turned.append(spans)
+        self.rot_index = np.concatenate(rot_index)
         self.com_index = np.concatenate([self.a, self.b])
-        self.body_vectors = np.concatenate([self.off_a, self.off_b, self.axis_a, self.axis_b])[:, :, None]
-        # The constant entries of the rows (±E of the ball rows) and where [r]ₓ goes.
+        self.body_vectors = np.concatenate(vectors)[:, :, None]
         self.template_a, self.template_b = np.zeros((self.m, 6)), np.zeros((self.m, 6))
-        self.template_a[self.gap_rows, np.arange(3)] = -1.0
-        self.template_b[self.gap_rows, np.arange(3)] = 1.0
-        self.gap_rows_flat = self.gap_rows.ravel()
-        self.bar_where = [self.where[k] for k in self.bars]
+        for rows in self.groups:
+            rows.template(self.template_a, self.template_b)
 
     def geometry(self, com: np.ndarray, rot: np.ndarray) -> Geometry:
         """World geometry at centres of mass ``com`` (n, 3) and rotations ``rot`` (n, 3, 3)."""
-        c, h = len(self.a), len(self.hinges)
-        # Every body-frame vector (attachment offsets, then hinge axes) turned in one product.
+        c = len(self.a)
         v = (rot[self.rot_index] @ self.body_vectors)[:, :, 0]
         p = com[self.com_index] + v[:2 * c]
-        return Geometry(v[:c], v[c:2 * c], p[c:] - p[:c], v[2 * c:2 * c + h], v[2 * c + h:])
+        turned = [tuple(v[s:e] for s, e in spans) for spans in self._turned]
+        return Geometry(v[:c], v[c:2 * c], p[c:] - p[:c], turned)
 
     def errors(self, geo: Geometry) -> np.ndarray:
         """(m,) position equations ``C``, scene row order (the modules' ``position_error``)."""
         out = np.empty(self.m)
-        if len(self.gap_of):
-            out[self.gap_rows] = geo.gap[self.gap_of]
-        if len(self.hinges):
-            x, y, _, s = geo.frames()
-            tilt = cross_rows(geo.z_a, s[:, None] * geo.z_b)
-            out[self.axis_rows[:, 0]] = (tilt * x).sum(axis=1)
-            out[self.axis_rows[:, 1]] = (tilt * y).sum(axis=1)
-        if len(self.bars):
-            gap = geo.gap[self.bars]
-            out[self.bar_rows] = np.sqrt((gap * gap).sum(axis=1)) - self.length
+        for g, rows in enumerate(self.groups):
+            rows.errors(geo, g, out)
         return out
 
     def jacobian(self, geo: Geometry) -> tuple[np.ndarray, np.ndarray]:
         """``(JA, JB)``, each (m, 6): row ``i`` is ``JA[i] · u[row_a[i]] + JB[i] · u[row_b[i]]``."""
         ja, jb = self.template_a.copy(), self.template_b.copy()
-        g, rows = self.gap_of, self.gap_rows_flat
-        if len(g):
-            # Ball rows (also a hinge's first three): [-E, [r_a]ₓ] and [E, -[r_b]ₓ].
-            ja[rows, 3:] = (geo.r_a[g][:, _SKEW_PICK] * _SKEW_SIGN).reshape(-1, 3)
-            jb[rows, 3:] = (geo.r_b[g][:, _SKEW_PICK] * -_SKEW_SIGN).reshape(-1, 3)
-        if len(self.hinges):
-            x, y, _, _ = geo.frames()
-            ja[self.axis_rows[:, 0], 3:], jb[self.axis_rows[:, 0], 3:] = -x, x
-            ja[self.axis_rows[:, 1], 3:], jb[self.axis_rows[:, 1], 3:] = -y, y
-        if len(self.bars):
-            d = bar_directions(geo.gap[self.bars], self.bar_where)
-            rows = self.bar_rows
-            ja[rows, :3], jb[rows, :3] = -d, d
-            ja[rows, 3:] = -cross_rows(geo.r_a[self.bars], d)
-            jb[rows, 3:] = cross_rows(geo.r_b[self.bars], d)
+        for g, rows in enumerate(self.groups):
+            rows.jacobian(geo, g, ja, jb)
         return ja, jb
 
     def apply(self, ja: np.ndarray, jb: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(m,) ``J u`` for body motions ``u`` (n, 6)."""
         return (ja * u[self.row_a] + jb * u[self.row_b]).sum(axis=1)
-
-
-#: ``[r]ₓ`` row-major as ``r[_SKEW_PICK] * _SKEW_SIGN`` (``rotation.skew``).
-_SKEW_PICK = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
-_SKEW_SIGN = np.array([0.0, -1, 1, 1, 0, -1, -1, 1, 0])
-
-
-def hinge_frames(z_a: np.ndarray, z_b: np.ndarray):
-    """``(x, y, z, s)`` of ``hinge.frame`` for (h, 3) axis pairs: ``z`` the bisector of the axes
-    (``z_b`` flipped by ``s`` when it points away), ``x`` the world axis least aligned with
-    ``z`` made perpendicular, ``y = z × x``."""
-    s = np.where((z_a * z_b).sum(axis=1) >= 0, 1.0, -1.0)
-    z = z_a + s[:, None] * z_b
-    # Unit axes with z_a · s z_b >= 0 give |z|² = 2 + 2|z_a · z_b| >= 2: never zero.
-    z /= np.sqrt((z * z).sum(axis=1))[:, None]
-    pick = np.argmin(np.abs(z), axis=1)
-    # x = e_pick - z_pick z, the seed axis made perpendicular (as hinge.frame computes it).
-    x = _EYE[pick] - z.ravel()[3 * np.arange(len(z)) + pick][:, None] * z
-    x /= np.sqrt((x * x).sum(axis=1))[:, None]
-    return x, cross_rows(z, x), z, s
-
-
-_EYE = np.eye(3)
-_NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
-
-
-def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a × b`` row by row for (c, 3) arrays, in few numpy calls."""
-    return a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]
-
-
-def bar_directions(gap: np.ndarray, where) -> np.ndarray:
-    """Unit vectors along (b, 3) bar gaps; a bar whose points met is one ``SceneError``."""
-    norm = np.sqrt((gap * gap).sum(axis=1))
-    if not norm.all():
-        raise bar_met_error(where[int(np.flatnonzero(norm == 0.0)[0])])
-    return gap / norm[:, None]
-
-
-def bar_met_error(where: str) -> SceneError:
-    """The error of a bar whose attachment points have met (it has no direction)."""
-    return SceneError(where or "bar", "the attachment points have come together, so the bar has "
-                      "no direction", "use a ball joint to join two points, or a smaller --dt")

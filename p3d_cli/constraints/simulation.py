@@ -7,14 +7,12 @@ This is the function behind ``p3d solve``; the CLI only parses options and forma
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
 from p3d_cli.constraints import small_step
 from p3d_cli.constraints.bodies import resolve_inertials
 from p3d_cli.constraints.outcome import BodyState, ConstraintOutcome, SolveResult
-from p3d_cli.constraints.solver import DENSE_LIMIT
 from p3d_cli.constraints.world import World
 from p3d_cli.errors import RangeError, UsageError
 
@@ -57,9 +55,7 @@ def _known_without_integration(body) -> bool:
     return body.fixed or (body.mass is not None and body.inertia is not None)
 
 
-def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None, centers: bool = False,
-                dense_limit: int = DENSE_LIMIT, scene_dir: str | None = None,
-                shape_counter: dict | None = None) -> SolveResult:
+def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None) -> SolveResult:
     """Solve a scene's constraints once, or advance it ``steps`` steps of ``dt``.
 
     Parameters
@@ -72,17 +68,9 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
     dt : float, optional
         Time step; required when ``steps > 0``.
     on_step : callable, optional
-        Called after every step as ``on_step(t, bodies)`` with the tuple of ``BodyState``.
-    centers : bool
-        Resolve every body's centre of mass (a trajectory reports them), integrating fixed
-        bodies' shapes if need be.
-    dense_limit : int
-        Islands with more equations use the sparse solver.
-    scene_dir : str, optional
-        Folder mesh paths are relative to (default: the current folder; ``load_scene`` keeps
-        resolved paths, so this only matters for scenes built by hand).
-    shape_counter : dict, optional
-        Filled with how often each distinct shape was integrated.
+        Called after every step as ``on_step(t, bodies)`` with the tuple of ``BodyState``;
+        then every body's centre of mass is resolved (a trajectory reports them), fixed
+        bodies' shapes integrated if need be.
 
     Raises
     ------
@@ -93,14 +81,13 @@ def solve_scene(scene, *, steps: int = 0, dt: float | None = None, on_step=None,
         system) overflows float64 or is not a number: never nan in a result.
     """
     check_steps(steps, dt, scene)
-    inertials = resolve_inertials(needed_bodies(scene, steps > 0, centers or on_step is not None),
-                                  scene_dir or os.getcwd(), shape_counter)
+    inertials = resolve_inertials(needed_bodies(scene, steps > 0, on_step is not None))
     # Overflow is found by the explicit checks of ``_solve`` (``_check_inverses``, ``_check_totals``,
     # ``_check_state``, the impulses in ``_result``), which name what
     # overflowed: numpy's warnings would only repeat it, a dozen lines at a time.
     with np.errstate(all="ignore"):
         try:
-            return _solve(scene, inertials, steps, dt, on_step, dense_limit)
+            return _solve(scene, inertials, steps, dt, on_step)
         except np.linalg.LinAlgError:
             # The constraint system's entries grow as (attachment - centre of mass)² / inertia; an
             # eigen-decomposition fails only when they are no longer finite.
@@ -133,8 +120,8 @@ def check_steps(steps: int, dt: float | None = None, scene=None) -> None:
         raise UsageError("dt", "stepping needs a positive, finite time step", "give dt=, e.g. dt=0.001")
 
 
-def _solve(scene, inertials, steps, dt, on_step, dense_limit) -> SolveResult:
-    world = World(scene, inertials, dense_limit)
+def _solve(scene, inertials, steps, dt, on_step) -> SolveResult:
+    world = World(scene, inertials)
     _check_inverses(world)
     before = (world.kinetic_energy(), world.momentum(), world.angular_momentum())
     _check_totals(scene, before, "before the solve")

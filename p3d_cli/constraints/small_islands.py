@@ -75,9 +75,8 @@ class _Island:
                     continue
                 c0 = column[body]
                 index += [(first + r) * width + c0 + c for r, c in joint.columns()]
-                if joint.kind != "bar":
-                    for i in range(3):
-                        self.jac[first + i, c0 + i] = sign
+                for r, c in joint.constants:
+                    self.jac[first + r, c0 + c] = sign
             first += joint.rows
         self.index = np.array(index, dtype=np.intp)
         self.weights = np.zeros((width, width))

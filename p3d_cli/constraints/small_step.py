@@ -4,9 +4,10 @@
 which is what a large scene needs; but a scene of a few bodies then pays ~1-2 µs of call
 overhead for arrays of 3-20 numbers, about 150 calls a step. Here the per-body and
 per-constraint work (drift, quaternions, the constraints' errors and the variable entries of
-their rows) is plain float arithmetic (``scalar``, ``body_kernels``), and numpy does only what
-grows with the square of an island's rows (``small_islands``): its dense system ``J W Jᵀ``,
-factorised once per step, and the products with it. The step is the one of ``simulation``
+their rows) is plain float arithmetic (each type's ``SmallJoint`` on ``scalar.Joint``, and
+``body_kernels``), and numpy does only what grows with the square of an island's rows
+(``small_islands``): its dense system ``J W Jᵀ``, factorised once per step, and the products
+with it. The step is the one of ``simulation``
 (docs/solve.md, "Stepping"), with the same position-correction iterates: some sums are taken
 in another order, and a few formulas are cheaper ones equal to rounding (the correction's
 unrefined gain, its small turns by series, bodies of revolution's inertia along their axis),
@@ -29,7 +30,7 @@ import numpy as np
 
 from p3d_cli.constraints.body_kernels import (axis_of_revolution, carry_spin, carry_spin_axial, carry_spin_diagonal,
                                               conjugate, conjugate_axial, conjugate_diagonal, nudge, turn)
-from p3d_cli.constraints.scalar import Hinge, make_joint
+from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.constraints.small_islands import _Island, _Single
 from p3d_cli.constraints.solver import ImpulseSolution
 
@@ -67,16 +68,12 @@ class SmallStep:
         self.quat = [tuple(q) for q in world.quat.tolist()]
         self.rot = world.rot.reshape(-1, 9).tolist()
         active = world.active.tolist()
-        hinge = {k: h for h, k in enumerate(rs.hinges.tolist())}
         joints = []
         for k, spec in enumerate(world.scene.constraints):
             a, b = int(rs.a[k]), int(rs.b[k])
-            h = hinge.get(k)
-            axes = None if h is None else (rs.axis_a[h].tolist(), rs.axis_b[h].tolist())
-            joint = make_joint(spec.type, a, b, rs.off_a[k].tolist(), rs.off_b[k].tolist(), active[a], active[b],
-                               self.com, self.rot, spec.where, axes, float(spec.length or 0.0))
-            joints.append(joint)
-        self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].rows == 1 else _Island)
+            joints.append(make_joint(spec, a, b, rs.off_a[k].tolist(), rs.off_b[k].tolist(), active[a], active[b],
+                                     self.com, self.rot))
+        self.islands = [(_Single if len(isl.constraints) == 1 and joints[isl.constraints[0]].single_row else _Island)
                         (isl, joints, rs.offsets, self.inv_mass) for isl in world.islands]
         self.lam: list = [np.zeros(island.m) for island in self.islands]   # minus the last multipliers
         # Moving bodies in no island (no joint to a free body): kicked on their own.
@@ -253,16 +250,21 @@ class SmallStep:
                                ranks)
 
 
+def make_joint(spec, a: int, b: int, off_a, off_b, free_a: bool, free_b: bool, com, rot):
+    """The scalar form (its type module's ``SmallJoint``) of constraint ``spec`` between bodies
+    ``a`` and ``b``, with attachment offsets ``off_a``, ``off_b`` from their centres (body frames)."""
+    joint = CONSTRAINT_TYPES[spec.type].SmallJoint(a, b, off_a, off_b, free_a, free_b, com, rot, spec.where)
+    joint.configure(spec, rot)
+    return joint
+
+
 def _axis_columns(n: int, axial, joints) -> list:
     """For each body, the column ``j`` of its rotation matrix that is all the step reads of it
     (its inertia's axis of revolution, and every joint on it attached on, and hinged about,
     that body axis: a chain's link, a rod), or None (the whole matrix is kept)."""
     read: list = [set() for _ in range(n)]
     for joint in joints:
-        sides = [(joint.a, joint.free_a, joint.axial_a), (joint.b, joint.free_b, joint.axial_b)]
-        if isinstance(joint, Hinge):          # and the hinge's axis on each side
-            sides += [(joint.a, joint.free_a, joint.along_a), (joint.b, joint.free_b, joint.along_b)]
-        for body, free, along in sides:
+        for body, free, along in joint.sides():
             if free:
                 read[body].add(None if along is None else along[0])
     out: list = [None] * n

@@ -15,7 +15,7 @@ factorises every island's system for one set of rows; the ``Factorisation`` it r
 any number of right-hand sides (the position correction of a step reuses the one of the
 velocity solve that ended the previous step: same rows, same matrix). Three paths:
 
-- **dense** (at most ``dense_limit`` rows): an eigendecomposition (pseudo-inverse with a
+- **dense** (at most ``DENSE_LIMIT`` rows): an eigendecomposition (pseudo-inverse with a
   relative tolerance) and one step of iterative refinement. Islands of the same size are
   stacked and decomposed in one batched call, so many small islands cost one call, not many.
 - **body space** (more rows than the island's ``6 nb`` degrees of freedom, which are at most
@@ -118,10 +118,12 @@ class SystemPlan:
     rows : RowSet
     active : (n,) bool
         Free bodies with mass properties.
-    dense_limit : int
+
+    An island of at most ``DENSE_LIMIT`` equations is solved dense (the module's value, read
+    when the plan is made).
     """
 
-    def __init__(self, islands, rows, active, dense_limit: int = DENSE_LIMIT) -> None:
+    def __init__(self, islands, rows, active) -> None:
         self.m = rows.m
         self.offsets = rows.offsets
         self.islands = islands
@@ -131,7 +133,7 @@ class SystemPlan:
         for isl in islands:
             m = sum(int(rows.offsets[k + 1] - rows.offsets[k]) for k in isl.constraints)
             dof = 6 * len(isl.bodies)
-            if m <= dense_limit:
+            if m <= DENSE_LIMIT:
                 group = self.dense.setdefault((m, len(isl.bodies)), [])
                 self.order.append(("dense", (m, len(isl.bodies)), len(group)))
                 group.append(isl)

@@ -18,7 +18,7 @@ from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.constraints.rotation import quat_to_matrix, quat_to_matrix_many, rotate_by_many
 from p3d_cli.constraints.rows import RowSet
-from p3d_cli.constraints.solver import DENSE_LIMIT, PendingSolution, SystemPlan
+from p3d_cli.constraints.solver import PendingSolution, SystemPlan
 
 
 class World:
@@ -29,10 +29,9 @@ class World:
     _rows_cache: Any = None
     _factor: Any = None
 
-    def __init__(self, scene, inertials: dict, dense_limit: int = DENSE_LIMIT) -> None:
+    def __init__(self, scene, inertials: dict) -> None:
         n = len(scene.bodies)
         self.scene = scene
-        self.dense_limit = dense_limit
         self.index = {b.name: i for i, b in enumerate(scene.bodies)}
         self.fixed = np.array([b.fixed for b in scene.bodies], dtype=bool)
         self.active = np.array([(not b.fixed) and b.name in inertials for b in scene.bodies], dtype=bool)
@@ -68,7 +67,7 @@ class World:
         for a, b in self.pairs:
             self.constrained[a] = self.constrained[b] = True
         self.rowset = RowSet(scene, self.index, self.com_body)
-        self.plan = SystemPlan(self.islands, self.rowset, self.active, dense_limit)
+        self.plan = SystemPlan(self.islands, self.rowset, self.active)
         self.moving = np.flatnonzero(self.active)
         self._update_inverse_inertia()
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from p3d_cli.errors import RangeError, UsageError
+from p3d_cli.geometry.rotation import matrix_quaternion, matrix_rpy
 from p3d_cli.results import MassProperties, Moments
 from p3d_cli.warning_codes import CodedWarning
 
@@ -46,6 +47,13 @@ def shifted_inertia(inertia_com: np.ndarray, mass: float, center: np.ndarray, po
     """
     d = np.asarray(center, dtype=np.float64) - np.asarray(point, dtype=np.float64)
     return inertia_com + mass * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+
+
+def principal_rotation(axes: np.ndarray) -> dict[str, np.ndarray]:
+    """The rotation of a principal frame (``principal_frame``'s axes as columns), as the
+    ``MassProperties`` fields ``principal_quaternion`` (``[w, x, y, z]``, MJCF) and
+    ``principal_rpy`` (URDF roll, pitch, yaw)."""
+    return {"principal_quaternion": matrix_quaternion(axes.T), "principal_rpy": matrix_rpy(axes.T)}
 
 
 def principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -189,7 +197,8 @@ def mass_properties(moments: Moments, *, density: float | None = None, mass: flo
             _check_finite(where, "the inertia about the point given", inertia_about)
     principal, axes = principal_frame(inertia)
     return MassProperties(moments.volume, density, total, moments.center.copy(), inertia,
-                          inertia_origin, principal, axes, second, about_point, inertia_about)
+                          inertia_origin, principal, axes, second, about_point, inertia_about,
+                          **principal_rotation(axes))
 
 
 def _check_normal(where: str, moments: Moments, mass: float, second: np.ndarray) -> None:
@@ -276,4 +285,4 @@ def combine_mass_properties(parts, about=None) -> MassProperties:
     inertia_about = None if about_point is None else shifted_inertia(inertia, total, center, about_point)
     return MassProperties(volume, total / volume if volume else 0.0, total, center, inertia,
                           shifted_inertia(inertia, total, center, np.zeros(3)), principal, axes, second,
-                          about_point, inertia_about)
+                          about_point, inertia_about, **principal_rotation(axes))

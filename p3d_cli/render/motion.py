@@ -143,9 +143,10 @@ def write_plot(motion, path: str, *, title: str = "", inputs: Iterable[str] = ()
     write_bytes(path, data.getvalue(), inputs=inputs, what="the plot")
 
 
-def body_triangles(scene, scene_dir: str, segments: int = 32) -> list[np.ndarray]:
-    """Each body's triangles in its own frame: its shape or parts; a body given only by its
-    mass properties is drawn as its equivalent uniform box (a small cube without them)."""
+def body_triangles(scene, segments: int = 32) -> list[np.ndarray]:
+    """Each body's triangles in its own frame: its shape (a mesh path as the scene resolved it
+    against its folder) or parts; a body given only by its mass properties is drawn as its
+    equivalent uniform box (a small cube without them)."""
     from p3d_cli.render.geometry import scene_triangles
 
     out = []

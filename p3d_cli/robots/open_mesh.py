@@ -75,7 +75,8 @@ def shell_properties(triangles: np.ndarray, mass: float, where: str) -> MassProp
     InputError
         The surface has no area.
     """
-    from p3d_cli.geometry.inertia import inertia_from_second_moments, principal_frame, shifted_inertia
+    from p3d_cli.geometry.inertia import (inertia_from_second_moments, principal_frame, principal_rotation,
+                                          shifted_inertia)
 
     t = np.asarray(triangles, dtype=np.float64)
     a, b, c = t[:, 0], t[:, 1], t[:, 2]
@@ -94,7 +95,8 @@ def shell_properties(triangles: np.ndarray, mass: float, where: str) -> MassProp
     inertia = inertia_from_second_moments(second)
     principal, axes = principal_frame(inertia)
     origin = shifted_inertia(inertia, mass, center, np.zeros(3))
-    return MassProperties(0.0, sigma, float(mass), center, inertia, origin, principal, axes, second)
+    return MassProperties(0.0, sigma, float(mass), center, inertia, origin, principal, axes, second,
+                          **principal_rotation(axes))
 
 
 def placed_triangles(solid, placement) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -29,10 +31,18 @@ constraints:
     return load_scene(str(tmp_path / "scene.yaml"), "scene.yaml")
 
 
-def test_each_distinct_mesh_is_integrated_once(cube_scene, tmp_path):
-    counter = {}
-    result = solve_scene(cube_scene, shape_counter=counter)
-    assert counter == {str((tmp_path / "cube.stl").resolve()): 1}
+def test_each_distinct_mesh_is_integrated_once(cube_scene, tmp_path, monkeypatch):
+    integrated = []
+    real = bodies_module.shape_moments
+
+    def count(spec, where):
+        integrated.append(spec)
+        return real(spec, where)
+
+    monkeypatch.setattr(bodies_module, "shape_moments", count)
+    result = solve_scene(cube_scene)
+    # cube.stl and ./cube.stl are one file: integrated once, for the first body needing it.
+    assert [str(pathlib.Path(p).resolve()) for p in integrated] == [str((tmp_path / "cube.stl").resolve())]
     # 'one' (density 2) and 'two' (mass 3) both took the cube's properties; the cube's centre
     # (0.5, 0.5, 0.5) is each body's centre of mass.
     states = {b.name: b for b in result.bodies}
@@ -44,9 +54,9 @@ def test_bodies_that_give_everything_and_fixed_or_resting_bodies_are_never_integ
     calls = []
     real = bodies_module.shape_moments
 
-    def spy(spec, scene_dir, where):
+    def spy(spec, where):
         calls.append(where)
-        return real(spec, scene_dir, where)
+        return real(spec, where)
 
     monkeypatch.setattr(bodies_module, "shape_moments", spy)
     solve_scene(cube_scene)
@@ -91,7 +101,7 @@ def test_primitive_spec_gives_the_box_inertia():
     scene = parse_scene({"bodies": {"g": {"fixed": True},
                                     "slab": {"shape": "box:1,1,0.1", "density": 7800, "velocity": [0, 0, 1]}},
                          "constraints": [{"type": "ball", "a": "g", "b": "slab", "attach_a": [0, 0, 0]}]}, "s", ".")
-    inertial = bodies_module.resolve_inertials([scene.bodies[1]], ".")["slab"]
+    inertial = bodies_module.resolve_inertials([scene.bodies[1]])["slab"]
     mass = 7800 * 2 * 2 * 0.2
     assert inertial.mass == pytest.approx(mass)
     np.testing.assert_allclose(np.diag(inertial.inertia),

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from p3d_cli.constraints import parse_scene, solve_scene
+from p3d_cli.constraints import parse_scene, solve_scene, solver
 from p3d_cli.constraints.rotation import quat_to_matrix
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
@@ -74,9 +74,14 @@ def scenes(draw, allow_fixed=True, min_bodies=2, max_bodies=5):
     return {"bodies": bodies, "constraints": constraints}
 
 
-def solve_data(data, **kw):
+def solve_data(data, dense_limit: int | None = None, **kw):
+    """(scene, result) of ``data``; ``dense_limit`` replaces the solver's ``DENSE_LIMIT`` (0: no
+    island is solved dense)."""
     scene = parse_scene(data, "scene.yaml", ".")
-    return scene, solve_scene(scene, **kw)
+    with pytest.MonkeyPatch.context() as m:
+        if dense_limit is not None:
+            m.setattr(solver, "DENSE_LIMIT", dense_limit)
+        return scene, solve_scene(scene, **kw)
 
 
 def world_points(scene, result):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from p3d_cli.constraints import parse_scene, solve_scene
+from p3d_cli.constraints import parse_scene, solve_scene, solver
 from p3d_cli.constraints.rotation import quat_to_matrix
 
 BODIES = {
@@ -21,9 +21,14 @@ BODIES = {
 BALL = {"type": "ball", "a": "a", "b": "b", "attach_a": [0.5, 0, 0]}
 
 
-def copies(n: int, **kw):
+def copies(n: int, dense_limit: int | None = None, **kw):
+    """(scene, result) of ``n`` copies of ``BALL``; ``dense_limit`` replaces the solver's
+    ``DENSE_LIMIT``."""
     scene = parse_scene({"bodies": BODIES, "constraints": [dict(BALL) for _ in range(n)]}, "dups", ".")
-    return scene, solve_scene(scene, **kw)
+    with pytest.MonkeyPatch.context() as m:
+        if dense_limit is not None:
+            m.setattr(solver, "DENSE_LIMIT", dense_limit)
+        return scene, solve_scene(scene, **kw)
 
 
 def dense_minimum_norm(scene, n: int) -> np.ndarray:

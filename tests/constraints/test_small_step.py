@@ -13,12 +13,13 @@ import math
 
 import numpy as np
 import pytest
+from helpers.joints import make_joint
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import scenes, unit_quats
 
 from p3d_cli.constraints import parse_scene, scalar, small_step, solve_scene
+from p3d_cli.constraints.hinge import frames as hinge_frames
 from p3d_cli.constraints.rotation import quat_to_matrix, rotate_by_many
-from p3d_cli.constraints.rows import hinge_frames
 from p3d_cli.constraints.solver import RANK_RTOL
 from p3d_cli.errors import RangeError, SceneError
 
@@ -65,13 +66,13 @@ def test_generated_scenes_step_alike_on_both_paths(data, diagonal):
                 body["inertia"] = [float(np.trace(np.array(body["inertia"]))) / 3.0] * 3
     scene = parse_scene({"gravity": [0, 0, -9.81], **data}, "scene.yaml", ".")
     try:
-        fast, slow, taken = both_paths(scene, steps=10, dt=1e-3, centers=True)
+        fast, slow, taken = both_paths(scene, steps=10, dt=1e-3)
     except SceneError:
         # A bar whose ends met: the array step says so too.
         with pytest.MonkeyPatch.context() as m:
             m.setattr(small_step, "fits", lambda world: False)
             with pytest.raises(SceneError):
-                solve_scene(scene, steps=10, dt=1e-3, centers=True)
+                solve_scene(scene, steps=10, dt=1e-3)
         return
     assert taken, "a generated scene of at most 5 bodies takes the small step"
     scale = 1.0 + max(max(float(np.abs(b.velocity).max()), float(np.abs(b.angular_velocity).max()))
@@ -163,7 +164,7 @@ def test_a_large_scene_takes_the_array_step():
     from p3d_cli.constraints.simulation import needed_bodies
     from p3d_cli.constraints.world import World
 
-    world = World(scene, resolve_inertials(needed_bodies(scene, True, False), ".", None))
+    world = World(scene, resolve_inertials(needed_bodies(scene, True, False)))
     assert world.rowset.m == 3 * links > small_step.SMALL_ROWS
     assert not small_step.fits(world)
 
@@ -195,7 +196,7 @@ def test_hinge_frames_agree(axis, tilt, flip):
     zb /= (-1 if flip else 1) * np.linalg.norm(zb)
     x, y, _, s = hinge_frames(za[None], zb[None])
     identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-    hinge = scalar.make_joint("hinge", 0, 1, [0.0] * 3, [0.0] * 3, True, True, [0.0] * 6, [identity, identity], "",
+    hinge = make_joint("hinge", 0, 1, [0.0] * 3, [0.0] * 3, True, True, [0.0] * 6, [identity, identity], "",
                               (za.tolist(), zb.tolist()))
     errors = hinge.evaluate([0.0] * 6, [identity, identity])
     _, _, fx, fy = hinge._state

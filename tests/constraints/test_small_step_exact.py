@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+from helpers.joints import make_joint
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import unit_quats
 
@@ -77,8 +78,8 @@ def test_axial_offsets_and_axes_give_the_general_numbers(qa, qb, off_a, off_b, c
     axis_a, axis_b = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
     axis_a[off_b[0]], axis_b[off_a[0]] = 1.0, -1.0
     for kind in ("ball", "hinge", "bar"):
-        fast = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", (axis_a, axis_b), 0.3)
-        slow = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", (axis_a, axis_b), 0.3)
+        fast = make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", (axis_a, axis_b), 0.3)
+        slow = make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", (axis_a, axis_b), 0.3)
         assert fast.axial_a == (off_a[0], off_a[1]) and fast.axial_b == (off_b[0], off_b[1])
         slow.axial_a = slow.axial_b = None
         if kind == "hinge":
@@ -90,10 +91,10 @@ def test_axial_offsets_and_axes_give_the_general_numbers(qa, qb, off_a, off_b, c
 
 
 def test_an_offset_off_the_axes_or_not_finite_takes_the_general_form():
-    assert scalar._axial([0.0, 0.1, 0.0]) == (1, 0.1)
-    assert scalar._axial([0.1, 0.1, 0.0]) is None
-    assert scalar._axial([0.0, 0.0, 0.0]) is None
-    assert scalar._axial([0.0, math.inf, 0.0]) is None
+    assert scalar.axial([0.0, 0.1, 0.0]) == (1, 0.1)
+    assert scalar.axial([0.1, 0.1, 0.0]) is None
+    assert scalar.axial([0.0, 0.0, 0.0]) is None
+    assert scalar.axial([0.0, math.inf, 0.0]) is None
 
 
 @settings(max_examples=200, deadline=None)
@@ -107,14 +108,14 @@ def test_the_both_sides_axial_path_gives_the_general_numbers(qa, qb, off_a, off_
     oa[off_a[0]], ob[off_b[0]] = off_a[1], off_b[1]
     axes = ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0])
     for kind in ("ball", "hinge", "bar"):
-        fast = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
-        slow = scalar.make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
+        fast = make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
+        slow = make_joint(kind, 0, 1, oa, ob, True, True, com, rot, "here", axes, 0.3)
         assert fast._both_axial is not None
         slow._both_axial = slow.axial_a = slow.axial_b = None
         assert fast.evaluate(com, rot) == slow.evaluate(com, rot)
         if kind != "bar" or slow._state[3] != 0.0:
             assert fast.entries() == slow.entries()
-        fixed = scalar.make_joint(kind, 0, 1, oa, ob, False, True, com, rot, "here", axes, 0.3)
+        fixed = make_joint(kind, 0, 1, oa, ob, False, True, com, rot, "here", axes, 0.3)
         assert fixed._both_axial is None
 
 

@@ -16,12 +16,12 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from helpers.joints import make_joint
 from hypothesis import given, settings, strategies as st
 from test_constraint_solver import unit_quats
 from test_small_step import assert_same, both_paths
 
 from p3d_cli.constraints import body_kernels, parse_scene, scalar, small_step
-from p3d_cli.constraints.scalar import make_joint
 from p3d_cli.constraints.rotation import quat_to_matrix
 from p3d_cli.constraints.small_islands import _Factor
 
