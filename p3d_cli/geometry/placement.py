@@ -394,7 +394,7 @@ def prescaled(placement: Placement, exponent: int, where: str = "placement") -> 
     if not np.all(np.isfinite(scale)) or np.any(np.abs(scale) < np.finfo(np.float64).tiny):
         from p3d_cli.errors import RangeError
 
-        raise RangeError(where, "the part is too " + ("large" if exponent < 0 else "small") + " for float64 "
+        raise RangeError(where, "the part is too " + ("small" if exponent < 0 else "large") + " for float64 "
                          "even after the scale given", "measure it in a unit nearer its size")
     errors = None if placement.errors is None else PlacementErrors(np.ldexp(e.scale, exponent), e.rotation,
                                                                    e.translation)

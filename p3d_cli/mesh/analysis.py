@@ -289,10 +289,14 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
 
 def _exponent(extent: float) -> int:
     """The ``k`` that brings ``extent·2**k`` into [0.5, 1) when ``extent`` lies outside
-    ``2**±RESCALE_BEYOND`` (else 0; and 0 for a flat or infinite extent)."""
+    ``2**±RESCALE_BEYOND`` (else 0; and 0 for a flat or infinite extent).
+
+    At most 1023, the largest ``k`` whose ``2**k`` is finite: a part below 2**-1023 (subnormal
+    coordinates) is scaled exactly as far as that goes, and the range checks after scaling back
+    refuse what then underflows."""
     if not (0 < extent < np.inf) or 2.0 ** -RESCALE_BEYOND <= extent <= 2.0 ** RESCALE_BEYOND:
         return 0
-    return -int(np.frexp(extent)[1])
+    return min(-int(np.frexp(extent)[1]), 1023)
 
 
 def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: Unbalanced,

@@ -58,6 +58,24 @@ def test_a_part_whose_inertia_underflows_is_refused_in_one_line(tmp_path, size):
         assert result.stderr.count("\n") == 1 and "too small" in result.stderr
 
 
+def test_a_part_of_subnormal_size_is_refused_as_too_small_or_measured_when_scaled_up(tmp_path):
+    # Its 2**k (k past 1023) overflowed to an internal error before (found by fuzzing a VTP).
+    triangles = WEDGE * 1e-310                     # subnormal coordinates: what they are, exactly
+    with pytest.raises(RangeError, match="too small"):
+        p3d.props(triangles)
+    path = tmp_path / "subnormal.obj"
+    v = triangles.reshape(-1, 3)
+    path.write_text("".join("v %r %r %r\n" % tuple(p) for p in v.tolist())
+                    + "".join(f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}\n" for i in range(len(v) // 3)))
+    result = CliRunner().invoke(cli, ["props", str(path)])
+    assert result.exit_code == 2 and "internal error" not in result.output
+    assert result.stderr.count("\n") == 1 and "too small" in result.stderr
+    placement = Placement(scale=np.full(3, 1e300))
+    scaled = p3d.props(triangles, placement)
+    exact = ExactPart.of_triangles(triangles).placed(placement.scale, None, None)
+    assert max(error_ratios(scaled, whole_of(exact)).values()) <= 1.0
+
+
 def test_a_density_that_makes_the_inertia_underflow_is_refused():
     with pytest.raises(RangeError, match="underflow"):
         p3d.props(WEDGE * 1e-50, density=1e-100)
