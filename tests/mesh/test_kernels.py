@@ -399,3 +399,25 @@ def test_placed_indexed_mesh_has_its_bounds(scale):
     assert np.array_equal(obj.facts.bounds.min, stl.facts.bounds.min)
     assert np.array_equal(obj.facts.bounds.max, stl.facts.bounds.max)
     assert bits(obj.properties.center_of_mass).tolist() == bits(stl.properties.center_of_mass).tolist()
+
+
+@pytest.mark.parametrize("n, dtype", [(1, np.float32), (129, np.float64), (65536, np.float32),
+                                      (70001, np.float64), (140000, np.float32)])
+def test_shell_volume_is_the_numpy_codes(n, dtype):
+    """A listed shell's volume (``shells._volume``): the kernels' blocks give the bits of
+    ``triangle_moments``, on blocks of 65,536 and their remainders."""
+    from p3d_cli.mesh.shells import _volume
+
+    rng = np.random.default_rng(n)
+    faces = (rng.standard_normal((n, 3, 3)) * 10 + 3).astype(dtype)
+    fast = _volume(faces)
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = _volume(faces)
+    finally:
+        kernels.KERNELS = saved
+    if SAME_BITS:
+        assert bits(fast) == bits(slow)
+    else:
+        assert fast == pytest.approx(slow, rel=1e-12)
