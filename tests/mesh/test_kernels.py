@@ -410,6 +410,9 @@ def test_shell_volume_is_the_numpy_codes(n, dtype):
 
     rng = np.random.default_rng(n)
     faces = (rng.standard_normal((n, 3, 3)) * 10 + 3).astype(dtype)
+    faces[..., 0] = np.maximum(faces[..., 0], 0)          # a bound of 0 beside a nonzero one
+    if n % 2:
+        faces[..., 2] = rng.choice([0.0, -0.0], faces.shape[:2])   # both bounds ±0: numpy's
     fast = _volume(faces)
     saved = kernels.KERNELS
     kernels.KERNELS = None
@@ -421,3 +424,46 @@ def test_shell_volume_is_the_numpy_codes(n, dtype):
         assert bits(fast) == bits(slow)
     else:
         assert fast == pytest.approx(slow, rel=1e-12)
+
+
+@given(st.integers(1, 300), st.integers(0, 600), st.integers(0, 2**32 - 1))
+@settings(max_examples=60)
+def test_components_roots_are_the_numpy_rounds(size, arcs, seed):
+    """``shells.chunked_roots`` by the compiled union-find (arcs in pieces) gives the numpy
+    rounds' array: every node's smallest fellow."""
+    from p3d_cli.mesh.shells import chunked_roots
+
+    rng = np.random.default_rng(seed)
+    a, b = rng.integers(0, size, arcs), rng.integers(0, size, arcs)
+    pieces = lambda: ((a[lo:lo + 50], b[lo:lo + 50]) for lo in range(0, arcs, 50))   # noqa: E731
+    fast = chunked_roots(size, pieces)
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = chunked_roots(size, pieces)
+    finally:
+        kernels.KERNELS = saved
+    assert np.array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_vertex_confirmation_is_the_numpy_codes(dtype):
+    """``vertices.group_corners``' second pass by the kernels (``confirm`` and the volume's
+    block sums): the same ids, points and volume bits as the numpy code, ``-0.0`` among them."""
+    from p3d_cli.mesh.vertices import group_corners
+
+    rng = np.random.default_rng(7)
+    points = rng.integers(-3, 4, (400, 3)).astype(dtype) * dtype(0.25)
+    faces = points[rng.integers(0, 400, (5000, 3))]
+    faces[::7] *= -1.0                                  # -0.0 where 0.0 was
+    blocks = lambda: (faces[lo:lo + 999] for lo in range(0, len(faces), 999))   # noqa: E731
+    fast = group_corners(blocks, len(faces))
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = group_corners(blocks, len(faces))
+    finally:
+        kernels.KERNELS = saved
+    assert np.array_equal(fast.ids, slow.ids) and np.array_equal(fast.first, slow.first)
+    assert fast.points.dtype == slow.points.dtype and np.array_equal(bits(fast.points), bits(slow.points))
+    assert bits(fast.volume) == bits(slow.volume)
