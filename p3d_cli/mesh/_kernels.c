@@ -1114,6 +1114,8 @@ static PyObject *py_paired_keys(PyObject *self, PyObject *args) {
 static PyObject *py_distinct(PyObject *self, PyObject *args);
 static PyObject *py_forward_block(PyObject *self, PyObject *args);
 static PyObject *py_keys_block(PyObject *self, PyObject *args);
+static PyObject *py_unite(PyObject *self, PyObject *args);
+static PyObject *py_flatten(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1888,6 +1890,8 @@ static PyMethodDef methods[] = {
     {"forward_block", py_forward_block, METH_VARARGS,
      "forward_block(block, ox, oy, oz, keys, fill, cap, shift) -> block()'s results, balance, backward sides"},
     {"keys_block", py_keys_block, METH_VARARGS, "keys_block(block, keys, fill, cap, shift) -> keys written (-1: overflow)"},
+    {"unite", py_unite, METH_VARARGS, "unite(parent, a, b): join nodes a[i] and b[i] (int64), smallest node the root"},
+    {"flatten", py_flatten, METH_VARARGS, "flatten(parent): every node pointed at its root"},
     {"star_normals", py_star_normals, METH_VARARGS, "star_normals(points, faces, shift, step, normal)"},
     {"star_signs", py_star_signs, METH_VARARGS,
      "star_signs(points, faces, normal, bound, g0, g1, good, count, deferred) -> deferred count (-1: too many)"},
@@ -2050,4 +2054,86 @@ static PyObject *py_keys_block(PyObject *self, PyObject *args) {
     PyBuffer_Release(&kview);
     PyBuffer_Release(&fview);
     return PyLong_FromSsize_t(c.overflow ? -1 : c.written);
+}
+
+/* Connected components (p3d_cli.mesh.shells.chunked_roots): a union-find whose every root is
+ * the smallest node of its component, so the result is that of the numpy rounds whatever the
+ * order of the unions. parent[x] <= x always holds (roots are linked under smaller roots, path
+ * halving only moves a node to an ancestor), so one ascending pass (flatten) points every node
+ * at its root. */
+static inline int64_t uf_root(int64_t *parent, int64_t x) {
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+static PyObject *py_unite(PyObject *self, PyObject *args) {
+    PyObject *pobj, *aobj, *bobj;
+    if (!PyArg_ParseTuple(args, "OOO", &pobj, &aobj, &bobj))
+        return NULL;
+    Py_buffer pv, av, bv;
+    if (PyObject_GetBuffer(pobj, &pv, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return NULL;
+    if (PyObject_GetBuffer(aobj, &av, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
+        PyBuffer_Release(&pv);
+        return NULL;
+    }
+    if (PyObject_GetBuffer(bobj, &bv, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) {
+        PyBuffer_Release(&pv);
+        PyBuffer_Release(&av);
+        return NULL;
+    }
+    int ok = pv.itemsize == 8 && av.itemsize == 8 && bv.itemsize == 8 && av.len == bv.len &&
+             strchr("lq", pv.format[0]) && strchr("lq", av.format[0]) && strchr("lq", bv.format[0]);
+    int64_t *parent = (int64_t *)pv.buf;
+    const int64_t *a = (const int64_t *)av.buf, *b = (const int64_t *)bv.buf;
+    Py_ssize_t size = pv.len / 8, m = av.len / 8;
+    for (Py_ssize_t i = 0; ok && i < m; i++)
+        ok = a[i] >= 0 && a[i] < size && b[i] >= 0 && b[i] < size;
+    /* parent is arange's or unite's (parent[x] <= x: its roots are reached); not checked
+     * here, which would cost a pass over all the nodes for every piece of the arcs */
+    if (ok) {
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t i = 0; i < m; i++) {
+            int64_t ra = uf_root(parent, a[i]), rb = uf_root(parent, b[i]);
+            if (ra < rb)
+                parent[rb] = ra;
+            else if (rb < ra)
+                parent[ra] = rb;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&pv);
+    PyBuffer_Release(&av);
+    PyBuffer_Release(&bv);
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError, "unite: int64 parent (parent[x] <= x) and equal int64 a, b within it");
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+static PyObject *py_flatten(PyObject *self, PyObject *args) {
+    PyObject *pobj;
+    if (!PyArg_ParseTuple(args, "O", &pobj))
+        return NULL;
+    Py_buffer pv;
+    if (PyObject_GetBuffer(pobj, &pv, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return NULL;
+    int ok = pv.itemsize == 8 && strchr("lq", pv.format[0]);
+    int64_t *parent = (int64_t *)pv.buf;
+    Py_ssize_t size = pv.len / 8;
+    for (Py_ssize_t i = 0; ok && i < size; i++)
+        ok = parent[i] >= 0 && parent[i] <= i;
+    if (ok)
+        for (Py_ssize_t i = 0; i < size; i++)
+            parent[i] = parent[parent[i]];
+    PyBuffer_Release(&pv);
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError, "flatten: int64 parent with parent[x] <= x");
+        return NULL;
+    }
+    Py_RETURN_NONE;
 }

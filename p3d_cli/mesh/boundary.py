@@ -275,8 +275,14 @@ class _Members:
 def boundary_volume(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> tuple[Fraction, float]:
     """The ``6V`` row of ``boundary_terms`` alone, ``o · Σ u × v`` (the same exact number),
     and a bound on what underflow can have taken from it (0 for any ordinary mesh)."""
+    return sides_volume(unbalanced_sides(source_blocks, unbalanced.ids, unbalanced.most), origin)
+
+
+def sides_volume(sides, origin: np.ndarray) -> tuple[Fraction, float]:
+    """``boundary_volume`` of the sides given as ``(3, m)`` start and end columns (world
+    coordinates): exact, so any order and any pairs ``u→v``, ``v→u`` besides give the same."""
     cross = WorldCross()
-    for u, v in unbalanced_sides(source_blocks, unbalanced.ids, unbalanced.most):
+    for u, v in sides:
         cross.add(u, v)
     p, lost = cross.totals()
     o = [Fraction(float(x)) for x in origin]

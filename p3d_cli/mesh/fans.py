@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p3d_cli.mesh.edges import Edges, next_corner
+from p3d_cli.mesh.edges import _PREVIOUS, Edges, corner_slot, next_corner
 from p3d_cli.mesh.shells import roots
 
 #: Fans walked step by step (one vectorised step per corner); longer ones use the union-find.
@@ -53,10 +53,11 @@ def nonmanifold_vertices(ids: np.ndarray, m: int, first_corner: np.ndarray, degr
     on_bad_edge = np.zeros(m, dtype=bool)
     if edges.nonmanifold.size:
         _mark_ends(on_bad_edge, ids, edges, edges.counts > 2)
-    walked = _walk(ids, first_corner, degree, edges, clean_pair, ~unclean)
+    twin = _twins(ids.size, edges, clean_pair)
+    walked = _walk(ids, first_corner, degree, twin, ~unclean)
     unclean |= walked == 0          # walks longer than WALK: general path
     short = (walked > 0) & (walked < degree)
-    fans = _general_fans(ids, faces, repeated, edges, unclean) if unclean.any() else None
+    fans = _general_fans(ids, faces, repeated, edges, unclean, twin) if unclean.any() else None
     bad = short if fans is None else short | ((fans > 1) & ~on_bad_edge)
     return np.flatnonzero(bad)
 
@@ -68,13 +69,12 @@ def _mark_ends(mark: np.ndarray, ids: np.ndarray, edges: Edges, groups: np.ndarr
     mark[ids[next_corner(sides.astype(np.int64))]] = True
 
 
-def _walk(ids, first_corner, degree, edges: Edges, clean_pair, clean) -> np.ndarray:
+def _walk(ids, first_corner, degree, twin: np.ndarray, clean) -> np.ndarray:
     """Length of the fan cycle through each clean vertex's first corner (0: not walked)."""
     length = np.zeros(first_corner.size, dtype=np.int32)
     vertices = np.flatnonzero(clean)
     if vertices.size == 0:
         return length
-    twin = _twins(ids.size, edges, clean_pair)
     # In slices of vertices, so that the walk's temporaries stay small beside the corners.
     for lo in range(0, vertices.size, 1 << 16):
         _walk_some(twin, first_corner, vertices[lo:lo + (1 << 16)], length)
@@ -117,17 +117,31 @@ def _twins(size: int, edges: Edges, clean_pair: np.ndarray) -> np.ndarray:
     return twin
 
 
-def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray) -> np.ndarray:
+def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray, twin: np.ndarray) -> np.ndarray:
     """Fans per vertex (for the ``selected`` vertices; 0 elsewhere), by union-find on the
     corners at those vertices only (so an open mesh with a few boundary vertices pays for a
-    few corners, not for all of them)."""
+    few corners, not for all of them).
+
+    Two corners at a vertex are joined when their faces share an edge used by exactly two
+    faces there. For the clean pairs, each selected corner's two sides (the one leaving it and
+    the one arriving at it) lead to their twins (``twin``); the misoriented pairs, which have
+    no twin there, are read from their groups."""
     point_face = (faces[:, 0] == faces[:, 1]) & (faces[:, 1] == faces[:, 2])
     # Corners of faces with three equal corners touch nothing: leave them out of the count.
     corners = np.flatnonzero(selected[ids] & ~np.repeat(point_face, 3))
     if corners.size == 0:
         return np.zeros(selected.size, dtype=np.int64)
     a, b = [], []
-    pair_start = np.flatnonzero(edges.counts == 2)
+    for lo in range(0, corners.size, 1 << 16):
+        at = corners[lo:lo + (1 << 16)]
+        vertex = ids[at]
+        for side in (at, at + _PREVIOUS[corner_slot(at)]):
+            other = twin[side].astype(np.int64)
+            paired = other >= 0
+            other = other[paired]
+            a.append(at[paired])    # either side's corner at the vertex is the selected corner
+            b.append(np.where(ids[other] == vertex[paired], other, next_corner(other)))
+    pair_start = edges.misoriented
     for lo in range(0, pair_start.size, 1 << 16):
         first = edges.starts[pair_start[lo:lo + (1 << 16)]].astype(np.int64)
         s1, s2 = edges.side[first].astype(np.int64), edges.side[first + 1].astype(np.int64)

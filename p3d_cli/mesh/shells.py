@@ -13,8 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from p3d_cli.mesh.columns import origin_from_bounds
 from p3d_cli.mesh.edges import Edges
-from p3d_cli.mesh.integrals import triangle_moments
+from p3d_cli.mesh.integrals import MomentSums, triangle_moments
+from p3d_cli.mesh.kernels import compiled, takes
 from p3d_cli.mesh.report import Shell
 
 #: Shells listed individually (largest first); more are counted but not listed.
@@ -38,6 +40,13 @@ def chunked_roots(size: int, arcs) -> np.ndarray:
     arrays, and is called once per round (so the edges are never held whole)."""
     # int64 throughout: numpy gathers with int64 indices about twice as fast as with int32.
     parent = np.arange(size, dtype=np.int64)
+    fast = compiled()
+    if fast is not None:
+        # One compiled union-find pass: its roots are the smallest nodes too, so the same array.
+        for a, b in arcs():
+            fast.unite(parent, np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64))
+        fast.flatten(parent)
+        return parent
     # First round: every node is its own root, so point each node at its smallest
     # neighbour (both ways) without looking roots up; fewer rounds follow than with hooking.
     for a, b in arcs():
@@ -151,6 +160,26 @@ def shell_volumes(blocks, n: int, found: Components, volume: float) -> list[Shel
     out = []
     for k, label in enumerate(chosen.tolist()):
         faces = np.concatenate(parts[k]) if len(parts[k]) > 1 else parts[k][0]
-        out.append(Shell(int(sizes[label]), int(first_face[k]),
-                                float(triangle_moments(faces).volume)))
+        out.append(Shell(int(sizes[label]), int(first_face[k]), _volume(faces)))
     return out
+
+
+def _volume(faces: np.ndarray, block: int = 65536) -> float:
+    """``triangle_moments(faces).volume``, by the compiled kernels when built: the same
+    origin (the bounds' centre) and the same blocks, summed with the same bits
+    (``p3d_cli.mesh.kernels``). An axis whose two bounds are both ±0 goes to numpy: the
+    centre's sign is then that of numpy's min and max (a zero bound beside a nonzero one
+    leaves the centre's bits alone); so does a block the kernels do not read."""
+    fast = compiled()
+    if fast is None or not takes(faces) or not faces.size:
+        return float(triangle_moments(faces).volume)
+    box, finite = fast.bounds(faces)
+    box = np.array(box)
+    if not finite or ((box[:3] == 0) & (box[3:] == 0)).any():
+        return float(triangle_moments(faces).volume)
+    sums = MomentSums(origin_from_bounds(box[:3], box[3:], faces.dtype == np.float32))
+    for start in range(0, len(faces), block):
+        part = faces[start:start + block]
+        _, _, totals, magnitude, weighted, _ = fast.block(part, *sums.origin, None, 0)
+        sums.add_sums(np.array(totals), magnitude, np.array(weighted), len(part))
+    return float(sums.moments().volume)

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from p3d_cli.mesh.boundary import boundary_volume, unbalanced_of
+from p3d_cli.mesh.boundary import SIDE_BLOCK, boundary_volume, sides_volume, unbalanced_of
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
@@ -176,7 +176,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyRepo
     duplicates = duplicate_faces(faces, _duplicate_candidates(n, edges, found, repeated))
     zero = np.concatenate(zero_area) if zero_area else np.zeros(0, dtype=np.int64)
     layout = Layout(ids, m, found, zero, _crowded(edges, ids), _open_shells(edges, found), edges, duplicates)
-    volume = _volume(blocks, corners, edges)
+    volume = _volume(blocks, corners, edges, ids)
     edge_samples = [_edge_samples(edges, groups, ids)
                     for groups in (edges.boundary, edges.nonmanifold, edges.misoriented)]
     vertex_samples = [int(v) for v in nonmanifold[:SAMPLES]]
@@ -211,13 +211,23 @@ def _crowded(edges: Edges, ids: np.ndarray) -> np.ndarray:
 
 def _open_shells(edges: Edges, found: Components) -> np.ndarray:
     """The shells that hold a boundary, non-manifold or misoriented edge."""
-    groups = np.concatenate([edges.boundary, edges.nonmanifold, edges.misoriented])
+    groups = _problem_groups(edges)
     if groups.size == 0:
         return np.zeros(0, dtype=np.int64)
+    return np.unique(found.labels[edges.side[_group_sides(edges, groups)] // 3]).astype(np.int64)
+
+
+def _problem_groups(edges: Edges) -> np.ndarray:
+    """The edge groups that are not one side each way: boundary, non-manifold, misoriented."""
+    return np.concatenate([edges.boundary, edges.nonmanifold, edges.misoriented])
+
+
+def _group_sides(edges: Edges, groups: np.ndarray) -> np.ndarray:
+    """Positions in ``edges.side`` of every side of the given groups, group by group."""
     counts = edges.counts[groups].astype(np.int64)
     sides = np.repeat(edges.starts[groups].astype(np.int64), counts)
     sides += np.arange(sides.size) - np.repeat(np.cumsum(counts) - counts, counts)
-    return np.unique(found.labels[edges.side[sides] // 3]).astype(np.int64)
+    return sides
 
 
 def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
@@ -244,12 +254,35 @@ def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
     )
 
 
-def _volume(blocks, corners, edges: Edges) -> float:
+def _volume(blocks, corners, edges: Edges, ids: np.ndarray) -> float:
     """The signed volume ``p3d props`` reports for the same triangles (one convention,
     docs/method.md, "Open and non-manifold meshes"): the local sums when every edge cancels,
-    plus the net boundary's exact volume term when some does not (``p3d_cli.mesh.boundary``)."""
-    if not (edges.boundary.size or edges.nonmanifold.size or edges.misoriented.size):
+    plus the net boundary's exact volume term when some does not (``p3d_cli.mesh.boundary``).
+
+    The edges whose two directions are not used equally often are found from the exact
+    edges at hand; their sides are those ``boundary.unbalanced_sides`` reads for ``p3d props``
+    (the sides of the unbalanced edge keys), and their exact term is the same number. A soup,
+    where ``props`` reads every side instead, takes ``props``' own road."""
+    groups = _problem_groups(edges)
+    if groups.size == 0:
         return corners.volume                       # closed: nothing to add
+    at = _group_sides(edges, groups)
+    side = edges.side[at].astype(np.int64)
+    after = next_corner(side)
+    step = np.where(ids[side] < ids[after], 1, -1)
+    counts = edges.counts[groups].astype(np.int64)
+    net = np.add.reduceat(step, np.cumsum(counts) - counts)
+    odd = np.repeat(net != 0, counts)
+    chosen = int(odd.sum())
+    if chosen == 0:
+        return corners.volume                       # non-manifold but bounding
+    if 2 * chosen <= edges.side.size:
+        ends = corner_coords(blocks, np.concatenate([side[odd], after[odd]]))
+        start, end = ends[:chosen], ends[chosen:]
+        six_volume, _ = sides_volume(((np.ascontiguousarray(start[lo:lo + SIDE_BLOCK].T),
+                                       np.ascontiguousarray(end[lo:lo + SIDE_BLOCK].T))
+                                      for lo in range(0, chosen, SIDE_BLOCK)), corners.volume_sums.origin)
+        return corners.volume_sums.volume(six_volume)
     unbalanced = unbalanced_of(blocks)
     if unbalanced.ids.size == 0:
         return corners.volume                       # non-manifold but bounding

@@ -399,3 +399,4 @@ def test_placed_indexed_mesh_has_its_bounds(scale):
     assert np.array_equal(obj.facts.bounds.min, stl.facts.bounds.min)
     assert np.array_equal(obj.facts.bounds.max, stl.facts.bounds.max)
     assert bits(obj.properties.center_of_mass).tolist() == bits(stl.properties.center_of_mass).tolist()
+

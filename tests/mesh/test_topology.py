@@ -209,3 +209,30 @@ def test_real_meshes_match_reference_topology(real_meshes, reference):
             assert r.volume == pytest.approx(entry["volume"], rel=1e-9), name
         checked.append(name)
     assert any(n.lower().endswith(".stl") for n in checked), "no real STL mesh was checked"
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["holes", "flips", "doubled", "soup"]))
+def test_open_volume_from_the_exact_edges_is_the_hashed_roads(seed, kind):
+    """The volume of a mesh with unbalanced edges takes its boundary term from the exact edges
+    ``topology`` found; it is the number the edge keys' road (``p3d props``') gives, bit for bit."""
+    from p3d_cli.mesh.boundary import boundary_volume, unbalanced_of
+    from p3d_cli.mesh.vertices import group_corners
+
+    rng = np.random.default_rng(seed)
+    t = np.concatenate([cube_triangles() + rng.integers(-3, 4, 3) for _ in range(3)])
+    t = t * rng.choice([1.0, 0.1, 1e-3, 7.3])
+    if kind == "holes":
+        t = np.delete(t, rng.choice(len(t), 4, replace=False), axis=0)
+    elif kind == "flips":
+        t[rng.choice(len(t), 3, replace=False)] = t[rng.choice(len(t), 3, replace=False)][:, ::-1]
+    elif kind == "doubled":
+        t = np.concatenate([t, t[rng.choice(len(t), 5)][:, ::-1], t[rng.choice(len(t), 2)]])
+    else:
+        t = t + rng.normal(0, 1e-3, (len(t), 1, 3))
+    blocks = lambda: iter([t])          # noqa: E731
+    corners = group_corners(blocks, len(t))
+    unbalanced = unbalanced_of(blocks)
+    expected = corners.volume
+    if unbalanced.ids.size:
+        expected = corners.volume_sums.volume(boundary_volume(blocks(), unbalanced, corners.volume_sums.origin)[0])
+    assert np.float64(topology(t).volume).view(np.uint64) == np.float64(expected).view(np.uint64)

@@ -1,0 +1,72 @@
+"""Shells: the listed shells' volumes and the components' roots, by the kernels and by numpy.
+
+Each test runs the same input through the compiled kernels and through the numpy code they
+replace (``kernels.KERNELS`` set to None) and compares the results bit for bit; skipped where
+the kernels are not built, except under CI, whose install compiles them (as
+``test_kernels.py``).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from p3d_cli.mesh import kernels
+
+if kernels.KERNELS is None and os.environ.get("CI") != "true":
+    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
+#: Same bits from numpy 2.3 on (``test_kernels.SAME_BITS``).
+SAME_BITS = np.lib.NumpyVersion(np.__version__) >= "2.3.0"
+
+
+def bits(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.float64).view(np.uint64)
+
+
+@pytest.mark.parametrize("n, dtype", [(1, np.float32), (129, np.float64), (65536, np.float32),
+                                      (70001, np.float64), (140000, np.float32)])
+def test_shell_volume_is_the_numpy_codes(n, dtype):
+    """A listed shell's volume (``shells._volume``): the kernels' blocks give the bits of
+    ``triangle_moments``, on blocks of 65,536 and their remainders."""
+    from p3d_cli.mesh.shells import _volume
+
+    rng = np.random.default_rng(n)
+    faces = (rng.standard_normal((n, 3, 3)) * 10 + 3).astype(dtype)
+    faces[..., 0] = np.maximum(faces[..., 0], 0)          # a bound of 0 beside a nonzero one
+    if n % 2:
+        faces[..., 2] = rng.choice([0.0, -0.0], faces.shape[:2])   # both bounds ±0: numpy's
+    fast = _volume(faces)
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = _volume(faces)
+    finally:
+        kernels.KERNELS = saved
+    if SAME_BITS:
+        assert bits(fast) == bits(slow)
+    else:
+        assert fast == pytest.approx(slow, rel=1e-12)
+
+
+@given(st.integers(1, 300), st.integers(0, 600), st.integers(0, 2**32 - 1))
+@settings(max_examples=60)
+def test_components_roots_are_the_numpy_rounds(size, arcs, seed):
+    """``shells.chunked_roots`` by the compiled union-find (arcs in pieces) gives the numpy
+    rounds' array: every node's smallest fellow."""
+    from p3d_cli.mesh.shells import chunked_roots
+
+    rng = np.random.default_rng(seed)
+    a, b = rng.integers(0, size, arcs), rng.integers(0, size, arcs)
+    pieces = lambda: ((a[lo:lo + 50], b[lo:lo + 50]) for lo in range(0, arcs, 50))   # noqa: E731
+    fast = chunked_roots(size, pieces)
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        slow = chunked_roots(size, pieces)
+    finally:
+        kernels.KERNELS = saved
+    assert np.array_equal(fast, slow)
