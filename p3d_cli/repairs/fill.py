@@ -63,6 +63,10 @@ class Hole:
         A hole of no area closed by splitting the face across it
         (``p3d_cli.repairs.junctions``): that face, and the triangle that takes its place
         (``triangles`` are then the split's other triangles).
+    projected : bool
+        ``triangles`` are an ear clipping of the loop seen exactly on a coordinate plane (step
+        2 of the module docstring): they meet each other only in the edges and corners they
+        share (``p3d_cli.repairs.solidity`` does not test their pairs).
     """
 
     vertices: np.ndarray
@@ -73,6 +77,7 @@ class Hole:
     triangles: np.ndarray | None = None
     reason: str | None = None
     replaced: tuple[int, np.ndarray] | None = None
+    projected: bool = False
 
     @property
     def filled(self) -> bool:
@@ -133,6 +138,7 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
                     f"over the limit {flatness:g}", flat)
     if policy == "flat" and k > max_edges:
         return left(f"larger than the limit: {k} edges, over {max_edges}", flat)
+    projected = False
     if k == 3:
         # A loop of three corners is its own triangulation (what ear clipping gives it, in its
         # winding), simple whenever it has an area: only the exact area test is left. The many
@@ -142,19 +148,20 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
         found = _triangulated(corners, relative, normal, length, vertices, policy, has_edge)
         if isinstance(found, str):
             return left(found, flat)
-        triangles = found
+        triangles, projected = found
     if triangles is not None and zero_area_faces(columns(np.asarray(points, dtype=np.float64)[triangles])).size:
         triangles = None
     if triangles is None:
         return left("every triangulation of it would repeat an edge the mesh already has "
                     "(making it non-manifold) or make a face of zero area", flat)
-    return Hole(vertices, k, where, size, flat, triangles, None)
+    return Hole(vertices, k, where, size, flat, triangles, None, projected=projected)
 
 
 def _triangulated(corners: np.ndarray, relative: np.ndarray, normal: np.ndarray, length: float,
-                  vertices: np.ndarray, policy: str, has_edge) -> np.ndarray | str | None:
-    """Ear clipping of a loop of four corners or more, seen along its normal: its triangles,
-    None when clipping gets stuck, or why the loop cannot be filled (it crosses itself)."""
+                  vertices: np.ndarray, policy: str, has_edge) -> tuple[np.ndarray | None, bool] | str:
+    """Ear clipping of a loop of four corners or more, seen along its normal: its triangles
+    (None when clipping gets stuck) and whether they were clipped on a coordinate plane, or
+    why the loop cannot be filled (it crosses itself)."""
     axis = int(np.argmax(np.abs(normal)))
     plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
     safe = in_safe_range(plane)
@@ -168,7 +175,8 @@ def _triangulated(corners: np.ndarray, relative: np.ndarray, normal: np.ndarray,
         safe = in_safe_range(plane)
         if not _simple(plane, safe):
             return "seen along its normal the loop crosses itself"
-    return _ear_clipping(plane, vertices, safe, has_edge)
+        return _ear_clipping(plane, vertices, safe, has_edge), False
+    return _ear_clipping(plane, vertices, safe, has_edge), True
 
 
 def _in_own_plane(relative: np.ndarray, unit_normal: np.ndarray) -> np.ndarray:

@@ -150,12 +150,13 @@ def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
     """The holes, with those whose filling crosses or overlaps another face left."""
     if len(draft.faces) == start:
         return found
-    fillings, position = [], start
+    fillings, projected, position = [], [], start
     for hole, _ in found:
         if hole.filled:
             fillings.append(np.arange(position, position + len(hole.triangles)))
+            projected.append(hole.projected)
             position += len(hole.triangles)
-    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings).tolist())
+    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings, projected).tolist())
     out = []
     for hole, around in found:
         if hole.filled and next(crossing):
