@@ -41,6 +41,8 @@ MIXED = np.iinfo(np.int64).min
 BATCH = 1 << 18
 #: Triangles walking the tree together on the numpy road (bounds the frontier).
 WALK = 1024
+#: The compiled walk's first output size, in pairs (grown when one triangle's do not fit).
+OUTPUTS = 1 << 16
 
 
 def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
@@ -182,7 +184,7 @@ def _compiled_walk(fast, triangles: np.ndarray, levels: list, lo: np.ndarray, hi
     corners = np.ascontiguousarray(triangles, dtype=np.float64)
     lo, hi = np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64)
     label, mine = np.ascontiguousarray(label, dtype=np.int64), np.ascontiguousarray(mine, dtype=np.int64)
-    size = max(1 << 16, 32 * len(triangles))
+    size = max(OUTPUTS, 32 * len(triangles))
     tris, faces = [], []
     start = 0
     while start < len(triangles):
