@@ -13,6 +13,8 @@
  * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
  * - forward_block, distinct, keys_block (at the end): `p3d props`' closed test on half the
  *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
+ * - near_walk (at the end): `p3d repair`'s faces near new faces, the walk of its box tree
+ *   (p3d_cli.repairs.near).
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
