@@ -178,6 +178,25 @@ def orient2d(a: np.ndarray, b: np.ndarray, c: np.ndarray, safe: bool = True) -> 
     return out
 
 
+def orient2d_about(a: np.ndarray, b: np.ndarray, c: np.ndarray, safe: bool = True) -> np.ndarray:
+    """``orient2d`` of one ``a`` and one ``b`` ``(2,)`` with every ``c`` ``(k, 2)``: the same
+    exact signs, without spreading ``a`` and ``b`` to arrays (the same float operations, so the
+    filter decides the same rows)."""
+    if not safe:
+        return exact_orient2d(np.broadcast_to(a, c.shape), np.broadcast_to(b, c.shape), c)
+    cx, cy = c[:, 0], c[:, 1]
+    left = (a[0] - cx) * (b[1] - cy)
+    right = (a[1] - cy) * (b[0] - cx)
+    det = left - right
+    out = _signs(det)
+    perm = np.abs(left) + np.abs(right)
+    unsure = (np.abs(det) <= CCW_BOUND * perm) & (perm != 0)
+    if unsure.any():
+        rows = np.flatnonzero(unsure)
+        out[rows] = exact_orient2d(np.broadcast_to(a, (rows.size, 2)), np.broadcast_to(b, (rows.size, 2)), c[rows])
+    return out
+
+
 def _signs(det: np.ndarray) -> np.ndarray:
     return (det > 0).astype(np.int8) - (det < 0).astype(np.int8)
 

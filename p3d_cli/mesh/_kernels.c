@@ -13,6 +13,8 @@
  * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
  * - forward_block, distinct, keys_block (at the end): `p3d props`' closed test on half the
  *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
+ * - near_walk (at the end): `p3d repair`'s faces near new faces, the walk of its box tree
+ *   (p3d_cli.repairs.near).
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -1116,6 +1118,7 @@ static PyObject *py_forward_block(PyObject *self, PyObject *args);
 static PyObject *py_keys_block(PyObject *self, PyObject *args);
 static PyObject *py_unite(PyObject *self, PyObject *args);
 static PyObject *py_flatten(PyObject *self, PyObject *args);
+static PyObject *py_near_walk(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1903,6 +1906,9 @@ static PyMethodDef methods[] = {
     {"grid_pairs", py_grid_pairs, METH_VARARGS,
      "grid_pairs(keys, entries, window, members, live, level, query_keys, queries, query_members, at, start, stop, "
      "out_i, out_j) -> (next, written)"},
+    {"near_walk", py_near_walk, METH_VARARGS,
+     "near_walk(triangles, node_lo, node_hi, node_label, offsets, face_lo, face_hi, face_label, mine, margin, leaf, "
+     "start, out_tri, out_face) -> (next, written)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -2136,4 +2142,144 @@ static PyObject *py_flatten(PyObject *self, PyObject *args) {
         return NULL;
     }
     Py_RETURN_NONE;
+}
+
+/* ---- the faces near new faces: the box tree's walk (p3d_cli.repairs.near) ------------------ */
+
+/* Whether triangle `c` (3 corners, x y z) may meet the box lo..hi grown by `margin`:
+ * p3d_cli.repairs.near._meets for one pair, the same IEEE operations in the same order. The
+ * triangle's own box first; then the separating-axis test, where numpy's "the least of the three
+ * projections > r" (NaN spreading through the least, so False) is "all three > r" here, which is
+ * False on a NaN too. */
+static int near_meets(const double *c, const double *lo, const double *hi, double margin) {
+    for (int a = 0; a < 3; a++) {
+        double low = c[a], high = c[a];
+        for (int k = 1; k < 3; k++) {
+            double x = c[3 * k + a];
+            low = x < low ? x : low;
+            high = x > high ? x : high;
+        }
+        if (!(low - margin <= hi[a] && lo[a] <= high + margin))
+            return 0;
+    }
+    double h[3], x[3][3], e[3][3];
+    for (int a = 0; a < 3; a++) {
+        double centre = (lo[a] + hi[a]) / 2;
+        h[a] = (hi[a] - lo[a]) / 2 + margin;
+        for (int k = 0; k < 3; k++)
+            x[k][a] = c[3 * k + a] - centre;
+        if ((x[0][a] > h[a] && x[1][a] > h[a] && x[2][a] > h[a]) ||
+            (x[0][a] < -h[a] && x[1][a] < -h[a] && x[2][a] < -h[a]))
+            return 0;
+    }
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++)
+            e[k][a] = x[(k + 1) % 3][a] - x[k][a];
+    double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                   e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    double p[3], r = fabs(n[0]) * h[0] + fabs(n[1]) * h[1] + fabs(n[2]) * h[2];
+    for (int k = 0; k < 3; k++)
+        p[k] = n[0] * x[k][0] + n[1] * x[k][1] + n[2] * x[k][2];
+    if ((p[0] > r && p[1] > r && p[2] > r) || (p[0] < -r && p[1] < -r && p[2] < -r))
+        return 0;
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++) {
+            int b = (a + 1) % 3, d = (a + 2) % 3;
+            const double *edge = e[k];
+            for (int q = 0; q < 3; q++)
+                p[q] = edge[d] * x[q][b] - edge[b] * x[q][d];
+            r = fabs(edge[d]) * h[b] + fabs(edge[b]) * h[d];
+            if ((p[0] > r && p[1] > r && p[2] > r) || (p[0] < -r && p[1] < -r && p[2] < -r))
+                return 0;
+        }
+    return 1;
+}
+
+/* near_walk(triangles, node_lo, node_hi, node_label, offsets, face_lo, face_hi, face_label, mine,
+ * margin, leaf, start, out_tri, out_face) -> (next, written): p3d_cli.repairs.near._tree_query's
+ * walk, one triangle at a time, depth first. The tree's levels are rows offsets[l] ..
+ * offsets[l + 1] of the node arrays, the root first; node i of a level has children 2i and
+ * 2i + 1 of the next (those that exist); node i of the last level holds the faces leaf * i ..
+ * leaf * i + leaf - 1 (those that exist) of the face arrays. A node or face whose label is the
+ * triangle's `mine` is passed over (but the root). The pairs (triangle, face position) that
+ * meet are written from triangles start on; next: the first triangle not done (when the outputs
+ * are full; its pairs are not written), written: the pairs written. */
+static PyObject *py_near_walk(PyObject *self, PyObject *args) {
+    PyObject *objs[12];
+    double margin;
+    Py_ssize_t leaf, start;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOdnnOO", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4], &objs[5], &objs[6],
+                          &objs[7], &objs[8], &margin, &leaf, &start, &objs[9], &objs[10]))
+        return NULL;
+    enum { TRI, NLO, NHI, NLAB, OFF, FLO, FHI, FLAB, MINE, OUT_T, OUT_F, ARRAYS };
+    Py_buffer v[ARRAYS];
+    int got[ARRAYS] = {0};
+    const char kinds[ARRAYS] = {'d', 'd', 'd', 'q', 'q', 'd', 'd', 'q', 'q', 'q', 'q'};
+    for (int k = 0; k < ARRAYS; k++) {
+        if (get_array(objs[k], &v[k], kinds[k], k == OUT_T || k == OUT_F, "near_walk") < 0) {
+            release_all(v, got, ARRAYS);
+            return NULL;
+        }
+        got[k] = 1;
+    }
+    Py_ssize_t nt = v[TRI].len / 72, nn = v[NLO].len / 24, nlev = v[OFF].len / 8 - 1, nf = v[FLO].len / 24;
+    Py_ssize_t cap = v[OUT_T].len / 8;
+    const int64_t *off = v[OFF].buf;
+    int bad = v[TRI].len != nt * 72 || v[NHI].len != nn * 24 || v[NLAB].len != nn * 8 || v[FHI].len != nf * 24 ||
+              v[FLAB].len != nf * 8 || v[MINE].len != nt * 8 || v[OUT_F].len != cap * 8 || nlev < 1 || nlev > 64 ||
+              leaf < 1 || start < 0 || off[0] != 0 || off[nlev] != nn || off[1] != 1;
+    for (Py_ssize_t l = 0; l < nlev && !bad; l++)
+        bad = off[l + 1] <= off[l] || (l > 0 && off[l + 1] - off[l] > 2 * (off[l] - off[l - 1]));
+    if (!bad)
+        bad = (off[nlev] - off[nlev - 1]) * leaf < nf || (off[nlev] - off[nlev - 1] - 1) * leaf >= nf;
+    if (bad) {
+        release_all(v, got, ARRAYS);
+        PyErr_SetString(PyExc_ValueError, "near_walk: the tree, triangles and outputs do not match");
+        return NULL;
+    }
+    const double *tri = v[TRI].buf, *nlo = v[NLO].buf, *nhi = v[NHI].buf, *flo = v[FLO].buf, *fhi = v[FHI].buf;
+    const int64_t *nlab = v[NLAB].buf, *flab = v[FLAB].buf, *mine = v[MINE].buf;
+    int64_t *out_t = v[OUT_T].buf, *out_f = v[OUT_F].buf;
+    Py_ssize_t next = start < nt ? start : nt, written = 0;
+    Py_BEGIN_ALLOW_THREADS
+    Py_ssize_t stack[2 * 64 + 2][2];
+    for (; next < nt; next++) {
+        const double *c = tri + 9 * next;
+        Py_ssize_t before = written;
+        int full = 0;
+        if (!near_meets(c, nlo, nhi, margin))
+            continue;
+        int top = 0;
+        stack[top][0] = 0, stack[top][1] = 0, top++;
+        while (top > 0 && !full) {
+            top--;
+            Py_ssize_t l = stack[top][0], i = stack[top][1];
+            if (l == nlev - 1) {
+                for (Py_ssize_t f = i * leaf; f < (i + 1) * leaf && f < nf; f++) {
+                    if (flab[f] == mine[next] || !near_meets(c, flo + 3 * f, fhi + 3 * f, margin))
+                        continue;
+                    if (written == cap) {
+                        full = 1;
+                        break;
+                    }
+                    out_t[written] = next, out_f[written] = f, written++;
+                }
+                continue;
+            }
+            Py_ssize_t width = off[l + 2] - off[l + 1];
+            for (int s = 1; s >= 0; s--) {
+                Py_ssize_t child = 2 * i + s, row = off[l + 1] + child;
+                if (child >= width || nlab[row] == mine[next] || !near_meets(c, nlo + 3 * row, nhi + 3 * row, margin))
+                    continue;
+                stack[top][0] = l + 1, stack[top][1] = child, top++;
+            }
+        }
+        if (full) {
+            written = before;
+            break;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    release_all(v, got, ARRAYS);
+    return Py_BuildValue("nn", next, written);
 }

@@ -37,7 +37,8 @@ _PAIRS = 1 << 15
 
 
 def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.ndarray | None = None,
-                       nonmanifold_edges: np.ndarray | None = None, fans: bool = False) -> SelfIntersections:
+                       nonmanifold_edges: np.ndarray | None = None, fans: bool = False,
+                       patches: np.ndarray | None = None) -> SelfIntersections:
     """The face pairs of an indexed triangle surface whose interiors cross or overlap.
 
     Parameters
@@ -57,6 +58,11 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         one fan. The fans whose faces provably meet only as neighbours do
         (``p3d_cli.mesh.stars``) spare their pairs the pair test; without ``fans``, only the
         vertices whose every edge pairs up one each way are tried (``paired_vertices``).
+    patches : (n,) int, optional
+        A label per face (negative: none). Faces of one label are known to meet each other
+        only in the edges and corners they share (a triangulation of a polygon seen on a
+        plane, such as a filled hole): the pair test would find their pairs ``NONE``, so they
+        are not given to it. Lines of contact still take every face around them.
 
     Returns
     -------
@@ -65,6 +71,8 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     points = np.ascontiguousarray(points, dtype=np.float64)
     faces = np.asarray(faces)
     n = len(faces)
+    if patches is not None:
+        patches = np.asarray(patches, dtype=np.int64)
     # In pieces: the whole array's magnitudes at once would cost twice the points' memory.
     safe = all(in_safe_range(points[at:at + _BLOCK]) for at in range(0, len(points), _BLOCK))
     if degenerate is None:
@@ -99,9 +107,9 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
                 batch.append((i[at:at + _PAIRS], j[at:at + _PAIRS]))
                 waiting += batch[-1][0].size
                 if waiting >= _PAIRS:
-                    _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+                    _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
                     batch, waiting = [], 0
-        _test(points, faces, batch, safe, crowded, found, kinds, contacts)
+        _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
     elif live.size > 1:
         lo, hi = _boxes(points, faces, live)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
@@ -115,9 +123,9 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
             pending.append((members[p[rest]], members[q[rest]]))
             waiting += rest.size
             if waiting >= _PAIRS:
-                _test(points, faces, pending, safe, crowded, found, kinds, contacts)
+                _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
                 pending, waiting = [], 0
-        _test(points, faces, pending, safe, crowded, found, kinds, contacts)
+        _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
     lines = _line_crossings(points, faces, live, contacts, nonmanifold_edges)
     return _result(points, faces, found, kinds, lines, live.size)
 
@@ -147,12 +155,16 @@ def crowded_edges(faces: np.ndarray) -> np.ndarray:
     return keys[0][keys[1] > 2]
 
 
-def _test(points, faces, pending, safe, crowded, found, kinds, contacts) -> None:
-    """Classify the pending pairs and keep what they find (``found``/``kinds``/``contacts``)."""
+def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches=None) -> None:
+    """Classify the pending pairs (but those within one of ``patches``) and keep what they
+    find (``found``/``kinds``/``contacts``)."""
     if not pending:
         return
     i = np.concatenate([x for x, _ in pending])
     j = np.concatenate([y for _, y in pending])
+    if patches is not None and i.size:
+        apart = (patches[i] < 0) | (patches[i] != patches[j])
+        i, j = i[apart], j[apart]
     if i.size == 0:
         return
     kind, edges = classify(points, faces, i, j, safe)

@@ -35,7 +35,7 @@ import numpy as np
 
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.geometry.predicates import in_safe_range, orient2d
+from p3d_cli.geometry.predicates import in_safe_range, orient2d, orient2d_about
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,10 @@ class Hole:
         A hole of no area closed by splitting the face across it
         (``p3d_cli.repairs.junctions``): that face, and the triangle that takes its place
         (``triangles`` are then the split's other triangles).
+    projected : bool
+        ``triangles`` are an ear clipping of the loop seen exactly on a coordinate plane (step
+        2 of the module docstring): they meet each other only in the edges and corners they
+        share (``p3d_cli.repairs.solidity`` does not test their pairs).
     """
 
     vertices: np.ndarray
@@ -73,6 +77,7 @@ class Hole:
     triangles: np.ndarray | None = None
     reason: str | None = None
     replaced: tuple[int, np.ndarray] | None = None
+    projected: bool = False
 
     @property
     def filled(self) -> bool:
@@ -89,6 +94,8 @@ FLATNESS = 1e-3
 #: Default largest hole filled, in edges (larger openings are usually meant: the mouth of a
 #: vessel; their triangulation also costs the square of the edges).
 MAX_EDGES = 1000
+#: Edge pairs tested together by the simplicity test (bounded temporaries).
+PAIRS = 1 << 18
 
 
 def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat", flatness: float = FLATNESS,
@@ -133,6 +140,7 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
                     f"over the limit {flatness:g}", flat)
     if policy == "flat" and k > max_edges:
         return left(f"larger than the limit: {k} edges, over {max_edges}", flat)
+    projected = False
     if k == 3:
         # A loop of three corners is its own triangulation (what ear clipping gives it, in its
         # winding), simple whenever it has an area: only the exact area test is left. The many
@@ -142,19 +150,20 @@ def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat",
         found = _triangulated(corners, relative, normal, length, vertices, policy, has_edge)
         if isinstance(found, str):
             return left(found, flat)
-        triangles = found
+        triangles, projected = found
     if triangles is not None and zero_area_faces(columns(np.asarray(points, dtype=np.float64)[triangles])).size:
         triangles = None
     if triangles is None:
         return left("every triangulation of it would repeat an edge the mesh already has "
                     "(making it non-manifold) or make a face of zero area", flat)
-    return Hole(vertices, k, where, size, flat, triangles, None)
+    return Hole(vertices, k, where, size, flat, triangles, None, projected=projected)
 
 
 def _triangulated(corners: np.ndarray, relative: np.ndarray, normal: np.ndarray, length: float,
-                  vertices: np.ndarray, policy: str, has_edge) -> np.ndarray | str | None:
-    """Ear clipping of a loop of four corners or more, seen along its normal: its triangles,
-    None when clipping gets stuck, or why the loop cannot be filled (it crosses itself)."""
+                  vertices: np.ndarray, policy: str, has_edge) -> tuple[np.ndarray | None, bool] | str:
+    """Ear clipping of a loop of four corners or more, seen along its normal: its triangles
+    (None when clipping gets stuck) and whether they were clipped on a coordinate plane, or
+    why the loop cannot be filled (it crosses itself)."""
     axis = int(np.argmax(np.abs(normal)))
     plane = np.ascontiguousarray(corners[:, [(axis + 1) % 3, (axis + 2) % 3]])
     safe = in_safe_range(plane)
@@ -168,7 +177,8 @@ def _triangulated(corners: np.ndarray, relative: np.ndarray, normal: np.ndarray,
         safe = in_safe_range(plane)
         if not _simple(plane, safe):
             return "seen along its normal the loop crosses itself"
-    return _ear_clipping(plane, vertices, safe, has_edge)
+        return _ear_clipping(plane, vertices, safe, has_edge), False
+    return _ear_clipping(plane, vertices, safe, has_edge), True
 
 
 def _in_own_plane(relative: np.ndarray, unit_normal: np.ndarray) -> np.ndarray:
@@ -192,29 +202,32 @@ def _simple(plane: np.ndarray, safe: bool) -> bool:
     back = ((b - a) * (after - b)).sum(axis=1) <= 0
     if ((turn == 0) & back).any():
         return False
-    for i in range(k - 2):
-        j = np.arange(i + 2, k if i > 0 else k - 1)
-        if j.size == 0:
-            continue
-        if _segments_meet(a[i], b[i], a[j], b[j], safe).any():
+    # Every pair of edges i < j that are not consecutive (j >= i + 2, and not the first with
+    # the last), a block of rows at a time (bounded temporaries, few calls).
+    rows = max(1, PAIRS // max(k, 1))
+    column = np.arange(k)
+    for start in range(0, k - 2, rows):
+        first = np.arange(start, min(start + rows, k - 2))[:, None]
+        i, j = np.nonzero((column >= first + 2) & ~((first == 0) & (column == k - 1)))
+        i = i + start
+        if i.size and _segments_meet(a[i], b[i], a[j], b[j], safe).any():
             return False
     return True
 
 
 def _segments_meet(p: np.ndarray, q: np.ndarray, r: np.ndarray, s: np.ndarray, safe: bool) -> np.ndarray:
-    """Whether closed segment ``p q`` meets each closed segment ``r[i] s[i]``."""
-    n = len(r)
-    p_, q_ = np.broadcast_to(p, (n, 2)), np.broadcast_to(q, (n, 2))
-    d1, d2 = orient2d(p_, q_, r, safe), orient2d(p_, q_, s, safe)
-    d3, d4 = orient2d(r, s, p_, safe), orient2d(r, s, q_, safe)
+    """Whether each closed segment ``p[i] q[i]`` meets closed segment ``r[i] s[i]`` (``(n, 2)``
+    each)."""
+    d1, d2 = orient2d(p, q, r, safe), orient2d(p, q, s, safe)
+    d3, d4 = orient2d(r, s, p, safe), orient2d(r, s, q, safe)
     proper = (d1 * d2 < 0) & (d3 * d4 < 0)
 
     def on(a, b, c):    # c on the closed segment a b, given the three are collinear
         return ((np.minimum(a[:, 0], b[:, 0]) <= c[:, 0]) & (c[:, 0] <= np.maximum(a[:, 0], b[:, 0]))
                 & (np.minimum(a[:, 1], b[:, 1]) <= c[:, 1]) & (c[:, 1] <= np.maximum(a[:, 1], b[:, 1])))
 
-    touch = (((d1 == 0) & on(p_, q_, r)) | ((d2 == 0) & on(p_, q_, s))
-             | ((d3 == 0) & on(r, s, p_)) | ((d4 == 0) & on(r, s, q_)))
+    touch = (((d1 == 0) & on(p, q, r)) | ((d2 == 0) & on(p, q, s))
+             | ((d3 == 0) & on(r, s, p)) | ((d4 == 0) & on(r, s, q)))
     return proper | touch
 
 
@@ -234,17 +247,19 @@ def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge)
 
     def ear(v: int) -> bool:
         u, w = before[v], following[v]
-        if int(orient2d(plane[[u]], plane[[v]], plane[[w]], safe)[0]) != sign:
+        if int(orient2d_about(plane[u], plane[v], plane[[w]], safe)[0]) != sign:
             return False
         others = np.flatnonzero(alive)
         others = others[(others != u) & (others != v) & (others != w)]
         if others.size:
-            tri = [np.broadcast_to(plane[x], (others.size, 2)) for x in (u, v, w)]
             c = plane[others]
-            s1 = orient2d(tri[0], tri[1], c, safe) * sign
-            s2 = orient2d(tri[1], tri[2], c, safe) * sign
-            s3 = orient2d(tri[2], tri[0], c, safe) * sign
-            if ((s1 >= 0) & (s2 >= 0) & (s3 >= 0)).any():
+            # Inside the closed triangle: on the inner side of (or on) each edge; the corners
+            # that fail one edge are not tried on the next.
+            for x, y in ((u, v), (v, w), (w, u)):
+                c = c[orient2d_about(plane[x], plane[y], c, safe) * sign >= 0]
+                if c.size == 0:
+                    break
+            if c.size:
                 return False
         a, b = int(vertices[u]), int(vertices[w])
         return (min(a, b), max(a, b)) not in added and not has_edge(a, b)

@@ -44,6 +44,19 @@ class Holes:
         left = [around for hole, around in self.holes if not hole.filled]
         return np.unique(np.concatenate(left + [self.stray])).astype(np.int64)
 
+    def fillings(self, count: int) -> np.ndarray:
+        """``(count,)`` int64: for each face of the output (``count`` faces, the fillings last,
+        in the holes' order), the hole whose filling on a coordinate plane it belongs to
+        (``Hole.projected``), else -1."""
+        label = np.full(count, -1, dtype=np.int64)
+        position = count - sum(len(hole.triangles) for hole, _ in self.holes if hole.filled)
+        for k, (hole, _) in enumerate(self.holes):
+            if hole.filled:
+                if hole.projected:
+                    label[position:position + len(hole.triangles)] = k
+                position += len(hole.triangles)
+        return label
+
 
 def boundary_sides(grouping: Grouping, draft: Draft) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Faces, start and end vertices of every boundary side, in the faces' current winding."""
@@ -150,12 +163,13 @@ def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
     """The holes, with those whose filling crosses or overlaps another face left."""
     if len(draft.faces) == start:
         return found
-    fillings, position = [], start
+    fillings, projected, position = [], [], start
     for hole, _ in found:
         if hole.filled:
             fillings.append(np.arange(position, position + len(hole.triangles)))
+            projected.append(hole.projected)
             position += len(hole.triangles)
-    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings).tolist())
+    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings, projected).tolist())
     out = []
     for hole, around in found:
         if hole.filled and next(crossing):

@@ -10,8 +10,10 @@ So the other faces go into a tree of boxes (a bounding volume hierarchy, C. Eric
 *Real-Time Collision Detection*, Morgan Kaufmann 2005, ch. 6): sorted along a Morton curve of
 their boxes' centres (G. M. Morton, IBM technical report, 1966), cut into leaves of ``LEAF``
 consecutive faces, and joined two by two up to one root. Every new triangle walks down from
-the root, all of them at once, level by level, into the nodes whose boxes it meets, and at the
-leaves keeps the faces whose boxes it meets.
+the root into the nodes whose boxes it meets, and at the leaves keeps the faces whose boxes it
+meets: in the compiled kernels (``near_walk``), one triangle at a time, depth first; on numpy,
+``WALK`` triangles at a time, level by level (the pairs of a level held at once: ten fans of
+1,000 slivers had 10 million at the leaves). Both make the same float tests, so the same pairs.
 
 "Meets" is the separating-axis test of a triangle and a box (T. Akenine-Möller, "Fast 3D
 triangle-box overlap testing", *Journal of Graphics Tools* 6(1), 2001: the box's three axes,
@@ -26,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.mesh.kernels import compiled
+
 #: Faces per leaf of the tree.
 LEAF = 16
 #: Bits per axis of the Morton code (a 30-bit key).
@@ -37,6 +41,10 @@ MARGIN = 2.0 ** -40
 MIXED = np.iinfo(np.int64).min
 #: Pairs (triangle, node) tested per batch (bounded temporaries).
 BATCH = 1 << 18
+#: Triangles walking the tree together on the numpy road (bounds the frontier).
+WALK = 1024
+#: The compiled walk's first output size, in pairs (grown when one triangle's do not fit).
+OUTPUTS = 1 << 16
 
 
 def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
@@ -104,10 +112,27 @@ def _tree_query(triangles: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: f
         return none, none
     order = np.argsort(_morton((lo + hi) / 2), kind="stable")
     lo, hi = lo[order], hi[order]
-    starts = np.arange(0, len(order), LEAF)
-    # Each node's boxes, and the one label all its faces have (else MIXED): a triangle skips
-    # the nodes of its own label (the other faces of its fan).
     label = theirs[order]
+    levels = _levels(lo, hi, label)
+    fast = compiled()
+    if fast is not None:
+        tri, face = _compiled_walk(fast, triangles, levels, lo, hi, label, mine, margin)
+    else:
+        # A block of triangles at a time: the frontier of all of them at once held 10 million
+        # pairs (1 GB) for the fans of slivers of ten 1,000-edge holes.
+        found = [_walk(triangles[at:at + WALK], levels, lo, hi, label, mine[at:at + WALK], margin)
+                 for at in range(0, len(triangles), WALK)]
+        tri = np.concatenate([t + at for (t, _), at in zip(found, range(0, len(triangles), WALK))])
+        face = np.concatenate([f for _, f in found])
+    return tri, order[face]
+
+
+def _levels(lo: np.ndarray, hi: np.ndarray, label: np.ndarray) -> list:
+    """The tree over boxes in their Morton order: ``(low, high, same)`` per level, the root
+    first; node ``i`` of a level has children ``2i`` and ``2i + 1`` in the next, and leaf ``i``
+    holds boxes ``LEAF i`` to ``LEAF i + LEAF - 1``. ``same`` is the one label of a node's
+    boxes, else ``MIXED``: a triangle skips the nodes of its own label (its fan's faces)."""
+    starts = np.arange(0, len(lo), LEAF)
     low_label, high_label = np.minimum.reduceat(label, starts), np.maximum.reduceat(label, starts)
     levels = [(np.minimum.reduceat(lo, starts, axis=0), np.maximum.reduceat(hi, starts, axis=0),
                np.where(low_label == high_label, low_label, MIXED))]
@@ -118,7 +143,13 @@ def _tree_query(triangles: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: f
         levels.append((np.minimum.reduceat(low, pairs, axis=0), np.maximum.reduceat(high, pairs, axis=0),
                        np.where(same[pairs] == same[sibling], same[pairs], MIXED)))
     levels.reverse()
-    # The frontier: (triangle, node) pairs whose boxes meet, from the root down to the leaves.
+    return levels
+
+
+def _walk(triangles: np.ndarray, levels: list, lo: np.ndarray, hi: np.ndarray, label: np.ndarray,
+          mine: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (triangle, box position) that meet: every triangle walks down from the root,
+    all at once, level by level (the frontier: the pairs whose boxes meet)."""
     tri = np.arange(len(triangles), dtype=np.int64)
     node = np.zeros(len(triangles), dtype=np.int64)
     keep = _meets(triangles, tri, levels[0][0], levels[0][1], node, margin)
@@ -132,15 +163,42 @@ def _tree_query(triangles: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: f
         tri, node = tri[other], node[other]
         keep = _meets(triangles, tri, low, high, node, margin)
         tri, node = tri[keep], node[keep]
-    # The leaves' faces: positions leaf * LEAF + 0..LEAF-1 in the sorted order.
+    # The leaves' boxes: positions leaf * LEAF + 0..LEAF-1.
     tri = np.repeat(tri, LEAF)
     face = np.repeat(node * LEAF, LEAF) + np.tile(np.arange(LEAF), node.size)
-    real = face < len(order)
+    real = face < len(lo)
     tri, face = tri[real], face[real]
-    other = mine[tri] != theirs[order[face]]
+    other = mine[tri] != label[face]
     tri, face = tri[other], face[other]
     keep = _meets(triangles, tri, lo, hi, face, margin)
-    return tri[keep], order[face[keep]]
+    return tri[keep], face[keep]
+
+
+def _compiled_walk(fast, triangles: np.ndarray, levels: list, lo: np.ndarray, hi: np.ndarray, label: np.ndarray,
+                   mine: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """``_walk`` in the compiled kernels (``near_walk``): the same pairs, the same float tests,
+    one triangle at a time down the tree, into outputs grown when one triangle's pairs do not
+    fit."""
+    node_lo = np.ascontiguousarray(np.concatenate([low for low, _, _ in levels]), dtype=np.float64)
+    node_hi = np.ascontiguousarray(np.concatenate([high for _, high, _ in levels]), dtype=np.float64)
+    node_label = np.ascontiguousarray(np.concatenate([same for _, _, same in levels]), dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum([len(low) for low, _, _ in levels])]).astype(np.int64)
+    corners = np.ascontiguousarray(triangles, dtype=np.float64)
+    lo, hi = np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64)
+    label, mine = np.ascontiguousarray(label, dtype=np.int64), np.ascontiguousarray(mine, dtype=np.int64)
+    size = max(OUTPUTS, 32 * len(triangles))
+    tris, faces = [], []
+    start = 0
+    while start < len(triangles):
+        out_tri, out_face = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
+        after, written = fast.near_walk(corners, node_lo, node_hi, node_label, offsets, lo, hi, label, mine,
+                                        margin, LEAF, start, out_tri, out_face)
+        tris.append(out_tri[:written].copy())
+        faces.append(out_face[:written].copy())
+        if after == start:
+            size *= 4               # one triangle's pairs did not fit
+        start = after
+    return np.concatenate(tris), np.concatenate(faces)
 
 
 def _morton(centres: np.ndarray) -> np.ndarray:

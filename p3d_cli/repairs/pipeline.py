@@ -27,7 +27,7 @@ from p3d_cli.mesh.verdicts import CHECKS, SOLIDITY
 from p3d_cli.repairs.cleanup import degenerate_step, duplicate_step, weld_step
 from p3d_cli.repairs.draft import Draft, Grouping, grouping, with_directions
 from p3d_cli.repairs.fill import FLATNESS, MAX_EDGES, POLICIES
-from p3d_cli.repairs.holes import holes_step
+from p3d_cli.repairs.holes import Holes, holes_step
 from p3d_cli.repairs.orient import Patches, joined, orient_step, outward_step, patches
 from p3d_cli.repairs.report import SHOWN, StepReport, failed_checks
 from p3d_cli.repairs.steps import STEPS
@@ -121,6 +121,7 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
             reports["duplicate"] = StepReport("duplicate", counts={"faces_removed": 0})
     as_input = len(draft.faces) == n and not draft.moved.any()
     grouped = _grouping(draft, layout, as_input)
+    filled: Holes | None = None
     if grouped is None:
         # Every edge of the input used once each way and the same faces: its shells are the
         # patches, consistent and closed; nothing for orient or holes.
@@ -143,29 +144,33 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
             draft, reports["holes"], holes = holes_step(draft, grouped, policy=fill_holes, flatness=flatness,
                                                         max_edges=max_hole_edges)
             holes_left = reports["holes"].notes
+            filled = holes
             found = joined(found, holes.holes)
             open_faces = np.union1d(_open_faces(grouped, "orient" in steps, boundary=False), holes.open_faces)
     shells_left: tuple[str, ...] = ()
     out = draft.output_triangles()
+    fillings = filled.fillings(len(out)) if filled is not None else None
     if "outward" in steps:
         open_patches = np.unique(found.labels[open_faces])
         draft, reports["outward"], turned = outward_step(draft, out, found, open_patches)
         out[turned] = out[turned][:, [0, 2, 1]]
         shells_left = reports["outward"].notes
-    after = checked(out, required)
+    after = checked(out, required, fillings)
     ordered = tuple(reports[name] for name in STEPS)
     return Outcome(draft, out, before, after, ordered, unfixed(after, steps, required, holes_left, shells_left),
                    draft.changed)
 
 
-def checked(triangles: np.ndarray, required: tuple[str, ...]) -> TopologyReport:
+def checked(triangles: np.ndarray, required: tuple[str, ...], fillings: np.ndarray | None = None) -> TopologyReport:
     """``p3d check``'s report of the output: its topology, and its self-intersections and
     shells' nesting when those are required (``p3d_cli.mesh.solidity``), in the blocks a file
-    of it would be read in."""
+    of it would be read in. ``fillings`` labels the faces of each hole filled on a coordinate
+    plane (``Holes.fillings``): the pair test would find their pairs within one filling
+    ``NONE``, so they are left out (the report is the same)."""
     blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
     report, layout = topology_and_layout(blocks, len(triangles))
     if any(name in SOLIDITY for name in required) and layout is not None:
-        report = with_solidity(report, blocks, layout)
+        report = with_solidity(report, blocks, layout, fillings)
     return report
 
 

@@ -75,9 +75,18 @@ SCREENED = 16
 PROBES = 8
 
 
-def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[np.ndarray]) -> np.ndarray:
+def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[np.ndarray],
+                      projected: Sequence[bool] | None = None) -> np.ndarray:
     """Which fillings (each an array of face ids into ``faces``) have a face whose interior
     crosses or overlaps another face: ``(len(fillings),)`` bool, decided exactly.
+
+    ``projected[k]`` says that filling ``k`` is a triangulation of its loop seen exactly on a
+    plane (``p3d_cli.repairs.fill.Hole.projected``): its triangles' shadows on that plane meet
+    only in shared edges and corners, and each triangle lies over its shadow one to one, so
+    two of them meet only in the edges and corners they share, which the pair test finds
+    ``NONE``. Their pairs are left out of the tests below (``patches`` of
+    ``self_intersections``); a fan of ``k`` slivers has ``k²/2`` of them, nearly all of the
+    pairs its tests would take.
 
     A filling is refused when ``p3d check``'s self-intersection test of the whole mesh
     (``p3d_cli.mesh.intersections``) would report a pair with one of its faces. The test is run
@@ -114,6 +123,9 @@ def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[
     owner = np.repeat(np.arange(len(sizes)), sizes)
     group = np.full(len(faces), -1, dtype=np.int64)
     group[new] = owner
+    on_plane = np.zeros(len(sizes), dtype=bool) if projected is None else np.asarray(projected, dtype=bool)
+    patches = np.full(len(faces), -1, dtype=np.int64)
+    patches[new] = np.where(on_plane[owner], owner, -1)
     at, near = near_pairs(points, faces, new, group)
     screened = (sizes >= SCREENED)[owner[at]] & (group[near] < 0)
     if screened.any():
@@ -127,11 +139,11 @@ def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[
         touching = i[live][kind == CONTACT]
         probes = touching[~crossing[group[touching]]]
         if probes.size:
-            crossing |= _probed(points, faces, new, owner, group, at, near, probes)
+            crossing |= _probed(points, faces, new, owner, group, at, near, probes, patches)
     left = ~crossing[owner]
     if left.any():
         chosen = np.union1d(new[left], near[left[at]])
-        found = self_intersections(points, faces[chosen])
+        found = self_intersections(points, faces[chosen], patches=patches[chosen])
         if len(found.pairs):
             hit = chosen[found.pairs.ravel()]
             crossing[group[hit[group[hit] >= 0]]] = True
@@ -139,9 +151,10 @@ def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[
 
 
 def _probed(points: np.ndarray, faces: np.ndarray, new: np.ndarray, owner: np.ndarray, group: np.ndarray,
-            at: np.ndarray, near: np.ndarray, touching: np.ndarray) -> np.ndarray:
+            at: np.ndarray, near: np.ndarray, touching: np.ndarray, patches: np.ndarray) -> np.ndarray:
     """The fillings refused by the whole self-intersection test of their first ``PROBES``
-    faces in ``touching`` (face ids, in order), with every face that touches those."""
+    faces in ``touching`` (face ids, in order), with every face that touches those (the pairs
+    within a filling of ``patches`` left out)."""
     from p3d_cli.mesh.intersections import self_intersections
 
     labels = group[touching]
@@ -151,7 +164,7 @@ def _probed(points: np.ndarray, faces: np.ndarray, new: np.ndarray, owner: np.nd
     probed[probes] = True
     whole = np.isin(group[new], np.unique(labels))
     chosen = np.union1d(new[whole], near[probed[new[at]]])
-    found = self_intersections(points, faces[chosen])
+    found = self_intersections(points, faces[chosen], patches=patches[chosen])
     if len(found.pairs):
         hit = chosen[found.pairs.ravel()]
         refused[group[hit[probed[hit]]]] = True

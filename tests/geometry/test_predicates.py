@@ -12,6 +12,7 @@ from p3d_cli.geometry.predicates import (
     exact_orient3d,
     in_safe_range,
     orient2d,
+    orient2d_about,
     orient2d_fraction,
     orient3d,
     orient3d_fraction,
@@ -91,3 +92,14 @@ def test_orient2d_matches_fractions(points, offset, power):
     p = np.array(points) * 2.0 ** power + offset
     a, b, c = (p[i:i + 1] for i in range(3))
     assert orient2d(a, b, c, in_safe_range(p))[0] == orient2d_fraction(*p.tolist())
+
+
+@given(st.lists(st.tuples(coordinate, coordinate), min_size=3, max_size=12),
+       st.sampled_from([0.0, 1e8, -2.0 ** 40]), st.integers(-30, 30))
+def test_orient2d_about_gives_orient2d_of_each_c(points, offset, power):
+    p = np.array(points) * 2.0 ** power + offset
+    p[2::3] = p[0] + (p[1] - p[0]) * 0.5          # midpoints of a b: often exactly on the line
+    c = p[2:]
+    for safe in (in_safe_range(p), False):
+        got = orient2d_about(p[0], p[1], c, safe)
+        assert got.tolist() == [orient2d_fraction(p[0].tolist(), p[1].tolist(), q) for q in c.tolist()]

@@ -4,12 +4,15 @@ the whole mesh's self-intersection test does."""
 
 from __future__ import annotations
 
+import os
 from fractions import Fraction
 
 import numpy as np
 import pytest
 
+from p3d_cli.mesh import kernels
 from p3d_cli.mesh.intersections import self_intersections
+from p3d_cli.repairs import near
 from p3d_cli.repairs.near import near_pairs
 from p3d_cli.repairs.solidity import PROBES, SCREENED, crossing_fillings
 
@@ -138,3 +141,54 @@ def test_fillings_in_a_soup_are_refused_as_the_whole_test_does(seed):
     faces = np.concatenate([faces] + extra)
     want = whole_test(points, faces, fillings)
     assert crossing_fillings(points, faces, fillings).tolist() == want.tolist()
+
+
+def test_the_fillings_clipped_on_a_plane_are_refused_as_the_whole_test_does():
+    """A fan of a flat convex loop is a triangulation seen on a coordinate plane: leaving its
+    pairs with itself out (``projected``) decides as the whole test does."""
+    points, faces, fillings = holed_torus(60, 20, (1, 7, 13))
+    want = whole_test(points, faces, fillings)
+    assert crossing_fillings(points, faces, fillings, [True] * len(fillings)).tolist() == want.tolist()
+    patches = np.full(len(faces), -1)
+    for k, filling in enumerate(fillings):
+        patches[filling] = k
+    assert np.array_equal(self_intersections(points, faces, patches=patches).pairs, self_intersections(points, faces).pairs)
+
+
+def numpy_walk(monkeypatch, *args):
+    """``near_pairs`` on the numpy road, a few triangles walking together."""
+    with monkeypatch.context() as m:
+        m.setattr(near, "compiled", lambda: None)
+        m.setattr(near, "WALK", 7)
+        return near_pairs(*args)
+
+
+@pytest.mark.skipif(kernels.KERNELS is None and os.environ.get("CI") != "true",
+                    reason="the compiled kernels are not built here")
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compiled_walk_finds_the_numpy_walks_pairs(monkeypatch, seed):
+    points, faces = soup(seed)
+    group = np.full(len(faces), -1)
+    group[:10] = 0
+    query = np.arange(0, 40)
+    assert kernels.KERNELS is not None
+    for args in ((points, faces, query, group), (points, faces, query), holed_torus(40, 10, (0, 2, 4))[:2]
+                 + (np.arange(700, 776),)):
+        compiled_at, compiled_face = near_pairs(*args)
+        numpy_at, numpy_face = numpy_walk(monkeypatch, *args)
+        assert compiled_at.size > 0
+        assert np.array_equal(compiled_at, numpy_at) and np.array_equal(compiled_face, numpy_face)
+
+
+@pytest.mark.skipif(kernels.KERNELS is None, reason="the compiled kernels are not built here")
+def test_the_compiled_walk_grows_its_outputs(monkeypatch):
+    """One triangle meeting more boxes than the first outputs hold."""
+    points, faces = soup(1, 3000)
+    big = np.array([[-1e3, -1e3, -1e3], [1e3, -1e3, 1e3], [0.0, 1e3, 0.0]])
+    points = np.concatenate([points, big])
+    faces = np.concatenate([faces, [[len(points) - 3, len(points) - 2, len(points) - 1]]])
+    query = np.array([len(faces) - 1])
+    monkeypatch.setattr(near, "OUTPUTS", 4)
+    at, face = near_pairs(points, faces, query)
+    assert at.size > 32 * 4
+    assert [a.tolist() for a in numpy_walk(monkeypatch, points, faces, query)] == [at.tolist(), face.tolist()]
