@@ -7,13 +7,13 @@ numpy code (no kernels) and against the exact-vertex test (``closed_exact``)."""
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import needs_kernels
 from p3d_cli.io.source import array_source
 from p3d_cli.mesh import kernels
 from p3d_cli.mesh.analysis import analyze
@@ -23,8 +23,7 @@ from test_kernels import assert_same_analysis
 from test_paired import torus
 
 KERNELS = kernels.KERNELS
-if KERNELS is None and os.environ.get("CI") != "true":
-    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
+pytestmark = needs_kernels
 
 #: A torus of 2 · 120 · 100 = 24,000 faces: 72,000 sides, past the 65,536 from which the
 #: compiled pass deals the keys to buckets.

@@ -19,6 +19,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import needs_kernels
 from helpers.real_meshes import REPO
 from helpers.solids import box, indexed
 from p3d_cli.geometry.predicates import O3D_BOUND, in_safe_range
@@ -30,8 +31,7 @@ from p3d_cli.mesh.stars import _G, certified_vertices
 from p3d_cli.mesh.triangle_pairs import uncertified
 
 KERNELS = kernels.KERNELS
-if KERNELS is None and os.environ.get("CI") != "true":
-    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
+pytestmark = needs_kernels
 
 REAL = REPO.parent / "shared" / "real-meshes"
 

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from helpers.kernels import SAME_BITS, bits, needs_kernels
 from helpers.real_meshes import REPO
 from p3d_cli.io import load_mesh
 from p3d_cli.io.source import array_source
@@ -26,15 +27,9 @@ from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.integrals import tetra_terms
 
 KERNELS = kernels.KERNELS
-if KERNELS is None and os.environ.get("CI") != "true":
-    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
+pytestmark = needs_kernels
 
 REAL = REPO.parent / "shared" / "real-meshes"
-#: The kernels replay numpy's pairwise summation as numpy 2.3 and later do it; numpy before 2.3
-#: cuts long reductions at other places, so its sums of more than a few thousand terms can differ
-#: in the last bits. There the kernels and the numpy code are held to agree within the stated
-#: error bound instead (both are exact sums rounded within it), and same-bits is not claimed.
-SAME_BITS = np.lib.NumpyVersion(np.__version__) >= "2.3.0"
 RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
 
 
@@ -50,10 +45,6 @@ def numpy_block(triangles: np.ndarray, origin: np.ndarray):
     cols -= origin[None, :, None]
     terms, magnitude, weighted = tetra_terms(cols[0], cols[1], cols[2])
     return terms.sum(axis=1), float(magnitude.sum()), weighted, keys
-
-
-def bits(x) -> np.ndarray:
-    return np.asarray(x, dtype=np.float64).view(np.uint64)
 
 
 def torus_mesh(u: int, v: int) -> tuple[np.ndarray, np.ndarray]:

@@ -8,23 +8,16 @@ the kernels are not built, except under CI, whose install compiles them (as
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from helpers.kernels import SAME_BITS, bits, needs_kernels
 from p3d_cli.mesh import kernels
 
-if kernels.KERNELS is None and os.environ.get("CI") != "true":
-    pytestmark = pytest.mark.skip(reason="the compiled kernels are not built here")
-#: Same bits from numpy 2.3 on (``test_kernels.SAME_BITS``).
-SAME_BITS = np.lib.NumpyVersion(np.__version__) >= "2.3.0"
-
-
-def bits(x) -> np.ndarray:
-    return np.asarray(x, dtype=np.float64).view(np.uint64)
+pytestmark = needs_kernels
 
 
 @pytest.mark.parametrize("n, dtype", [(1, np.float32), (129, np.float64), (65536, np.float32),

@@ -4,12 +4,12 @@ the whole mesh's self-intersection test does."""
 
 from __future__ import annotations
 
-import os
 from fractions import Fraction
 
 import numpy as np
 import pytest
 
+from helpers.kernels import needs_kernels
 from p3d_cli.mesh import kernels
 from p3d_cli.mesh.intersections import self_intersections
 from p3d_cli.repairs import near
@@ -163,8 +163,7 @@ def numpy_walk(monkeypatch, *args):
         return near_pairs(*args)
 
 
-@pytest.mark.skipif(kernels.KERNELS is None and os.environ.get("CI") != "true",
-                    reason="the compiled kernels are not built here")
+@needs_kernels
 @pytest.mark.parametrize("seed", range(4))
 def test_the_compiled_walk_finds_the_numpy_walks_pairs(monkeypatch, seed):
     points, faces = soup(seed)
@@ -180,7 +179,7 @@ def test_the_compiled_walk_finds_the_numpy_walks_pairs(monkeypatch, seed):
         assert np.array_equal(compiled_at, numpy_at) and np.array_equal(compiled_face, numpy_face)
 
 
-@pytest.mark.skipif(kernels.KERNELS is None, reason="the compiled kernels are not built here")
+@needs_kernels
 def test_the_compiled_walk_grows_its_outputs(monkeypatch):
     """One triangle meeting more boxes than the first outputs hold."""
     points, faces = soup(1, 3000)
