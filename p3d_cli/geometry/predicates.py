@@ -166,34 +166,36 @@ def orient2d(a: np.ndarray, b: np.ndarray, c: np.ndarray, safe: bool = True) -> 
     """Exact signs of ``(b - a) × (c - a)`` for ``(k, 2)`` float64 points: ``(k,)`` int8."""
     if not safe:
         return exact_orient2d(a, b, c)
-    left = (a[:, 0] - c[:, 0]) * (b[:, 1] - c[:, 1])
-    right = (a[:, 1] - c[:, 1]) * (b[:, 0] - c[:, 0])
-    det = left - right
-    out = _signs(det)
-    perm = np.abs(left) + np.abs(right)
-    unsure = (np.abs(det) <= CCW_BOUND * perm) & (perm != 0)
-    if unsure.any():
-        rows = np.flatnonzero(unsure)
-        out[rows] = exact_orient2d(a[rows], b[rows], c[rows])
-    return out
+    return _filtered_orient2d(a[:, 0], a[:, 1], b[:, 0], b[:, 1], c,
+                              lambda rows: exact_orient2d(a[rows], b[rows], c[rows]))
 
 
 def orient2d_about(a: np.ndarray, b: np.ndarray, c: np.ndarray, safe: bool = True) -> np.ndarray:
     """``orient2d`` of one ``a`` and one ``b`` ``(2,)`` with every ``c`` ``(k, 2)``: the same
     exact signs, without spreading ``a`` and ``b`` to arrays (the same float operations, so the
     filter decides the same rows)."""
+    def spread(rows: np.ndarray | int) -> tuple[np.ndarray, np.ndarray]:
+        shape = (rows, 2) if isinstance(rows, int) else (rows.size, 2)
+        return np.broadcast_to(a, shape), np.broadcast_to(b, shape)
+
     if not safe:
-        return exact_orient2d(np.broadcast_to(a, c.shape), np.broadcast_to(b, c.shape), c)
+        return exact_orient2d(*spread(len(c)), c)
+    return _filtered_orient2d(a[0], a[1], b[0], b[1], c, lambda rows: exact_orient2d(*spread(rows), c[rows]))
+
+
+def _filtered_orient2d(ax, ay, bx, by, c: np.ndarray, exact) -> np.ndarray:
+    """orient2d's float filter (``a``, ``b`` as arrays of ``c``'s rows or as single values: the
+    same operations either way), with ``exact(rows)`` for the rows it cannot decide."""
     cx, cy = c[:, 0], c[:, 1]
-    left = (a[0] - cx) * (b[1] - cy)
-    right = (a[1] - cy) * (b[0] - cx)
+    left = (ax - cx) * (by - cy)
+    right = (ay - cy) * (bx - cx)
     det = left - right
     out = _signs(det)
     perm = np.abs(left) + np.abs(right)
     unsure = (np.abs(det) <= CCW_BOUND * perm) & (perm != 0)
     if unsure.any():
         rows = np.flatnonzero(unsure)
-        out[rows] = exact_orient2d(np.broadcast_to(a, (rows.size, 2)), np.broadcast_to(b, (rows.size, 2)), c[rows])
+        out[rows] = exact(rows)
     return out
 
 
