@@ -255,13 +255,15 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     """One block through the compiled kernels: its bounds, its edge keys (into ``keys`` from
     ``filled``, or the forward ones into ``buckets`` with their balance) and its sums; returns
     ``(lo, hi, keys written, sums)``, or None for the numpy code to take the block (a NaN or
-    infinity, whose message it words; a bound of ±0, whose sign numpy's min and max decide; the
-    first block of a part to be rescaled)."""
+    infinity, whose message it words; the first block of a part to be rescaled). A bound of
+    ±0, whose sign numpy's min and max decide, is taken from them (``_numpy_box``)."""
     if sums is None:
         box, finite = fast.bounds(block)
         box = np.array(box)
-        if not finite or not box.all():
+        if not finite:
             return None
+        if not box.all():
+            box = _numpy_box(block)
         if rescale and _exponent(float((box[3:] - box[:3]).max())):
             return None
         sums = MomentSums(origin_from_bounds(box[:3], box[3:], single))
@@ -273,10 +275,12 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     else:
         box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
     box = np.array(box)
-    if not finite or not box.all():
+    if not finite:
         if buckets is not None and not buckets.overflow:
             buckets.fill[:] = before
         return None
+    if not box.all():
+        box = _numpy_box(block)
     if written < 0:                                 # a bucket overflowed
         buckets.overflow = True
         written = 0
@@ -285,6 +289,17 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
         buckets.backward += backward
     sums.add_sums(np.array(totals), magnitude, np.array(weighted), size)
     return box[:3], box[3:], written, sums
+
+
+def _numpy_box(block) -> np.ndarray:
+    """A block's bounds ``(lo, hi)`` as the numpy code finds them (the same reductions over the
+    same copy, so a zero bound has the sign they give): for the blocks with a bound of ±0, whose
+    sums and keys the kernels still make."""
+    if not isinstance(block, np.ndarray):           # (vertices, faces) of an indexed source
+        vertices, faces = block
+        block = vertices[faces]
+    cols = columns(block)
+    return np.concatenate([cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)])
 
 
 def _exponent(extent: float) -> int:

@@ -229,6 +229,22 @@ def test_tori_anywhere_analyse_alike(at, scale):
             assert_same_analysis(source, closed=False)
 
 
+@pytest.mark.parametrize("signed_zeros", [False, True])
+def test_blocks_with_a_zero_bound_analyse_alike(signed_zeros):
+    """Blocks whose bounds touch 0 (of either sign) take their bounds from numpy's reductions
+    and their sums and keys from the kernels: the numpy road's bits, zeros' signs included."""
+    points, faces = torus_mesh(160, 60)                 # 19,200 faces: two blocks
+    points = points - points.min(axis=0)                # every lower bound exactly 0
+    if signed_zeros:
+        points[points == 0.0] = -0.0                    # some -0.0 beside +0.0 in one block
+        points[::3][points[::3] == -0.0] = 0.0
+    for chosen in (faces, faces[1:]):
+        for dtype in (np.float64, np.float32):
+            source = array_source("stl-binary", points.astype(dtype)[chosen], np.dtype(dtype).name)
+            assert_same_analysis(source)
+            assert_same_analysis(source, closed=False)
+
+
 def test_pure_numpy_switch(monkeypatch):
     monkeypatch.setenv("P3D_PURE_NUMPY", "1")
     assert kernels._load() is None
