@@ -168,10 +168,13 @@ class NotTaken(Exception):
     """A block the kernels do not read as it is (another dtype or byte order)."""
 
 
-def confirm_fans(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
+def confirm_fans(blocks, fan: np.ndarray, count: int, is_first: np.ndarray, volume=None):
     """``p3d_cli.mesh.paired._confirm`` by the compiled kernels (the same comparisons, block by
     block): the fans' coordinates ``(count, 3)`` as stored, or None when some corner differs
-    from its fan's first corner. Raises ``NotTaken`` for a block the kernels do not read."""
+    from its fan's first corner. Raises ``NotTaken`` for a block the kernels do not read.
+
+    With ``volume`` (a ``SignedVolume``), each block's volume sums are added to it as well, with
+    the bits its ``add_columns`` gives."""
     fast = KERNELS
     assert fast is not None  # noqa: S101 - called only with the kernels
     axes = np.zeros((3, count))
@@ -189,7 +192,11 @@ def confirm_fans(blocks, fan: np.ndarray, count: int, is_first: np.ndarray):
         if not fast.confirm(block, fan[3 * done:3 * (done + k)], is_first[3 * done:3 * (done + k)].view(np.uint8),
                             axes):
             return None                             # colliding keys paired two edges
+        if volume is not None:
+            _, _, totals, magnitude, _, _ = fast.block(block, *volume.origin, None, 0)
+            volume.add_sums(totals[0], magnitude, k)
         done += k
-    assert dtype is not None
+    if dtype is None:
+        return np.zeros((count, 3))
     # The coordinates as stored (float32 values are exact in float64 and back).
     return np.ascontiguousarray(axes.T).astype(dtype, copy=False)

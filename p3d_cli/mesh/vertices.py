@@ -21,7 +21,7 @@ import numpy as np
 from p3d_cli.mesh.closed import _column_hashes, corner_hashes
 from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.volume import SignedVolume
-from p3d_cli.mesh.kernels import compiled, key_buffer, sort, takes
+from p3d_cli.mesh.kernels import NotTaken, compiled, confirm_fans, key_buffer, sort
 
 #: Corners handled per vectorised step of the passes over the sorted keys (cache-sized).
 CHUNK = 1 << 16
@@ -199,7 +199,7 @@ def _confirm(blocks, ids, keys, first, bits, origin):
     is_first[(keys[first[:-1]] & mask).astype(np.int64)] = True
     fast = compiled()
     if fast is not None:
-        found = _confirm_compiled(fast, blocks, ids, is_first, m, origin)
+        found = _confirm_compiled(blocks, ids, is_first, m, origin)
         if found is not None:
             return found
     # One array per axis, so that each comparison is a 1-D gather (float64: the widened,
@@ -238,33 +238,18 @@ def _confirm(blocks, ids, keys, first, bits, origin):
     return points, volume, mixed
 
 
-def _confirm_compiled(fast, blocks, ids, is_first, m: int, origin):
+def _confirm_compiled(blocks, ids, is_first, m: int, origin):
     """``_confirm`` by the compiled kernels, when every group is one point (the usual case):
-    the same comparisons (``kernels.confirm_fans``'s, block by block) and the volume's sums
-    with the bits ``SignedVolume.add_columns`` gives (as ``paired._keyed_pass`` sums them).
-    None when some group holds several points or a block is not one the kernels read: the
-    numpy code then finds which."""
-    axes = np.zeros((3, m))
+    ``kernels.confirm_fans``'s comparisons, block by block, with the volume's sums (the bits
+    ``SignedVolume.add_columns`` gives, as ``paired._keyed_pass`` sums them). None when some
+    group holds several points or a block is not one the kernels read: the numpy code then
+    finds which."""
     volume = SignedVolume(origin, block=None)
-    dtype = None
-    done = 0
-    for block in blocks():
-        block = np.asarray(block)
-        k = len(block)
-        if k == 0:
-            continue
-        if not takes(block):
-            return None
-        dtype = dtype or block.dtype
-        if not fast.confirm(block, ids[3 * done:3 * (done + k)], is_first[3 * done:3 * (done + k)].view(np.uint8),
-                            axes):
-            return None
-        _, _, totals, magnitude, _, _ = fast.block(block, *volume.origin, None, 0)
-        volume.add_sums(totals[0], magnitude, k)
-        done += k
-    # The coordinates as stored (float32 values are exact in float64 and back).
-    points = np.ascontiguousarray(axes.T).astype(dtype, copy=False) if dtype is not None else np.zeros((m, 3))
-    return points, volume, np.zeros(0, dtype=np.int64)
+    try:
+        points = confirm_fans(blocks, ids, m, is_first, volume)
+    except NotTaken:
+        return None
+    return None if points is None else (points, volume, np.zeros(0, dtype=np.int64))
 
 
 def _split_groups(blocks, keys, ids, first, points, bits, mixed):
