@@ -51,6 +51,11 @@ def is_polydata(head: bytes) -> bool:
         is not None
 
 
+def _header_type(root) -> str:
+    """The XML file's ``header_type``, lower case; an absent or empty one is VTK's UInt32."""
+    return (root.get("header_type") or "UInt32").lower()
+
+
 def _corrupt(where: str, what: str) -> FormatError:
     return FormatError(where, what, "the file is corrupt or not VTK PolyData; export it again")
 
@@ -129,8 +134,7 @@ class _Xml:
     def __init__(self, where: str, root, appended: bytes, appended_base64: bool) -> None:
         self.where = where
         self.order = "<" if root.get("byte_order", "LittleEndian") == "LittleEndian" else ">"
-        # Checked by _load_xml: UInt32 or UInt64, an empty attribute taken as absent.
-        self.header = np.dtype(self.order + _TYPES[(root.get("header_type") or "UInt32").lower()])
+        self.header = np.dtype(self.order + _TYPES[_header_type(root)])   # checked by _load_xml
         compressor = root.get("compressor")
         if compressor not in (None, "", "vtkZLibDataCompressor"):
             raise FormatError(where, f"its data are compressed by {compressor}, which p3d does not decode",
@@ -248,7 +252,7 @@ def _load_xml(raw: RawInput) -> MeshSource:
         raise _corrupt(raw.where, f"is not valid VTK XML ({exc})") from None
     if root.get("type") != "PolyData":
         raise _corrupt(raw.where, f"is a VTK {root.get('type')!r} file, not PolyData")
-    if (root.get("header_type") or "UInt32").lower() not in ("uint32", "uint64"):
+    if _header_type(root) not in ("uint32", "uint64"):
         raise _corrupt(raw.where, f"header_type {root.get('header_type')!r} is not UInt32 or UInt64")
     reader = _Xml(raw.where, root, appended, is_base64)
     points, triangles, skipped, base = [], [], 0, 0

@@ -139,7 +139,7 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
         cols = columns(block)
         if cols.shape[2] == 0:
             continue                                # an empty block: nothing to add, no bounds
-        block_lo, block_hi = cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
+        block_lo, block_hi = _column_bounds(cols)
         # min and max propagate NaN and show any infinity: a finite check for free.
         if not (np.isfinite(block_lo).all() and np.isfinite(block_hi).all()):
             bad = int(np.flatnonzero(~np.isfinite(cols).all(axis=(0, 1)))[0])
@@ -291,15 +291,20 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     return box[:3], box[3:], written, sums
 
 
+def _column_bounds(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ``(lo, hi)`` of a block's columns ``(3, 3, k)``: the reductions that decide the sign
+    of a zero bound, for the numpy code and for the kernels' blocks with a bound of ±0."""
+    return cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)
+
+
 def _numpy_box(block) -> np.ndarray:
-    """A block's bounds ``(lo, hi)`` as the numpy code finds them (the same reductions over the
-    same copy, so a zero bound has the sign they give): for the blocks with a bound of ±0, whose
-    sums and keys the kernels still make."""
+    """A block's bounds as the numpy code finds them (``_column_bounds`` of the same copy), as
+    the kernels' ``box``: for the blocks with a bound of ±0, whose sums and keys the kernels
+    still make."""
     if not isinstance(block, np.ndarray):           # (vertices, faces) of an indexed source
         vertices, faces = block
         block = vertices[faces]
-    cols = columns(block)
-    return np.concatenate([cols.min(axis=2).min(axis=0), cols.max(axis=2).max(axis=0)])
+    return np.concatenate(_column_bounds(columns(block)))
 
 
 def _exponent(extent: float) -> int:
