@@ -18,10 +18,12 @@ from p3d_cli.constraints.rotation import skew
 KEYS = ("attach_a", "attach_b")
 #: Rows per constraint.
 EQUATIONS = 3
+#: Body-frame vectors its world geometry turns (``hinge.TURNED``): none.
+TURNED: tuple = ()
 
 
 def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
-    """Its own values of a scene entry (``ConstraintSpec`` fields): none beyond the attachments."""
+    """Its own values of a scene entry (``ConstraintSpec.values``): none beyond the attachments."""
     return {}
 
 
@@ -53,8 +55,6 @@ class Rows:
 
     Also a hinge's first three rows (``hinge.Rows`` holds one for its hinges).
     """
-
-    body_vectors: tuple = ()
 
     def __init__(self, specs, ks: np.ndarray, offsets: np.ndarray) -> None:
         self.ks = ks

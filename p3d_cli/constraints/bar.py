@@ -20,10 +20,12 @@ from p3d_cli.errors import SceneError
 KEYS = ("attach_a", "attach_b", "length")
 #: Rows per constraint.
 EQUATIONS = 1
+#: Body-frame vectors its world geometry turns (``hinge.TURNED``): none.
+TURNED: tuple = ()
 
 
 def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
-    """Its own values of a scene entry (``ConstraintSpec`` fields): the length, by default the
+    """Its own values of a scene entry (``ConstraintSpec.values``): the length, by default the
     distance between the attachment points where the scene places the bodies."""
     world_a = body_a.position + quat_to_matrix(body_a.rotation) @ attach_a
     world_b = body_b.position + quat_to_matrix(body_b.rotation) @ attach_b
@@ -76,7 +78,7 @@ def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
 
 def position_error(spec, geo) -> np.ndarray:
     """(1,): the distance between the points minus the bar's length."""
-    return np.array([np.linalg.norm(geo.p_b - geo.p_a) - spec.length])
+    return np.array([np.linalg.norm(geo.p_b - geo.p_a) - spec.values["length"]])
 
 
 def impulse(geo, lam: np.ndarray) -> dict:
@@ -87,12 +89,10 @@ def impulse(geo, lam: np.ndarray) -> dict:
 class Rows:
     """The array form (``rows.RowSet``): the rows of every bar of a scene at once."""
 
-    body_vectors: tuple = ()
-
     def __init__(self, specs, ks: np.ndarray, offsets: np.ndarray) -> None:
         self.ks = ks
         self.rows = offsets[ks]
-        self.length = np.array([specs[k].length for k in ks], dtype=np.float64)
+        self.length = np.array([specs[k].values["length"] for k in ks], dtype=np.float64)
         self.where = [specs[k].where for k in ks]
 
     def template(self, ja: np.ndarray, jb: np.ndarray) -> None:
@@ -129,7 +129,7 @@ class SmallJoint(scalar.Joint):
     length: float
 
     def configure(self, spec, rot) -> None:
-        self.length = float(spec.length or 0.0)
+        self.length = float(spec.values["length"])
 
     def evaluate(self, com, rot) -> list[float]:
         gap = self.points(com, rot)

@@ -28,10 +28,13 @@ from p3d_cli.constraints.rotation import cross, cross_rows
 KEYS = ("attach_a", "attach_b", "axis_a", "axis_b")
 #: Rows per constraint.
 EQUATIONS = 5
+#: Its body-frame vectors (value name, side) that its world geometry turns, in this order:
+#: ``JointGeometry.turned`` and ``rows.Geometry.turned`` hold them as ``(z_a, z_b)``.
+TURNED = (("axis_a", "a"), ("axis_b", "b"))
 
 
 def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
-    """Its own values of a scene entry (``ConstraintSpec`` fields): the unit axes in each body's
+    """Its own values of a scene entry (``ConstraintSpec.values``): the unit axes in each body's
     frame (a missing one is the other's, carried into its body's frame)."""
     axis_a, axis_b = values.pair(spec, "axis", place, body_a, body_b, point=False)
     return {"axis_a": values.unit_vector(axis_a), "axis_b": values.unit_vector(axis_b)}   # nonzero, finite
@@ -39,12 +42,13 @@ def read(spec: dict, place: str, body_a, body_b, attach_a, attach_b) -> dict:
 
 def frame(geo) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """``(x, y, z, s)``: an orthonormal frame with ``z`` the hinge axis, and the flip ``s`` of ``z_b``."""
-    s = 1.0 if float(geo.z_a @ geo.z_b) >= 0 else -1.0
-    z = geo.z_a + s * geo.z_b
+    z_a, z_b = geo.turned
+    s = 1.0 if float(z_a @ z_b) >= 0 else -1.0
+    z = z_a + s * z_b
     norm = np.linalg.norm(z)
     # Axes at exactly 90° still bisect; only an exactly opposite pair (impossible after the flip)
     # would leave z undefined.
-    z = z / norm if norm > 0 else geo.z_a
+    z = z / norm if norm > 0 else z_a
     # x: the world axis least aligned with z, made perpendicular (deterministic and well
     # conditioned: |x| >= sqrt(2/3) before normalising).
     seed = np.zeros(3)
@@ -67,7 +71,8 @@ def jacobian(geo) -> tuple[np.ndarray, np.ndarray]:
 def position_error(spec, geo) -> np.ndarray:
     """(5,): the attachment gap, then the axis misalignment ``(z_a × s z_b)`` along ``x`` and ``y``."""
     x, y, _, s = frame(geo)
-    tilt = cross(geo.z_a, s * geo.z_b)
+    z_a, z_b = geo.turned
+    tilt = cross(z_a, s * z_b)
     return np.concatenate([geo.p_b - geo.p_a, [tilt @ x, tilt @ y]])
 
 
@@ -79,13 +84,11 @@ def impulse(geo, lam: np.ndarray) -> dict:
 
 class Rows:
     """The array form (``rows.RowSet``): the rows of every hinge of a scene at once, its axes
-    turned into the world frame with the attachment offsets."""
+    (``TURNED``) turned into the world frame with the attachment offsets."""
 
     def __init__(self, specs, ks: np.ndarray, offsets: np.ndarray) -> None:
         self.ball = ball.Rows(specs, ks, offsets)       # the first three rows
         self.axis_rows = offsets[ks][:, None] + np.array([3, 4])
-        self.body_vectors = (("a", np.array([specs[k].axis_a for k in ks]).reshape(-1, 3)),
-                             ("b", np.array([specs[k].axis_b for k in ks]).reshape(-1, 3)))
 
     def template(self, ja: np.ndarray, jb: np.ndarray) -> None:
         self.ball.template(ja, jb)
@@ -144,8 +147,8 @@ class SmallJoint(scalar.Joint):
 
     def configure(self, spec, rot) -> None:
         """The body-frame unit axes; a fixed side's world axis is computed once."""
-        axis_a = np.asarray(spec.axis_a, dtype=np.float64).tolist()
-        axis_b = np.asarray(spec.axis_b, dtype=np.float64).tolist()
+        axis_a = np.asarray(spec.values["axis_a"], dtype=np.float64).tolist()
+        axis_b = np.asarray(spec.values["axis_b"], dtype=np.float64).tolist()
         self.axis_a, self.axis_b = axis_a, axis_b
         self.z_a = None if self.free_a else scalar.apply(rot[self.a], axis_a)
         self.z_b = None if self.free_b else scalar.apply(rot[self.b], axis_b)

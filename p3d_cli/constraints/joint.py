@@ -2,7 +2,8 @@
 
 Every constraint type works from the same few world-frame quantities: the offsets ``r`` of its
 attachment points from each body's centre of mass (docs/method.md, "Frames": ``r = attachment - centre of
-mass``, rotated into the world), the attachment points themselves, and for a hinge its axes.
+mass``, rotated into the world), the attachment points themselves, and the body-frame vectors the
+type declares in its ``TURNED`` (a hinge's axes), turned into the world.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 
 
 @dataclass(frozen=True)
@@ -22,8 +25,8 @@ class JointGeometry:
         Attachment point minus centre of mass, world frame.
     p_a, p_b : (3,) float64
         Attachment points, world frame.
-    z_a, z_b : (3,) float64 or None
-        Unit hinge axes, world frame.
+    turned : tuple of (3,) float64
+        The type's ``TURNED`` vectors in the world frame, in its order (a hinge's ``(z_a, z_b)``).
     where : str
         The constraint's place in the scene, for messages.
     """
@@ -32,8 +35,7 @@ class JointGeometry:
     r_b: np.ndarray
     p_a: np.ndarray
     p_b: np.ndarray
-    z_a: np.ndarray | None = None
-    z_b: np.ndarray | None = None
+    turned: tuple = ()
     where: str = ""
 
 
@@ -52,7 +54,6 @@ def joint_geometry(spec, com_a, rot_a, com_body_a, com_b, rot_b, com_body_b) -> 
     """
     r_a = rot_a @ (spec.attach_a - com_body_a)
     r_b = rot_b @ (spec.attach_b - com_body_b)
-    z_a = z_b = None
-    if spec.axis_a is not None:
-        z_a, z_b = rot_a @ spec.axis_a, rot_b @ spec.axis_b
-    return JointGeometry(r_a, r_b, com_a + r_a, com_b + r_b, z_a, z_b, spec.where)
+    turned = tuple((rot_a if side == "a" else rot_b) @ spec.values[name]
+                   for name, side in CONSTRAINT_TYPES[spec.type].TURNED)
+    return JointGeometry(r_a, r_b, com_a + r_a, com_b + r_b, turned, spec.where)

@@ -12,11 +12,12 @@ the scene, in the registry's order, for its part.
 Rows are in scene order: constraint 0's rows, then constraint 1's, and within a constraint in
 the order of its module.
 
+The body-frame vectors a type declares in its module's ``TURNED`` (value name and side, such
+as a hinge's axes) are turned into the world frame by ``geometry`` with the attachment offsets,
+in one product; the type reads them back as ``geo.turned[g]``, in order.
+
 A type's ``Rows(specs, ks, offsets)`` (``ks`` the scene indices of its constraints) has:
 
-- ``body_vectors``: a tuple of ``(side, (t, 3) vectors)``, body-frame vectors (such as a hinge's
-  axes) of side ``"a"`` or ``"b"`` that ``geometry`` turns into the world frame with the
-  attachment offsets, in one product; the type reads them back as ``geo.turned[g]``, in order;
 - ``template(ja, jb)``: writes its rows' constant entries (the ``±E`` of a ball's rows);
 - ``errors(geo, g, out)`` and ``jacobian(geo, g, ja, jb)``: write its rows' position errors and
   variable entries (``g`` is its place in ``geo.turned`` and ``geo.memo``).
@@ -39,7 +40,7 @@ class Geometry:
     gap : (c, 3) float64
         ``p_b - p_a``, the attachment points' separation.
     turned : list of tuple
-        Per type present (``RowSet.groups``' order), its ``body_vectors`` in the world frame.
+        Per type present (``RowSet.groups``' order), its ``TURNED`` vectors in the world frame.
     memo : list of dict
         Per type present, what its ``errors`` and ``jacobian`` share at this instant (a hinge's
         frames), computed once.
@@ -99,12 +100,11 @@ class RowSet:
             ks = np.array([k for k, c in enumerate(specs) if c.type == name], dtype=np.intp)
             if not len(ks):
                 continue
-            rows = module.Rows(specs, ks, self.offsets)
-            self.groups.append(rows)
+            self.groups.append(module.Rows(specs, ks, self.offsets))
             spans = []
-            for side, v in rows.body_vectors:
+            for name, side in module.TURNED:
                 rot_index.append((self.a if side == "a" else self.b)[ks])
-                vectors.append(np.asarray(v, dtype=np.float64).reshape(-1, 3))
+                vectors.append(np.array([specs[k].values[name] for k in ks], dtype=np.float64).reshape(-1, 3))
                 spans.append((start, start + len(ks)))
                 start += len(ks)
             self._turned.append(spans)

@@ -7,7 +7,7 @@ naming its place (``scene.yaml: constraints[2].b``). See ``docs/solve.md`` for t
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -90,12 +90,10 @@ class ConstraintSpec:
     a, b : str
         Body names.
     attach_a, attach_b : (3,) float64
-    axis_a, axis_b : (3,) float64 or None
-        Unit hinge axes (hinge only).
-    length : float or None
-        Bar length (bar only).
-
-    The fields after ``attach_b`` are what a type's ``read`` gives (its module's own values).
+    values : dict
+        The type's own values, as its module's ``read`` gives them (a hinge's unit axes
+        ``axis_a``, ``axis_b`` in each body's frame; a bar's ``length``). Only the type's module
+        reads them, so a new type needs no field here.
     """
 
     index: int
@@ -104,9 +102,7 @@ class ConstraintSpec:
     b: str
     attach_a: np.ndarray
     attach_b: np.ndarray
-    axis_a: np.ndarray | None = None
-    axis_b: np.ndarray | None = None
-    length: float | None = None
+    values: dict = field(default_factory=dict)
     where: str = ""
 
 
@@ -323,4 +319,4 @@ def _constraint(index: int, spec, where: str, bodies: dict) -> ConstraintSpec:
                          "remove it, or make one body free")
     attach_a, attach_b = values.pair(spec, "attach", place, bodies[a], bodies[b], point=True)
     own = module.read(spec, place, bodies[a], bodies[b], attach_a, attach_b)
-    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, **own, where=place)
+    return ConstraintSpec(index, kind, a, b, attach_a, attach_b, own, where=place)

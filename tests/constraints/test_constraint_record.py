@@ -15,6 +15,7 @@ from test_small_step import assert_same, both_paths
 
 from helpers.real_meshes import REPO
 from p3d_cli.constraints import ball, bar, hinge, scalar, solve_scene
+from p3d_cli.constraints.joint import joint_geometry
 from p3d_cli.constraints.registry import CONSTRAINT_TYPES
 from p3d_cli.constraints.rotation import quat_to_matrix
 from p3d_cli.constraints.rows import RowSet
@@ -27,13 +28,11 @@ BODY = {"mass": 1.0, "inertia": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}
 def read_tether(spec, place, body_a, body_b, attach_a, attach_b):
     if spec.get("slack") is not None and spec["slack"] < 0:
         raise SceneError(f"{place}.slack", "is negative", "give a slack >= 0")
-    return {"length": 1.0 + float(spec.get("slack") or 0.0)}
+    return {"reach": 1.0 + float(spec.get("slack") or 0.0), "pull": np.array([0.0, 0.0, 1.0])}
 
 
 class _NoRows:
-    """An array form that writes nothing (the row layout is what is tested)."""
-
-    body_vectors = ()
+    """An array form that writes nothing (the row layout and the turned vectors are what is tested)."""
 
     def __init__(self, specs, ks, offsets):
         pass
@@ -42,8 +41,10 @@ class _NoRows:
         pass
 
 
-#: A throwaway type: a ball's keys plus ``slack``, two rows.
-TETHER = types.SimpleNamespace(KEYS=("attach_a", "attach_b", "slack"), EQUATIONS=2, read=read_tether, Rows=_NoRows)
+#: A throwaway type: a ball's keys plus ``slack``, two rows, values of its own (``reach``, and
+#: ``pull``: a body-frame vector of side b that its world geometry turns).
+TETHER = types.SimpleNamespace(KEYS=("attach_a", "attach_b", "slack"), EQUATIONS=2, read=read_tether, Rows=_NoRows,
+                               TURNED=(("pull", "b"),))
 
 
 @pytest.fixture
@@ -59,7 +60,7 @@ def scene(**entry):
 
 def test_a_registered_type_is_read_from_a_scene(tether):
     spec = scene(type="tether", slack=0.5).constraints[0]
-    assert (spec.type, spec.length, spec.where) == ("tether", 1.5, "scene.yaml: constraints[0]")
+    assert (spec.type, spec.values["reach"], spec.where) == ("tether", 1.5, "scene.yaml: constraints[0]")
     assert spec.attach_b.tolist() == [0.0, 0.0, -1.0]     # the attachments are read as for every type
     with pytest.raises(SceneError, match=r"constraints\[0\]\.slack: is negative"):
         scene(type="tether", slack=-1)
@@ -79,6 +80,13 @@ def test_its_rows_are_counted_from_the_module(tether):
                          "scene.yaml", ".")
     rows = RowSet(parsed, {"a": 0, "b": 1}, np.zeros((2, 3)))
     assert rows.offsets.tolist() == [0, 3, 5] and rows.m == 5
+    # Its declared vector is turned with side b's rotation (a quarter turn about x: z -> -y).
+    quarter = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+    geo = rows.geometry(np.zeros((2, 3)), np.stack([np.eye(3), quarter]))
+    assert [v.tolist() for v in geo.turned[1]] == [[[0.0, -1.0, 0.0]]]
+    single = joint_geometry(parsed.constraints[1], np.zeros(3), np.eye(3), np.zeros(3),
+                            np.zeros(3), quarter, np.zeros(3))
+    assert [v.tolist() for v in single.turned] == [[0.0, -1.0, 0.0]]
 
 
 def test_an_unregistered_type_is_refused():
@@ -91,10 +99,11 @@ def test_each_type_declares_its_record(module):
     assert module.KEYS[:2] == ("attach_a", "attach_b") and module.EQUATIONS in (1, 3, 5)
     assert callable(module.read) and callable(module.jacobian) and callable(module.position_error)
     assert issubclass(module.SmallJoint, scalar.Joint) and module.SmallJoint.rows == module.EQUATIONS
-    assert callable(module.Rows)
+    assert callable(module.Rows) and all(side in ("a", "b") for _, side in module.TURNED)
+    turned = tuple(np.array([0.0, 0, 1]) for _ in module.TURNED)
     ja, jb = module.jacobian(types.SimpleNamespace(r_a=np.array([0.0, 0, 1]), r_b=np.array([0.0, 0, -1]),
                                                    p_a=np.zeros(3), p_b=np.array([0.0, 0, 1]),
-                                                   z_a=np.array([0.0, 0, 1]), z_b=np.array([0.0, 0, 1]), where="x"))
+                                                   turned=turned, where="x"))
     assert ja.shape == jb.shape == (module.EQUATIONS, 6)
 
 
@@ -111,8 +120,6 @@ def _pin_jacobian(geo):
 
 
 class _PinRows:
-    body_vectors = ()
-
     def __init__(self, specs, ks, offsets):
         self.ks, self.rows = ks, offsets[ks]
 
@@ -146,7 +153,7 @@ class _PinJoint(scalar.Joint):
 
 
 PIN = types.SimpleNamespace(
-    KEYS=("attach_a", "attach_b"), EQUATIONS=1, read=lambda spec, place, body_a, body_b, attach_a, attach_b: {},
+    KEYS=("attach_a", "attach_b"), EQUATIONS=1, TURNED=(), read=lambda spec, place, body_a, body_b, attach_a, attach_b: {},
     jacobian=_pin_jacobian, position_error=lambda spec, geo: np.array([geo.p_b[2] - geo.p_a[2]]),
     impulse=lambda geo, lam: {"impulse": float(lam[0])}, Rows=_PinRows, SmallJoint=_PinJoint)
 

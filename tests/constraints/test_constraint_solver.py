@@ -111,7 +111,7 @@ def constraint_residuals(scene, result) -> list[float]:
             d = (pb - pa) / np.linalg.norm(pb - pa)
             out.append(abs(float((vb - va) @ d)))
         else:
-            z = ra @ c.axis_a
+            z = ra @ c.values["axis_a"]
             rel = np.cross(states[c.b].angular_velocity - states[c.a].angular_velocity, z)
             out.append(max(float(np.abs(vb - va).max()), float(np.abs(rel).max())))
     return out
