@@ -24,13 +24,14 @@ metres; ``scene_source`` turns them into one ``MeshSource``:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 import numpy as np
 
 from p3d_cli.errors import FormatError, InputError
-from p3d_cli.io.source import BLOCK, MeshSource
+from p3d_cli.io.source import BLOCK, MeshSource, indexed_source
 from p3d_cli.warning_codes import CodedWarning
 
 #: Relative tolerance for recognising a declared unit as one of ``LENGTHS`` (``0.0254`` as
@@ -130,9 +131,13 @@ def _stored_dtype(vertices: np.ndarray) -> str:
 def object_source(fmt: str, where: str, vertices: np.ndarray, faces: np.ndarray, dtype: str,
                   unit: str, matrix: np.ndarray | None = None) -> MeshSource:
     """A ``MeshSource`` over one object, placed by ``matrix`` (when given) as its blocks are
-    read: a scene of many instances of one mesh holds the mesh once, never its copies."""
+    read: a scene of many instances of one mesh holds the mesh once, never its copies. An
+    object left as stored is an indexed mesh (``indexed_source``: the same blocks, and the
+    kernels read its vertices and faces without gathering them)."""
     vertices = vertices if vertices.dtype in (np.float32, np.float64) else vertices.astype(np.float64)
     faces = faces.astype(np.intp, copy=False)
+    if matrix is None:
+        return dataclasses.replace(indexed_source(fmt, vertices, faces, dtype), where=where, length_unit=unit)
 
     def read_blocks() -> Iterator[np.ndarray]:
         points, corners, _ = _place(vertices, faces, matrix)
@@ -185,14 +190,16 @@ def scene_source(fmt: str, where: str, objects: list[SceneObject], metres: float
                          "export the model with its meshes")
     dtypes = {source.coordinate_dtype for _, source in parts}
 
-    def read_blocks() -> Iterator[np.ndarray]:
+    def every_part() -> Iterator[np.ndarray]:
         for _, source in parts:
             yield from source.read_blocks()
 
     listed = tuple(parts) if len(parts) > 1 else ()
+    # One object is read as its own source is (an unplaced one by the kernels' indexed road).
+    read_blocks, indexed = (every_part, None) if listed else (parts[0][1].read_blocks, parts[0][1].indexed)
     return MeshSource(fmt, sum(s.face_count for _, s in parts), "float32" if dtypes == {"float32"} else "float64",
                       read_blocks, None, tuple(warnings), where, length_unit=unit, objects=listed,
-                      object_kind=kind if listed else "")
+                      object_kind=kind if listed else "", indexed=indexed)
 
 
 def instance_totals(where: str, roots: list, children: Callable[[Any], list], own: Callable[[Any], tuple[int, int]],

@@ -407,3 +407,46 @@ def test_placed_indexed_mesh_has_its_bounds(scale):
     assert np.array_equal(obj.facts.bounds.max, stl.facts.bounds.max)
     assert bits(obj.properties.center_of_mass).tolist() == bits(stl.properties.center_of_mass).tolist()
 
+
+
+@pytest.mark.parametrize("kind", ["glb", "glb strided", "3mf"])
+def test_unplaced_scene_object_is_indexed_and_alike(tmp_path, kind):
+    """A scene file of one unplaced object (GLB, 3MF) is read as an indexed mesh, so the kernels
+    read its vertices and faces as they are (a strided glTF accessor included): the same
+    analysis, bit for bit, as its gathered blocks, and the same check and props with the
+    kernels and without."""
+    import dataclasses
+
+    from helpers import threemf_writer
+    from helpers.gltf_writer import Gltf
+
+    points, faces = torus_mesh(160, 80)
+    faces = faces[1:]                                                  # one hole
+    if kind == "3mf":
+        path = threemf_writer.package(tmp_path / "torus.3mf", threemf_writer.model(
+            [threemf_writer.mesh_object(1, points, faces)], items=[(1, None, None)], unit="meter"))
+    else:
+        gltf = Gltf()
+        if kind == "glb strided":                                      # x y z and a pad per vertex
+            rows = np.zeros((len(points), 4), np.float32)
+            rows[:, :3] = points
+            position = gltf.accessor(np.zeros((len(points), 3)), view=gltf.view(rows.tobytes(), stride=16),
+                                     count=len(points), min=points.min(axis=0).tolist(),
+                                     max=points.max(axis=0).tolist())
+            primitive = {"attributes": {"POSITION": position},
+                         "indices": gltf.accessor(faces.reshape(-1), "uint32")}
+        else:
+            primitive = gltf.primitive(points, faces)
+        gltf.node(gltf.mesh(primitive))
+        path = gltf.save(tmp_path / "torus.glb")
+    source = load_mesh(str(path))
+    assert source.indexed_arrays() is not None
+    gathered = dataclasses.replace(source, read_blocks=lambda: source.read_blocks())
+    assert gathered.indexed_arrays() is None
+    ours, theirs = analyze(source, "torus"), analyze(gathered, "torus")
+    assert (ours.closed, ours.boundary_edges) == (theirs.closed, theirs.boundary_edges) == (False, 3)
+    for name in ("volume", "center", "central"):
+        assert bits(getattr(ours.moments, name)).tolist() == bits(getattr(theirs.moments, name)).tolist()
+        assert bits(getattr(ours.moments.errors, name)).tolist() == bits(getattr(theirs.moments.errors, name)).tolist()
+    assert bits([ours.bounds.min, ours.bounds.max]).tolist() == bits([theirs.bounds.min, theirs.bounds.max]).tolist()
+    assert_commands_alike(path)
