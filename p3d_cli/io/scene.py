@@ -135,7 +135,7 @@ def object_source(fmt: str, where: str, vertices: np.ndarray, faces: np.ndarray,
     object left as stored is an indexed mesh (``indexed_source``: the same blocks, and the
     kernels read its vertices and faces without gathering them)."""
     vertices = vertices if vertices.dtype in (np.float32, np.float64) else vertices.astype(np.float64)
-    faces = faces.astype(np.intp, copy=False)
+    faces = faces if faces.dtype in (np.int32, np.intp) else faces.astype(np.intp)
     if matrix is None:
         return dataclasses.replace(indexed_source(fmt, vertices, faces, dtype), where=where, length_unit=unit)
 

@@ -42,7 +42,8 @@ class Meshes:
 
     def triangles(self, index: int, path: str, weights=None) -> tuple[np.ndarray, np.ndarray]:
         """Mesh ``index``: its vertices ``(m, 3)`` (float32 as stored when nothing changes them,
-        else float64) and faces ``(n, 3)`` int64, over all its primitives."""
+        else float64) and faces ``(n, 3)``, over all its primitives: int32 where the vertex
+        count allows (half the memory of int64, and the kernels read them as they are), else int64."""
         self.doc.entry("meshes", index, path)      # an index that is no index fails here, by name
         if weights is not None:
             if not all(isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) for w in weights):
@@ -87,7 +88,7 @@ class Meshes:
             if mode == 4 and len(corners) % 3:
                 self.ragged += 1
             vertex_sets.append(vertices)
-            face_sets.append(faces + offset if offset else faces)
+            face_sets.append(faces.astype(np.int64) + offset if offset else faces)   # no int32 overflow
             offset += len(vertices)
         if not vertex_sets:
             return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int64)
@@ -144,7 +145,7 @@ class Meshes:
         if top >= vertex_count:
             raise self.doc.error(f"{here}.indices", f"name vertex {top}, but the primitive has "
                                  f"{vertex_count} vertices")
-        return corners.astype(np.int64)
+        return corners.astype(np.int32 if vertex_count <= 1 << 31 else np.int64)
 
 
 def _faces(corners: np.ndarray, mode: int) -> np.ndarray:
