@@ -325,7 +325,15 @@ def _fan_ids(pi: np.ndarray):
     needed) and doubling each round; every cycle is covered when adjacent corners agree
     (window minima of a cycle longer than the window differ where the window leaves its
     smallest corner). Valence 6 or less, most vertices of most meshes, takes one round.
+
+    The compiled kernels walk each cycle once instead (``fan_cycles``), in ascending order of
+    its smallest corner: the same numbers, written into ``pi``'s buffer as here.
     """
+    fast = compiled()
+    if fast is not None and pi.flags.c_contiguous and pi.flags.writeable:
+        first = np.empty(pi.size, dtype=bool)
+        count = fast.fan_cycles(pi, first)
+        return pi, count, first
     label = np.arange(pi.size, dtype=pi.dtype)
     np.minimum(label, pi, out=label)
     jump = _gather(pi, pi)

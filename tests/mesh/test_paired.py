@@ -17,6 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import needs_kernels
 from helpers.meshes import cube_triangles
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
@@ -165,14 +166,26 @@ def test_falsely_paired_sides_fail_the_exact_confirmation(monkeypatch):
     assert r.boundary_edges == 6 and r.shells == 2
 
 
-@given(st.integers(0, 2**32 - 1), st.integers(1, 300))
-def test_fan_ids_number_the_cycles_of_a_permutation(seed, size):
+@given(st.integers(0, 2**32 - 1), st.integers(1, 300), st.sampled_from([np.int32, np.int64]),
+       st.sampled_from(["kernel", "numpy"]))
+def test_fan_ids_number_the_cycles_of_a_permutation(seed, size, dtype, road):
+    # Both roads (the compiled cycle walk and numpy's pointer doubling) against a walk here.
     rng = np.random.default_rng(seed)
-    pi = rng.permutation(size).astype(np.int32)
+    pi = rng.permutation(size).astype(dtype)
     if seed % 2:                                    # long cycles, as around a busy vertex
         order = rng.permutation(size)
-        pi = np.empty(size, dtype=np.int32)
+        pi = np.empty(size, dtype=dtype)
         pi[order] = np.roll(order, 1)
+    if road == "numpy" or paired.compiled() is None:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(paired, "compiled", lambda: None)
+            check_fan_ids(pi)
+    else:
+        check_fan_ids(pi)
+
+
+def check_fan_ids(pi: np.ndarray) -> None:
+    size = pi.size
     expected = np.full(size, -1)
     count = 0
     for c in range(size):                           # cycles in order of their first member
@@ -183,8 +196,16 @@ def test_fan_ids_number_the_cycles_of_a_permutation(seed, size):
                 x = int(pi[x])
             count += 1
     fan, got_count, first = paired._fan_ids(pi.copy())
-    assert got_count == count and np.array_equal(fan, expected)
+    assert got_count == count and np.array_equal(fan, expected) and fan.dtype == pi.dtype
+    assert first.dtype == bool
     assert np.array_equal(np.flatnonzero(first), [np.flatnonzero(expected == k)[0] for k in range(count)])
+
+
+@needs_kernels
+@pytest.mark.parametrize("pi", [[1, 1, 0], [0, 3], [2, 0, 0], [-1, 0], [-1]])
+def test_the_compiled_cycle_walk_refuses_what_is_not_a_permutation(pi):
+    with pytest.raises(ValueError, match="permutation"):
+        paired.compiled().fan_cycles(np.array(pi, dtype=np.int32), np.zeros(len(pi), dtype=bool))
 
 
 def test_a_shared_top_hash_of_distinct_points_is_not_a_vertex(monkeypatch):
