@@ -40,7 +40,7 @@ import numpy as np
 from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, corner_hashes
 from p3d_cli.mesh.splitmix import mix
 from p3d_cli.mesh.edges import corner_slot
-from p3d_cli.mesh.faces import zero_area_faces
+from p3d_cli.mesh.faces import zero_area_faces, zero_area_faces_compiled
 from p3d_cli.mesh.columns import columns, origin_from_bounds
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
 from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
@@ -138,6 +138,26 @@ def _keyed_pass(blocks, n: int, bits: int, where, hasher):
     else:
         keys = key_buffer(3 * n)        # ordinary pages: see kernels.key_buffer
     for block in blocks():
+        if buckets is not None and volume is not None and kernel_takes(block):
+            # After the first block (whose bounds place the origin), the compiled pass reads
+            # the block's own records: no float64 columns. A block with a NaN or an infinity
+            # takes the road below, which names the face.
+            k = len(block)
+            if k == 0:
+                continue
+            if done + k > n:
+                count_error(where, n, f"more than {n}")
+            _, finite, totals, magnitude, _, _ = fast.block(block, *volume.origin, None, 0)
+            if finite:
+                zero.append(zero_area_faces_compiled(block, fast) + done)
+                degenerate, forward_sum, total, written = fast.paired_keys(
+                    block, bits, done, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
+                if degenerate or written < 0:
+                    return None         # a side that may bound nothing, or crowded keys: the general path
+                balance += 2 * forward_sum - total
+                volume.add_sums(totals[0], magnitude, k)
+                done += k
+                continue
         cols = columns(block)
         k = cols.shape[2]
         if k == 0:
@@ -406,14 +426,15 @@ def _merge_fans(fan: np.ndarray, count: int, points: np.ndarray):
     """Exact vertex ids from the fans: fans at one point are one vertex (several fans: a
     non-manifold vertex). Returns ``(ids, vertices, nonmanifold)`` (see ``Paired``)."""
     hashes = corner_hashes(points)
-    # Fans whose hashes agree in their top 32 bits (a uint32 sort is faster): a few, by chance,
-    # besides those that share a point.
-    top = (hashes >> np.uint64(32)).astype(np.uint32)
-    ordered = np.sort(top)
+    # Fans whose hashes agree (the compiled radix sort, when there is one): a few, by chance,
+    # besides those that share a point, whose hashes are equal.
+    ordered = hashes.copy()
+    sort(ordered)
     shared = ordered[1:][ordered[1:] == ordered[:-1]]
+    del ordered
     if shared.size == 0:                # the usual case: one fan per point
         return fan, count, np.zeros(0, dtype=np.int64)
-    candidates = np.flatnonzero(np.isin(top, shared))
+    candidates = np.flatnonzero(np.isin(hashes, shared))
     coords = points[candidates].astype(np.float64) + 0.0
     h = hashes[candidates]
     # The general path's vertex order: full hash, then coordinates (vertices.py).
