@@ -1119,6 +1119,8 @@ static PyObject *py_keys_block(PyObject *self, PyObject *args);
 static PyObject *py_unite(PyObject *self, PyObject *args);
 static PyObject *py_flatten(PyObject *self, PyObject *args);
 static PyObject *py_near_walk(PyObject *self, PyObject *args);
+static PyObject *py_fan_cycles(PyObject *self, PyObject *args);
+static PyObject *py_area_filter(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1909,6 +1911,10 @@ static PyMethodDef methods[] = {
     {"near_walk", py_near_walk, METH_VARARGS,
      "near_walk(triangles, node_lo, node_hi, node_label, offsets, face_lo, face_hi, face_label, mine, margin, leaf, "
      "start, out_tri, out_face) -> (next, written)"},
+    {"fan_cycles", py_fan_cycles, METH_VARARGS,
+     "fan_cycles(pi, first) -> fans: pi overwritten with each corner's fan (numbered by smallest corner)"},
+    {"area_filter", py_area_filter, METH_VARARGS,
+     "area_filter(block, undecided) -> count: the faces no plane certifies as of non-zero area"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -2282,4 +2288,132 @@ static PyObject *py_near_walk(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     release_all(v, got, ARRAYS);
     return Py_BuildValue("nn", next, written);
+}
+
+/* ---- p3d check's fast path: the fans, the cycles of the corner permutation
+ * (p3d_cli.mesh.paired._fan_ids) --------------------------------------------------------- */
+
+/* fan_cycles(pi, first) -> count: pi (int32 or int64) a permutation of the corners; each of
+ * its cycles is a fan. Overwrites pi with the fan number of every corner, the fans numbered
+ * by their smallest corner (the numpy code's pointer doubling labels each cycle with its
+ * smallest corner and numbers the labels in order: the same numbers), and sets first[c]
+ * (bytes) where c is its fan's smallest corner. The cycles are found in ascending order of
+ * their smallest corner, each walked once; a visited corner holds -(fan + 1) until the last
+ * pass. -1 when pi is not a permutation (an index out of range, or two corners leading to
+ * one; pi is then left partly overwritten). */
+#define FAN_CYCLES(T)                                                                              \
+    static Py_ssize_t fan_cycles_##T(T *pi, unsigned char *first, Py_ssize_t size) {             \
+        Py_ssize_t count = 0;                                                                      \
+        for (Py_ssize_t c = 0; c < size; c++)                                                      \
+            if (pi[c] < 0 || pi[c] >= size)                                                        \
+                return -1;                                                                         \
+        for (Py_ssize_t c = 0; c < size; c++) {                                                    \
+            if (pi[c] < 0) {                                                                       \
+                first[c] = 0;                                                                      \
+                continue;                                                                          \
+            }                                                                                      \
+            first[c] = 1;                                                                          \
+            T mark = (T)(-(count + 1));                                                            \
+            Py_ssize_t x = c;                                                                      \
+            while (pi[x] >= 0) {                                                                   \
+                Py_ssize_t next = (Py_ssize_t)pi[x];                                               \
+                if (next >= size)                                                                  \
+                    return -1;                                                                     \
+                pi[x] = mark;                                                                      \
+                x = next;                                                                          \
+            }                                                                                      \
+            if (x != c)                                                                            \
+                return -1; /* met another cycle: not a permutation */                             \
+            count++;                                                                               \
+        }                                                                                          \
+        for (Py_ssize_t c = 0; c < size; c++)                                                      \
+            pi[c] = (T)(-pi[c] - 1);                                                               \
+        return count;                                                                              \
+    }
+FAN_CYCLES(int32_t)
+FAN_CYCLES(int64_t)
+
+static PyObject *py_fan_cycles(PyObject *self, PyObject *args) {
+    PyObject *piobj, *fobj;
+    if (!PyArg_ParseTuple(args, "OO", &piobj, &fobj))
+        return NULL;
+    Py_buffer pv, fv;
+    if (get_array(piobj, &pv, 'i', 1, "fan_cycles") < 0)
+        return NULL;
+    if (get_array(fobj, &fv, 'B', 1, "fan_cycles") < 0) {
+        PyBuffer_Release(&pv);
+        return NULL;
+    }
+    Py_ssize_t size = pv.len / pv.itemsize, count = -1;
+    if (fv.len == size) {
+        Py_BEGIN_ALLOW_THREADS
+        count = pv.itemsize == 4 ? fan_cycles_int32_t((int32_t *)pv.buf, (unsigned char *)fv.buf, size)
+                                 : fan_cycles_int64_t((int64_t *)pv.buf, (unsigned char *)fv.buf, size);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&pv);
+    PyBuffer_Release(&fv);
+    if (count < 0) {
+        PyErr_SetString(PyExc_ValueError, "fan_cycles: pi must be a permutation and first as long");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(count);
+}
+
+/* ---- p3d check's zero-area faces: the float filter (p3d_cli.mesh.faces.zero_area_faces) ---- */
+
+/* area_filter(block, undecided) -> count: the faces of a (k, 3, 3) block (any strides, float32
+ * widened) that no coordinate plane certifies as of non-zero area, ascending in undecided
+ * (int64, at least k long). Plane (i, j) certifies a face when |left - right| > bound, with
+ * left = (a_i - c_i)(b_j - c_j), right = (a_j - c_j)(b_i - c_i) and bound = (3 + 16 eps) eps
+ * (|left| + |right|) + 2^-1060: the numpy filter's IEEE operations in the same order, so the
+ * same faces are left to its exact test (a NaN or an overflow certifies nothing). */
+static PyObject *py_area_filter(PyObject *self, PyObject *args) {
+    PyObject *obj, *uobj;
+    if (!PyArg_ParseTuple(args, "OO", &obj, &uobj))
+        return NULL;
+    Py_buffer view, uv;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (b.indexed || get_array(uobj, &uv, 'q', 1, "area_filter") < 0) {
+        if (b.indexed)
+            PyErr_SetString(PyExc_TypeError, "area_filter: a (k, 3, 3) block");
+        release_block(&view, &b);
+        return NULL;
+    }
+    Py_ssize_t count = -1;
+    if (uv.len / 8 >= b.n) {
+        const double eps = 0x1p-53, bound_factor = (3.0 + 16.0 * eps) * eps, underflow = 0x1p-1060;
+        static const int planes[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+        int64_t *undecided = (int64_t *)uv.buf;
+        count = 0;
+        Py_BEGIN_ALLOW_THREADS
+        double p[128][9];
+        for (Py_ssize_t t0 = 0; t0 < b.n; t0 += 128) {
+            Py_ssize_t m = b.n - t0 < 128 ? b.n - t0 : 128;
+            load(&b, t0, m, p);
+            for (Py_ssize_t k = 0; k < m; k++) {
+                const double *a = p[k], *bb = p[k] + 3, *c = p[k] + 6;
+                int certain = 0;
+                for (int q = 0; q < 3 && !certain; q++) {
+                    int i = planes[q][0], j = planes[q][1];
+                    double left = (a[i] - c[i]) * (bb[j] - c[j]);
+                    double right = (a[j] - c[j]) * (bb[i] - c[i]);
+                    double bound = bound_factor * (fabs(left) + fabs(right)) + underflow;
+                    certain = fabs(left - right) > bound;
+                }
+                if (!certain)
+                    undecided[count++] = t0 + k;
+            }
+        }
+        Py_END_ALLOW_THREADS
+    }
+    release_block(&view, &b);
+    PyBuffer_Release(&uv);
+    if (count < 0) {
+        PyErr_SetString(PyExc_ValueError, "area_filter: undecided shorter than the block");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(count);
 }

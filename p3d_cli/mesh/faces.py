@@ -17,6 +17,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from p3d_cli.mesh.columns import columns
+
 _EPS = np.finfo(np.float64).eps / 2
 #: Shewchuk's ``ccwerrboundA``.
 _ORIENT_BOUND = (3.0 + 16.0 * _EPS) * _EPS
@@ -48,6 +50,23 @@ def zero_area_faces(cols: np.ndarray) -> np.ndarray:
             undecided = undecided[~(np.abs(left - right) > bound)]
             if undecided.size == 0:
                 return undecided
+    return _decided(cols, undecided)
+
+
+def zero_area_faces_compiled(block: np.ndarray, kernels) -> np.ndarray:
+    """``zero_area_faces`` of a ``(k, 3, 3)`` block the kernels read as it is (``kernels.takes``):
+    the same float filter in one compiled pass over the block's own records, and the exact test
+    on the float64 columns of the few faces it leaves (none in most meshes)."""
+    undecided = np.empty(len(block), dtype=np.int64)
+    count = kernels.area_filter(block, undecided)
+    if count == 0:
+        return undecided[:0]
+    undecided = undecided[:count]
+    return undecided[_decided(columns(block[undecided]), np.arange(count))]
+
+
+def _decided(cols: np.ndarray, undecided: np.ndarray) -> np.ndarray:
+    """The faces among ``undecided`` (ascending) of exactly zero area, by the exact tests."""
     zero, rest = exactly_zero_area(cols[:, :, undecided])
     # What the vectorised test cannot decide (coordinates beyond 2**±400, or an expansion that
     # did not settle): one face at a time in rationals. None in any mesh seen so far.

@@ -157,7 +157,10 @@ def _general_fans(ids, faces, repeated, edges: Edges, selected: np.ndarray, twin
         a.append(3 * same + i)
         b.append(3 * same + j)
     a, b = np.concatenate(a), np.concatenate(b)  # type: ignore[assignment]  # the list becomes its array
-    live = np.isin(a, corners) & np.isin(b, corners)
+    chosen = np.zeros(ids.size, dtype=bool)     # np.isin's sort of a and b, as a lookup
+    chosen[corners] = True
+    live = chosen[a] & chosen[b]
+    del chosen
     parent = roots(corners.size, np.searchsorted(corners, a[live]), np.searchsorted(corners, b[live]))
     fan_roots = corners[parent == np.arange(corners.size)]
     return np.bincount(ids[fan_roots], minlength=selected.size)

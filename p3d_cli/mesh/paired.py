@@ -3,9 +3,10 @@
 The usual input of ``p3d check`` is a clean closed mesh. For it, one sort of packed *edge*
 keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
 
-1. **Pass 1** reads the blocks once: bounds, finite check, exact zero-area faces, the signed
-   volume (the same blocks about the same origin as ``vertices.group_corners``, so the same
-   bits) and, for every side ``3 f + k``, the key ``(edge hash high bits) | direction | side``.
+1. **Pass 1** (``p3d_cli.mesh.paired_keys``) reads the blocks once: bounds, finite check,
+   exact zero-area faces, the signed volume (the same blocks about the same origin as
+   ``vertices.group_corners``, so the same bits) and, for every side ``3 f + k``, the key
+   ``(edge hash high bits) | direction | side``.
 2. **One in-place sort.** When every key group is two sides running opposite ways, each side
    has a twin, and ``pi(c) = next(twin(c))`` is a permutation of the corners whose cycles are
    the fans around the vertices (``p3d_cli.mesh.fans``). Two colliding edges make a balanced
@@ -15,11 +16,11 @@ keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
    such meshes leave before the sort: the edge keys of sides used once each way cancel in
    ``sum(forward keys) - sum(backward keys)`` (mod 2^64), so a sum that does not cancel
    proves the mesh is not clean, at the cost of two sums per block.
-3. **Fans by pointer doubling**: ``label = min(label, label[q]); q = q[q]`` labels each cycle
-   with its smallest corner in ``log2(valence)`` rounds; each fan's first corner (file order)
-   is its representative, and fans are numbered in file order, so later work reads memory
-   nearly in order (the hash order of a corner sort reads it at random, which costs more
-   than the arithmetic).
+3. **Fans**: the compiled kernels walk each cycle once; numpy's pointer doubling
+   (``label = min(label, label[q]); q = q[q]``) labels each cycle with its smallest corner in
+   ``log2(valence)`` rounds. Each fan's first corner (file order) is its representative, and
+   fans are numbered in file order, so later work reads memory nearly in order (the hash
+   order of a corner sort reads it at random, which costs more than the arithmetic).
 4. **Pass 2** compares every corner's coordinates with its fan representative's, exactly: it
    proves that every twin really shares its two end points, whatever the hashes did (a
    difference leaves the fast path). Fans at the same point are then found by sorting the
@@ -37,20 +38,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from p3d_cli.mesh.closed import _GOLDEN, _column_hashes, corner_hashes
-from p3d_cli.mesh.splitmix import mix
+from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import corner_slot
-from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.mesh.columns import columns, origin_from_bounds
+from p3d_cli.mesh.kernels import NotTaken, compiled, confirm_fans, sort
+from p3d_cli.mesh.paired_keys import keyed_pass
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
-from p3d_cli.mesh.vertices import CHUNK, block_bounds, count_error
-from p3d_cli.mesh.volume import SignedVolume
-from p3d_cli.mesh.kernels import Buckets, NotTaken, compiled, confirm_fans, key_buffer, sort
-from p3d_cli.mesh.kernels import takes as kernel_takes
+from p3d_cli.mesh.vertices import CHUNK
 
 #: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
 _NEXT = np.array([1, 1, -2], dtype=np.int64)
-_ONE = np.uint64(1)
 
 
 @dataclass
@@ -98,7 +94,7 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
         any function gives the same results, which lets the tests force collisions.
     """
     bits = max(int(3 * n - 1).bit_length(), 1)
-    first = _keyed_pass(blocks, n, bits, where, hasher)
+    first = keyed_pass(blocks, n, bits, where, hasher)
     if first is None:
         return None
     keys, presorted, zero, volume = first
@@ -117,112 +113,6 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
         return None
     ids, vertices, nonmanifold = _merge_fans(fan, count, points)
     return Paired(ids, vertices, nonmanifold, zero, volume, _shells(fan, count))
-
-
-def _keyed_pass(blocks, n: int, bits: int, where, hasher):
-    """Pass 1: the side keys ``edge hash | direction << bits | side``, zero-area faces and the
-    volume; None as soon as a side's two ends hash alike (the general path's case), or when
-    the edge keys do not balance."""
-    low = np.uint64((1 << (bits + 1)) - 1)
-    shift = np.uint64(bits)
-    zero: list[np.ndarray] = []
-    volume = None
-    done = balance = 0
-    fast = compiled() if hasher is None else None
-    buckets = None
-    if fast is not None and 3 * n >= 1 << 16:
-        # The compiled pass deals the keys to buckets by their top bits (the edge hash): the
-        # sort then needs no pass over all of them (p3d_cli.mesh.kernels.Buckets).
-        buckets = Buckets(3 * n)
-        keys = None
-    else:
-        keys = key_buffer(3 * n)        # ordinary pages: see kernels.key_buffer
-    for block in blocks():
-        cols = columns(block)
-        k = cols.shape[2]
-        if k == 0:
-            continue
-        if done + k > n:
-            count_error(where, n, f"more than {n}")
-        lo, hi = block_bounds(cols, where, done)
-        if volume is None:
-            # The origin ``p3d props`` sums about: the first block's bounding-box centre.
-            volume = SignedVolume(origin_from_bounds(lo, hi, np.asarray(block).dtype == np.float32),
-                                  block=None)
-        zero.append(zero_area_faces(cols) + done)
-        if buckets is not None and kernel_takes(block):
-            degenerate, forward_sum, total, written = fast.paired_keys(
-                block, bits, done, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
-            if degenerate or written < 0:
-                return None             # a side that may bound nothing, or crowded keys: the general path
-            balance += 2 * forward_sum - total
-            _, _, totals, magnitude, _, _ = fast.block(block, *volume.origin, None, 0)
-            volume.add_sums(totals[0], magnitude, k)
-            done += k
-            continue
-        scratch = np.empty((3, k), dtype=np.uint64)
-        key = np.empty((3, k), dtype=np.uint64) if keys is None else keys[3 * done:3 * (done + k)].reshape(3, k)
-        if fast is not None:
-            # The compiled side keys are (edge hash & ~1) | direction: the same hash bits.
-            if fast.side_keys(cols.transpose(2, 0, 1), key.reshape(-1), scratch.view(np.uint8)[0, :3 * k]):
-                return None             # a side that may bound nothing: the general path
-            forward = key & _ONE
-            key &= ~low
-        else:
-            h = _column_hashes(cols, scratch) if hasher is None else np.asarray(hasher(cols), np.uint64)
-            start, end = h, h[[1, 2, 0]]
-            if (start == end).any():
-                return None             # a side that may bound nothing: the general path
-            forward = np.less(start, end).view(np.uint8).astype(np.uint64)
-            # Computed in its place in ``keys``: where a key sits does not matter (they are
-            # sorted), so the block's keys are stored in (slot, face) order and carry their side.
-            np.minimum(start, end, out=key)
-            key *= _GOLDEN
-            key += np.maximum(start, end, out=end)
-            mix(key, scratch)
-            key &= ~low
-        # Edge keys used once each way cancel in (sum forward - sum backward) mod 2^64; a
-        # sum that does not cancel proves some edge is not, before any sort.
-        balance += 2 * int(np.multiply(key, forward, out=scratch).sum()) - int(key.sum())
-        forward <<= shift
-        key |= forward
-        key += _side_numbers(k)
-        key += np.uint64(3 * done)
-        if buckets is not None:
-            buckets.add(key.reshape(-1))
-            if buckets.overflow:
-                return None
-        if fast is not None:
-            # The compiled sums about the same origin: row 0 and the magnitudes are the bits
-            # SignedVolume would sum (p3d_cli.mesh.kernels).
-            _, _, totals, magnitude, _, _ = fast.block(cols.transpose(2, 0, 1), *volume.origin, None, 0)
-            volume.add_sums(totals[0], magnitude, k)
-        else:
-            volume.add_columns(cols)
-        done += k
-    if done != n:
-        count_error(where, n, str(done))
-    if balance % 2**64:
-        return None
-    assert volume is not None
-    if buckets is not None:
-        keys = buckets.sorted_keys()
-        del buckets
-        return keys, True, np.concatenate(zero), volume.volume()
-    return keys, False, np.concatenate(zero), volume.volume()
-
-
-_SIDES: list[np.ndarray] = []
-
-
-def _side_numbers(k: int) -> np.ndarray:
-    """``3 j + slot`` as ``(3, k)`` uint64 (slot, face): side numbers of a block's faces."""
-    if k > 1 << 16:                     # large blocks: not kept
-        return 3 * np.arange(k, dtype=np.uint64) + np.arange(3, dtype=np.uint64)[:, None]
-    if not _SIDES or _SIDES[0].shape[1] < k:
-        _SIDES[:] = [(3 * np.arange(max(k, 1 << 14), dtype=np.uint64)
-                      + np.arange(3, dtype=np.uint64)[:, None])]
-    return _SIDES[0][:, :k]
 
 
 def _orbit_map(keys: np.ndarray, bits: int, blocks):
@@ -325,7 +215,15 @@ def _fan_ids(pi: np.ndarray):
     needed) and doubling each round; every cycle is covered when adjacent corners agree
     (window minima of a cycle longer than the window differ where the window leaves its
     smallest corner). Valence 6 or less, most vertices of most meshes, takes one round.
+
+    The compiled kernels walk each cycle once instead (``fan_cycles``), in ascending order of
+    its smallest corner: the same numbers, written into ``pi``'s buffer as here.
     """
+    fast = compiled()
+    if fast is not None and pi.flags.c_contiguous and pi.flags.writeable:
+        first = np.empty(pi.size, dtype=bool)
+        count = fast.fan_cycles(pi, first)
+        return pi, count, first
     label = np.arange(pi.size, dtype=pi.dtype)
     np.minimum(label, pi, out=label)
     jump = _gather(pi, pi)
@@ -398,14 +296,15 @@ def _merge_fans(fan: np.ndarray, count: int, points: np.ndarray):
     """Exact vertex ids from the fans: fans at one point are one vertex (several fans: a
     non-manifold vertex). Returns ``(ids, vertices, nonmanifold)`` (see ``Paired``)."""
     hashes = corner_hashes(points)
-    # Fans whose hashes agree in their top 32 bits (a uint32 sort is faster): a few, by chance,
-    # besides those that share a point.
-    top = (hashes >> np.uint64(32)).astype(np.uint32)
-    ordered = np.sort(top)
+    # Fans whose hashes agree (the compiled radix sort, when there is one): a few, by chance,
+    # besides those that share a point, whose hashes are equal.
+    ordered = hashes.copy()
+    sort(ordered)
     shared = ordered[1:][ordered[1:] == ordered[:-1]]
+    del ordered
     if shared.size == 0:                # the usual case: one fan per point
         return fan, count, np.zeros(0, dtype=np.int64)
-    candidates = np.flatnonzero(np.isin(top, shared))
+    candidates = np.flatnonzero(np.isin(hashes, shared))
     coords = points[candidates].astype(np.float64) + 0.0
     h = hashes[candidates]
     # The general path's vertex order: full hash, then coordinates (vertices.py).

@@ -292,9 +292,11 @@ def _volume(blocks, corners, edges: Edges, ids: np.ndarray) -> float:
 
 def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> np.ndarray:
     """The faces that can have a duplicate (``faces.duplicate_candidates``), cheaper when
-    every edge is used twice: a face and its duplicate then share all three edges and
-    nothing else, a shell of two faces (point faces are shells of one)."""
-    if edges.count and (edges.counts == 2).all():
+    no edge is used more than twice: a face and its duplicate then share all three edges
+    and nothing else, a shell of two faces (point faces, and faces whose one edge is used
+    by their own two sides, are shells of one). A face with an edge used once (a boundary)
+    has no duplicate, which would use that edge too; its shell may be of any size."""
+    if edges.count and (edges.counts <= 2).all():
         small = np.bincount(found.labels, minlength=found.count) <= 2
         return np.flatnonzero(small[found.labels])
     return duplicate_candidates(n, edges.side, edges.starts, edges.counts, repeated)

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import needs_kernels
 from helpers.meshes import write_ascii_stl
+from p3d_cli.mesh.kernels import KERNELS
 from p3d_cli.io import load_mesh
 from p3d_cli.mesh.faces import zero_area_faces
 from p3d_cli.mesh.columns import columns
@@ -103,3 +106,65 @@ def test_the_vectorised_exact_test_gives_the_rational_answers_on_planted_faces()
     assert undecided.sum() <= 400                                     # only the 2**±400 faces
     assert np.array_equal(zero_area_faces(cols), np.flatnonzero(want))
     assert want.sum() > 600 and (~want).sum() > 200                    # both kinds were planted
+
+
+def numpy_undecided(block: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The zero-area faces of ``block`` by the numpy code, and the faces its filter left to the
+    exact tests (none when it certified every face)."""
+    from p3d_cli.mesh import faces
+
+    seen = [np.zeros(0, dtype=np.int64)]
+    real = faces._decided
+
+    def spy(cols, undecided):
+        seen[0] = undecided
+        return real(cols, undecided)
+
+    faces._decided = spy
+    try:
+        got = zero_area_faces(columns(block))
+    finally:
+        faces._decided = real
+    return got, seen[0]
+
+
+@needs_kernels
+@given(st.integers(0, 2**32 - 1), st.integers(1, 400), st.sampled_from([np.float32, np.float64]))
+def test_the_compiled_filter_leaves_the_faces_numpys_leaves(seed, n, dtype):
+    from p3d_cli.mesh.faces import zero_area_faces_compiled
+
+    rng = np.random.default_rng(seed)
+    t = np.concatenate([nearly_collinear(seed, n, np.float64), _planted_faces(rng)[:n]])
+    t = t[rng.permutation(len(t))]
+    with np.errstate(over="ignore"):
+        t = t.astype(dtype)
+    t = t[np.isfinite(t).all(axis=(1, 2))]         # callers refuse the others first
+    block = t
+    if dtype == np.float32:     # as a binary STL holds them: 50-byte records, read in place
+        records = np.zeros((len(t), 50), dtype=np.uint8)
+        records[:, 12:48] = t.reshape(len(t), 9).view(np.uint8)
+        block = records[:, 12:48].view(np.float32).reshape(len(t), 3, 3)
+        assert block.strides[0] == 50 and np.array_equal(block, t, equal_nan=True)
+    expected, left = numpy_undecided(t)
+    undecided = np.empty(len(t), dtype=np.int64)
+    count = KERNELS.area_filter(block, undecided)
+    assert np.array_equal(undecided[:count], left)
+    got = zero_area_faces_compiled(block, KERNELS)
+    assert got.dtype == np.int64 and np.array_equal(got, expected)
+
+
+@needs_kernels
+def test_the_compiled_filter_on_huge_tiny_and_nonfinite_faces():
+    from p3d_cli.mesh.faces import zero_area_faces_compiled
+
+    t = np.array([[[0, 0, 0], [1e-300, 0, 0], [0, 1e-300, 0]],
+                  [[0, 0, 0], [1e300, 1e300, 0], [-1e300, -1e300, 0]],
+                  [[0, 0, 0], [1e300, 1e300, 0], [-1e300, 1e300, 0]],
+                  [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+                  [[0, 0, 0], [0, 0, 0], [0, 0, 0]]])
+    assert zero_area_faces_compiled(t, KERNELS).tolist() == [1, 4]
+    undecided = np.empty(2, dtype=np.int64)
+    nan = np.array([[[0, 0, 0], [np.nan, 1, 0], [0, 1, 0]]])
+    assert KERNELS.area_filter(nan, undecided) == 1             # a NaN certifies nothing
+    with pytest.raises(ValueError):
+        KERNELS.area_filter(t, undecided)                       # room for 2 of 5 faces

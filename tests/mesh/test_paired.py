@@ -17,6 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import needs_kernels
 from helpers.meshes import cube_triangles
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
@@ -165,14 +166,26 @@ def test_falsely_paired_sides_fail_the_exact_confirmation(monkeypatch):
     assert r.boundary_edges == 6 and r.shells == 2
 
 
-@given(st.integers(0, 2**32 - 1), st.integers(1, 300))
-def test_fan_ids_number_the_cycles_of_a_permutation(seed, size):
+@given(st.integers(0, 2**32 - 1), st.integers(1, 300), st.sampled_from([np.int32, np.int64]),
+       st.sampled_from(["kernel", "numpy"]))
+def test_fan_ids_number_the_cycles_of_a_permutation(seed, size, dtype, road):
+    # Both roads (the compiled cycle walk and numpy's pointer doubling) against a walk here.
     rng = np.random.default_rng(seed)
-    pi = rng.permutation(size).astype(np.int32)
+    pi = rng.permutation(size).astype(dtype)
     if seed % 2:                                    # long cycles, as around a busy vertex
         order = rng.permutation(size)
-        pi = np.empty(size, dtype=np.int32)
+        pi = np.empty(size, dtype=dtype)
         pi[order] = np.roll(order, 1)
+    if road == "numpy" or paired.compiled() is None:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(paired, "compiled", lambda: None)
+            check_fan_ids(pi)
+    else:
+        check_fan_ids(pi)
+
+
+def check_fan_ids(pi: np.ndarray) -> None:
+    size = pi.size
     expected = np.full(size, -1)
     count = 0
     for c in range(size):                           # cycles in order of their first member
@@ -183,12 +196,20 @@ def test_fan_ids_number_the_cycles_of_a_permutation(seed, size):
                 x = int(pi[x])
             count += 1
     fan, got_count, first = paired._fan_ids(pi.copy())
-    assert got_count == count and np.array_equal(fan, expected)
+    assert got_count == count and np.array_equal(fan, expected) and fan.dtype == pi.dtype
+    assert first.dtype == bool
     assert np.array_equal(np.flatnonzero(first), [np.flatnonzero(expected == k)[0] for k in range(count)])
 
 
+@needs_kernels
+@pytest.mark.parametrize("pi", [[1, 1, 0], [0, 3], [2, 0, 0], [-1, 0], [-1]])
+def test_the_compiled_cycle_walk_refuses_what_is_not_a_permutation(pi):
+    with pytest.raises(ValueError, match="permutation"):
+        paired.compiled().fan_cycles(np.array(pi, dtype=np.int32), np.zeros(len(pi), dtype=bool))
+
+
 def test_a_shared_top_hash_of_distinct_points_is_not_a_vertex(monkeypatch):
-    # Hashes of the fans' points agreeing in their top 32 bits (all of them, here) are only
+    # Hashes of the fans' points that agree (all of them, here) are only
     # candidates: distinct points stay distinct vertices.
     t = torus(5, 4)
     monkeypatch.setattr(paired, "corner_hashes", lambda points: np.full(len(points), 7 << 40, dtype=np.uint64))
@@ -266,3 +287,49 @@ def test_high_valence_fans_need_more_doubling_rounds_and_agree():
         same(got, general(t))
     assert got.nonmanifold_vertices == 1 and got.shells == 2
     assert got.nonmanifold_vertex_samples[0].point == (0.0, 0.0, 1.0)
+
+
+def numpy_road(function, *args):
+    """``function(*args)`` with the compiled kernels switched off."""
+    from p3d_cli.mesh import kernels
+
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        return function(*args)
+    finally:
+        kernels.KERNELS = saved
+
+
+@needs_kernels
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_large_meshes_take_the_compiled_pass_and_agree(dtype):
+    # Past 2**16 sides the keys are bucketed and every block after the first is read in place
+    # (volume, zero-area filter, keys): collinear pillows (zero-area faces, duplicates) and
+    # cubes touching the torus at a point, spread over the blocks, as the numpy code finds them.
+    rng = np.random.default_rng(5)
+    t = torus(150, 80, shift=(0.25, -1.0, 0.5))
+    flat = np.array([[[9, 9, 9], [10, 10, 10], [12, 12, 12]]], dtype=float)
+    corner = t[7, 0]
+    parts = [t] + [np.concatenate([flat + 10 * k, flat[:, [1, 0, 2]] + 10 * k]) for k in range(5)]
+    parts.append(cube_triangles() * 0.01 + corner)
+    t = np.concatenate(parts)
+    t = t[rng.permutation(len(t))].astype(dtype)
+    got = fast(t)
+    assert got is not None and got.zero_area_faces == 10 and got.nonmanifold_vertices == 1
+    same(got, numpy_road(fast, t))
+    same(got, general(t))
+
+
+@needs_kernels
+def test_a_nan_in_a_later_block_is_named_as_the_numpy_code_names_it():
+    from p3d_cli.errors import InputError
+
+    t = torus(150, 80)
+    t[20000, 1, 2] = np.nan
+    messages = []
+    for road in (lambda f, *a: f(*a), numpy_road):
+        with pytest.raises(InputError) as caught:
+            road(paired.paired_topology, _array_blocks(t), len(t), "mesh.stl")
+        messages.append(str(caught.value))
+    assert messages[0] == messages[1] and "face 20000" in messages[0]

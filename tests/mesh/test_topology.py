@@ -236,3 +236,26 @@ def test_open_volume_from_the_exact_edges_is_the_hashed_roads(seed, kind):
     if unbalanced.ids.size:
         expected = corners.volume_sums.volume(boundary_volume(blocks(), unbalanced, corners.volume_sums.origin)[0])
     assert np.float64(topology(t).volume).view(np.uint64) == np.float64(expected).view(np.uint64)
+
+
+@given(st.integers(0, 2**32 - 1))
+def test_duplicates_of_a_mesh_with_holes_are_those_of_every_face(seed):
+    """No edge used more than twice: the duplicates are found among the faces of shells of one
+    or two faces; they are those a comparison of every face with every other finds."""
+    from p3d_cli.mesh.faces import duplicate_faces
+
+    rng = np.random.default_rng(seed)
+    t = np.concatenate([cube_triangles() + rng.integers(-3, 4, 3) for _ in range(3)])
+    t = np.delete(t, rng.choice(len(t), int(rng.integers(0, 5)), replace=False), axis=0)
+    p, q, r = rng.integers(10, 20, (3, 3)).astype(float)
+    planted = [[p, q, r], [q, r, p],               # a duplicate, the same way round
+               [p + 9, r + 9, q + 9], [p + 9, q + 9, r + 9],   # a pillow
+               [p + 30, p + 30, q + 30],           # one edge, used by its own two sides
+               [r + 40, r + 40, r + 40], [r + 40, r + 40, r + 40]]   # point faces, twice
+    t = np.concatenate([t, np.array(planted)[rng.permutation(len(planted))[:int(rng.integers(2, 8))]]])
+    t = t[rng.permutation(len(t))]
+    ids, _ = corner_vertex_ids(t)
+    report = topology(t)
+    expected = duplicate_faces(ids)
+    assert report.duplicate_faces == len(expected)
+    assert report.duplicate_face_samples == tuple((int(a), int(b)) for a, b in expected[:SAMPLES])
