@@ -105,6 +105,17 @@ class Buckets:
         self.fill = np.zeros(buckets, dtype=np.int64)
         self.overflow = False
 
+    @classmethod
+    def like(cls, other: Buckets) -> Buckets:
+        """Empty buckets of ``other``'s shift and room: the keys that go with ``other``'s, for
+        a scan of both bucket by bucket (``split_groups``)."""
+        buckets = cls.__new__(cls)
+        buckets.shift, buckets.cap = other.shift, other.cap
+        buckets.keys = key_buffer(other.keys.size)
+        buckets.fill = np.zeros_like(other.fill)
+        buckets.overflow = False
+        return buckets
+
     def add(self, block_keys: np.ndarray) -> None:
         """Deal keys made by the numpy code (a block the compiled pass left to it)."""
         bucket = (block_keys >> np.uint64(self.shift)).astype(np.int64)
