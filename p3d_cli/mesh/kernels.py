@@ -148,7 +148,9 @@ class ForwardBuckets(Buckets):
     used unequally often in the two directions, and adds ``g(edge)`` times that nonzero
     difference to the balance, which the other such edges cancel only by a 64-bit coincidence
     (as two edges' keys must coincide to fool the sort). ``closed`` False says nothing more:
-    the caller then makes every key (``Buckets``) for the open-mesh road.
+    the caller then deals the other half of the keys beside these (``Buckets.like``, the
+    kernel's ``backward_block``) and scans the two together for the open-mesh road
+    (``split_groups``; ``p3d_cli.mesh.analysis``).
     """
 
     def __init__(self, sides: int) -> None:
