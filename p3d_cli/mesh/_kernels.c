@@ -1919,7 +1919,7 @@ static PyMethodDef methods[] = {
     {"split_groups", py_split_groups, METH_VARARGS,
      "split_groups(fkeys, ffill, bkeys, bfill, cap, shift) -> groups(...) of both halves' keys together"},
     {"pick_sides", py_pick_sides, METH_VARARGS,
-     "pick_sides(block, ids, table, shift, out) -> sides written: those whose edge id is in ids"},
+     "pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written: those whose edge id is in ids"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -2442,93 +2442,110 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     return result;
 }
 
-/* pick_sides(block, ids, table, shift, out) -> sides written.
+/* pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written.
  * The sides of a block whose edge id (key >> 1) is in the sorted ids (uint64), in the order of
  * p3d_cli.mesh.boundary.unbalanced_sides (slot, then face; sides whose ends hash alike left
  * out): out[i] = (start x, y, z, end x, y, z) in float64, -0.0 read as 0.0. table is a bit
  * set of the ids' top bits (bit id >> shift set for every id, little-endian bit order within
  * its bytes, as numpy.packbits(..., bitorder="little")), small enough to stay in cache, which
- * turns most sides away before the binary search. out holds 3 k rows. */
+ * turns most sides away; starts (int64) indexes the ids by their top bits,
+ * starts[j] = the first id >= j << start_shift, so that an id that passes the table is looked
+ * for among the few ids of its slot, not by a binary search of all of them (a cache miss a
+ * step). out holds 3 k rows. */
 static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
-    PyObject *obj, *idobj, *tabobj, *outobj;
-    int tshift;
-    if (!PyArg_ParseTuple(args, "OOOiO", &obj, &idobj, &tabobj, &tshift, &outobj))
+    PyObject *obj, *idobj, *tabobj, *startobj, *outobj;
+    int tshift, sshift;
+    if (!PyArg_ParseTuple(args, "OOOiOiO", &obj, &idobj, &tabobj, &tshift, &startobj, &sshift, &outobj))
         return NULL;
-    Py_buffer view, iv, tv, ov;
+    Py_buffer view, iv, tv, sv, ov;
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
-    int got[3] = {0, 0, 0};
-    Py_buffer *vs[3] = {&iv, &tv, &ov};
+    int got[4] = {0, 0, 0, 0};
+    Py_buffer *vs[4] = {&iv, &tv, &sv, &ov};
     int ok = PyObject_GetBuffer(idobj, &iv, PyBUF_C_CONTIGUOUS) == 0 && (got[0] = 1) &&
              PyObject_GetBuffer(tabobj, &tv, PyBUF_C_CONTIGUOUS) == 0 && (got[1] = 1) &&
-             PyObject_GetBuffer(outobj, &ov, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 && (got[2] = 1);
-    if (ok && (iv.itemsize != 8 || tv.itemsize != 1 || ov.itemsize != 8 || ov.len / 48 < 3 * b.n || tshift < 0 ||
-               tshift > 60 || tv.len < (Py_ssize_t)(((UINT64_MAX >> 1) >> tshift) >> 3) + 1)) {
-        PyErr_SetString(PyExc_ValueError, "pick_sides: the ids, table or output do not fit");
+             PyObject_GetBuffer(startobj, &sv, PyBUF_C_CONTIGUOUS) == 0 && (got[2] = 1) &&
+             PyObject_GetBuffer(outobj, &ov, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 && (got[3] = 1);
+    if (ok && (iv.itemsize != 8 || tv.itemsize != 1 || sv.itemsize != 8 || ov.itemsize != 8 ||
+               ov.len / 48 < 3 * b.n || tshift < 0 || tshift > 60 ||
+               tv.len < (Py_ssize_t)(((UINT64_MAX >> 1) >> tshift) >> 3) + 1 || sshift < 0 || sshift > 62 ||
+               sv.len / 8 != (Py_ssize_t)((UINT64_MAX >> 1) >> sshift) + 2)) {
+        PyErr_SetString(PyExc_ValueError, "pick_sides: the ids, table, starts or output do not fit");
         ok = 0;
     }
+    const uint64_t *ids = ok ? iv.buf : NULL;
+    const int64_t *starts = ok ? sv.buf : NULL;
+    Py_ssize_t nid = ok ? iv.len / 8 : 0;
     if (!ok) {
-        for (int i = 0; i < 3; i++)
+        for (int i = 0; i < 4; i++)
             if (got[i])
                 PyBuffer_Release(vs[i]);
         release_block(&view, &b);
         return NULL;
     }
-    const uint64_t *ids = iv.buf;
     const uint8_t *table = tv.buf;
     double *out = ov.buf;
-    Py_ssize_t nid = iv.len / 8, k = b.n, written = 0;
-    uint64_t *edge = malloc((3 * k + 1) * sizeof(uint64_t));
-    if (!edge) {
-        for (int i = 0; i < 3; i++)
-            PyBuffer_Release(vs[i]);
-        release_block(&view, &b);
-        return PyErr_NoMemory();
-    }
+    Py_ssize_t k = b.n, written = 0, n[3] = {0, 0, 0}, room[3] = {64, 64, 64};
+    /* The faces of the hit sides, one list a slot (each in face order as found). */
+    Py_ssize_t *hit[3] = {malloc(64 * sizeof(Py_ssize_t)), malloc(64 * sizeof(Py_ssize_t)),
+                          malloc(64 * sizeof(Py_ssize_t))};
+    int failed = !hit[0] || !hit[1] || !hit[2];
     Py_BEGIN_ALLOW_THREADS
-    /* Pass 1: each side's edge id, or all ones for a side whose ends hash alike (never an id:
-     * ids are 63-bit) and for one whose id is not in ids. */
     double raw[LEAF][9];
-    for (Py_ssize_t t0 = 0; t0 < k; t0 += LEAF) {
+    for (Py_ssize_t t0 = 0; t0 < k && !failed; t0 += LEAF) {
         Py_ssize_t m = k - t0 < LEAF ? k - t0 : LEAF;
         load(&b, t0, m, raw);
-        for (Py_ssize_t j = 0; j < m; j++) {
+        for (Py_ssize_t j = 0; j < m && !failed; j++) {
             uint64_t h[3];
             corner_hashes(raw[j], h);
             for (int v = 0; v < 3; v++) {
-                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1], id = UINT64_MAX;
-                if (start != end) {
-                    uint64_t e = edge_hash(start, end) >> 1;
-                    uint64_t top = e >> tshift;
-                    if (table[top >> 3] >> (top & 7) & 1) {
-                        Py_ssize_t at = lower_bound(ids, 0, nid, e);
-                        if (at < nid && ids[at] == e)
-                            id = e;
+                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+                if (start == end)
+                    continue; /* a side whose ends hash alike bounds nothing */
+                uint64_t e = edge_hash(start, end) >> 1, top = e >> tshift;
+                if (!(table[top >> 3] >> (top & 7) & 1))
+                    continue;
+                Py_ssize_t at = starts[e >> sshift], stop = starts[(e >> sshift) + 1];
+                if (at < 0)
+                    at = 0;
+                if (stop > nid)
+                    stop = nid; /* (an index that is not one finds less, never reads beyond) */
+                while (at < stop && ids[at] < e)
+                    at++;
+                if (at == stop || ids[at] != e)
+                    continue;
+                if (n[v] == room[v]) {
+                    Py_ssize_t *grown = realloc(hit[v], (room[v] *= 2) * sizeof(Py_ssize_t));
+                    if (!grown) {
+                        failed = 1;
+                        break;
                     }
+                    hit[v] = grown;
                 }
-                edge[v * k + t0 + j] = id;
+                hit[v][n[v]++] = t0 + j;
             }
         }
     }
-    /* Pass 2: the hit sides' end points, slot by slot. */
-    for (int v = 0; v < 3; v++)
-        for (Py_ssize_t t = 0; t < k; t++) {
-            if (edge[v * k + t] == UINT64_MAX)
-                continue;
-            double p[9];
-            load(&b, t, 1, (double (*)[9])p);
+    /* The hit sides' end points, slot by slot. */
+    for (int v = 0; v < 3 && !failed; v++)
+        for (Py_ssize_t i = 0; i < n[v]; i++) {
+            double p[1][9];
+            load(&b, hit[v][i], 1, p);
             int w = v == 2 ? 0 : v + 1;
             for (int a = 0; a < 3; a++) {
-                out[6 * written + a] = p[3 * v + a] + 0.0;
-                out[6 * written + 3 + a] = p[3 * w + a] + 0.0;
+                out[6 * written + a] = p[0][3 * v + a] + 0.0;
+                out[6 * written + 3 + a] = p[0][3 * w + a] + 0.0;
             }
             written++;
         }
     Py_END_ALLOW_THREADS
-    free(edge);
-    for (int i = 0; i < 3; i++)
+    for (int v = 0; v < 3; v++)
+        free(hit[v]);
+    for (int i = 0; i < 4; i++)
         PyBuffer_Release(vs[i]);
     release_block(&view, &b);
+    if (failed)
+        return PyErr_NoMemory();
     return PyLong_FromSsize_t(written);
 }

@@ -213,13 +213,14 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
     members = _Members(ids)
     kernels = compiled()
     out = np.empty((0, 6))
+    index = members.starts() if kernels is not None and not every else None
     for block in source_blocks:
         if kernels is not None and not every and takes(block):
             # The same sides in the same order, picked by the compiled kernel from the
             # block's own records (no float64 copy, no keys array).
             if out.shape[0] < 3 * len(block):
                 out = np.empty((3 * len(block), 6))
-            sides = out[:kernels.pick_sides(block, ids, members.bits, int(members.shift), out)]
+            sides = out[:kernels.pick_sides(block, ids, members.bits, int(members.shift), *index, out)]
             for first in range(0, sides.shape[0], SIDE_BLOCK):
                 chunk = sides[first:first + SIDE_BLOCK]
                 yield np.ascontiguousarray(chunk[:, :3].T), np.ascontiguousarray(chunk[:, 3:].T)
@@ -270,6 +271,14 @@ class _Members:
         self.table[(ids >> self.shift).astype(np.intp)] = True
         #: The table packed 8 slots a byte, for the compiled ``pick_sides``.
         self.bits = np.packbits(self.table, bitorder="little")
+
+    def starts(self) -> tuple[np.ndarray, int]:
+        """An index of the ids by their top bits, for the compiled ``pick_sides``: ``starts[j]``
+        is the first id at or above ``j << shift``, about one id a slot; and ``shift``."""
+        bits = max(1, int(self.ids.size).bit_length())
+        shift = 63 - bits
+        bounds = np.arange((1 << bits) + 1, dtype=np.uint64) << np.uint64(shift)
+        return np.searchsorted(self.ids, bounds).astype(np.int64), shift
 
     def __call__(self, edge: np.ndarray) -> np.ndarray:
         ids = self.ids
