@@ -15,6 +15,8 @@
  *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
  * - near_walk (at the end): `p3d repair`'s faces near new faces, the walk of its box tree
  *   (p3d_cli.repairs.near).
+ * - backward_block, split_groups, pick_sides (at the end): `p3d props`' open road, the other
+ *   half of the keys beside the forward ones, their groups, and the boundary's sides.
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -1121,6 +1123,9 @@ static PyObject *py_flatten(PyObject *self, PyObject *args);
 static PyObject *py_near_walk(PyObject *self, PyObject *args);
 static PyObject *py_fan_cycles(PyObject *self, PyObject *args);
 static PyObject *py_area_filter(PyObject *self, PyObject *args);
+static PyObject *py_backward_block(PyObject *self, PyObject *args);
+static PyObject *py_split_groups(PyObject *self, PyObject *args);
+static PyObject *py_pick_sides(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1915,6 +1920,12 @@ static PyMethodDef methods[] = {
      "fan_cycles(pi, first) -> fans: pi overwritten with each corner's fan (numbered by smallest corner)"},
     {"area_filter", py_area_filter, METH_VARARGS,
      "area_filter(block, undecided) -> count: the faces no plane certifies as of non-zero area"},
+    {"backward_block", py_backward_block, METH_VARARGS,
+     "backward_block(block, keys, fill, cap, shift) -> keys written (-1: overflow): the other half of the keys"},
+    {"split_groups", py_split_groups, METH_VARARGS,
+     "split_groups(fkeys, ffill, bkeys, bfill, cap, shift) -> groups(...) of both halves' keys together"},
+    {"pick_sides", py_pick_sides, METH_VARARGS,
+     "pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written: those whose edge id is in ids"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -2416,4 +2427,259 @@ static PyObject *py_area_filter(PyObject *self, PyObject *args) {
         return NULL;
     }
     return PyLong_FromSsize_t(count);
+}
+
+/* ---- props on an open mesh without making every key again (issue 32) ---------------------- */
+
+/* backward_block(block, keys, fill, cap, shift) -> keys written, -1 when a bucket overflowed:
+ * the keys forward_block leaves out (the sides running from the larger corner hash to the
+ * smaller: bit 0 clear), dealt to buckets of the same shift as its own. With its buckets they
+ * are every key of keys_block, so that split_groups finds the key groups of a mesh
+ * forward_block did not prove closed from one more pass that stores half the keys. */
+static PyObject *py_backward_block(PyObject *self, PyObject *args) {
+    PyObject *obj, *keyobj, *fillobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOni", &obj, &keyobj, &fillobj, &cap, &shift))
+        return NULL;
+    Py_buffer view, kview, fview;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
+        release_block(&view, &b);
+        return NULL;
+    }
+    uint64_t *keys = kview.buf;
+    int64_t *fill = fview.buf;
+    Py_ssize_t written = 0;
+    int overflow = 0;
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
+        Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
+        load(&b, t0, m, raw);
+        for (Py_ssize_t k = 0; k < m; k++) {
+            uint64_t h[3];
+            corner_hashes(raw[k], h);
+            for (int v = 0; v < 3; v++) {
+                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+                if (start <= end)
+                    continue; /* a forward side, or one whose ends hash alike */
+                uint64_t key = edge_hash(start, end) & ~(uint64_t)1, at = key >> shift;
+                if (fill[at] == cap) {
+                    overflow = 1;
+                    continue;
+                }
+                keys[at * cap + fill[at]++] = key;
+                written++;
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    release_block(&view, &b);
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return PyLong_FromSsize_t(overflow ? -1 : written);
+}
+
+/* Append x to a growing array (*a, *n, *cap); 0 when memory ran out. */
+static int push_u64(uint64_t **a, Py_ssize_t *n, Py_ssize_t *cap, uint64_t x) {
+    if (*n == *cap) {
+        uint64_t *grown = realloc(*a, (*cap *= 2) * 8);
+        if (!grown)
+            return 0;
+        *a = grown;
+    }
+    (*a)[(*n)++] = x;
+    return 1;
+}
+
+/* split_groups(fkeys, ffill, bkeys, bfill, cap, shift) ->
+ *   (unbalanced ids, net boundary edges, their sides, doubtful ids or None)
+ * groups() of every key, given as forward_block's buckets (bit 0 set) and backward_block's
+ * (bit 0 clear) of the same shift: each bucket of both is sorted in place and the two are
+ * merged by edge (key >> 1) as they are scanned, bucket by bucket, so that the keys are never
+ * moved together. The same answers as groups() over all the keys sorted. */
+static PyObject *py_split_groups(PyObject *self, PyObject *args) {
+    PyObject *fobj, *ffobj, *bobj, *bfobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOOni", &fobj, &ffobj, &bobj, &bfobj, &cap, &shift))
+        return NULL;
+    Py_buffer fk, ff, bk, bf;
+    if (get_buckets(fobj, ffobj, cap, shift, 1, &fk, &ff) < 0)
+        return NULL;
+    if (get_buckets(bobj, bfobj, cap, shift, 1, &bk, &bf) < 0) {
+        PyBuffer_Release(&fk);
+        PyBuffer_Release(&ff);
+        return NULL;
+    }
+    Py_ssize_t buckets = ff.len / 8, nu = 0, nd = 0, cu = 64, cd = 64;
+    const int64_t *ffill = ff.buf, *bfill = bf.buf;
+    uint64_t *fa = fk.buf, *ba = bk.buf;
+    long long edges = 0, sides = 0;
+    int proven_open = 0;
+    uint64_t *unbalanced = malloc(cu * 8), *doubtful = malloc(cd * 8),
+             *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
+    int failed = !unbalanced || !doubtful || !tmp;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t bucket = 0; bucket < buckets && !failed; bucket++) {
+        uint64_t *f = fa + bucket * cap, *g = ba + bucket * cap;
+        Py_ssize_t nf = ffill[bucket], ng = bfill[bucket], i = 0, j = 0;
+        msd(f, nf, shift, tmp);
+        msd(g, ng, shift, tmp);
+        while ((i < nf || j < ng) && !failed) {
+            uint64_t ef = i < nf ? f[i] >> 1 : UINT64_MAX, eg = j < ng ? g[j] >> 1 : UINT64_MAX;
+            uint64_t edge = ef < eg ? ef : eg;
+            Py_ssize_t forward = 0, count = 0;
+            while (i < nf && (f[i] >> 1) == edge)
+                i++, forward++;
+            count = forward;
+            while (j < ng && (g[j] >> 1) == edge)
+                j++, count++;
+            long long net = 2 * (long long)forward - count;
+            if (net != 0) {
+                if (!push_u64(&unbalanced, &nu, &cu, edge))
+                    failed = 1;
+                edges += net < 0 ? -net : net;
+                sides += count;
+            }
+            if (!(count == 2 && forward == 1) && !proven_open) {
+                if (count < 4 || 2 * forward != count)
+                    proven_open = 1;
+                else if (!push_u64(&doubtful, &nd, &cd, edge))
+                    failed = 1;
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(tmp);
+    PyBuffer_Release(&fk);
+    PyBuffer_Release(&ff);
+    PyBuffer_Release(&bk);
+    PyBuffer_Release(&bf);
+    PyObject *result = NULL;
+    if (failed)
+        PyErr_NoMemory();
+    else {
+        PyObject *d = proven_open ? (Py_INCREF(Py_None), Py_None)
+                                  : PyBytes_FromStringAndSize((const char *)doubtful, nd * 8);
+        PyObject *u = PyBytes_FromStringAndSize((const char *)unbalanced, nu * 8);
+        if (d && u)
+            result = Py_BuildValue("OLLO", u, edges, sides, d);
+        Py_XDECREF(d);
+        Py_XDECREF(u);
+    }
+    free(unbalanced);
+    free(doubtful);
+    return result;
+}
+
+/* pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written.
+ * The sides of a block whose edge id (key >> 1) is in the sorted ids (uint64), in the order of
+ * p3d_cli.mesh.boundary.unbalanced_sides (slot, then face; sides whose ends hash alike left
+ * out): out[i] = (start x, y, z, end x, y, z) in float64, -0.0 read as 0.0. table is a bit
+ * set of the ids' top bits (bit id >> shift set for every id, little-endian bit order within
+ * its bytes, as numpy.packbits(..., bitorder="little")), small enough to stay in cache, which
+ * turns most sides away; starts (int64) indexes the ids by their top bits,
+ * starts[j] = the first id >= j << start_shift, so that an id that passes the table is looked
+ * for among the few ids of its slot, not by a binary search of all of them (a cache miss a
+ * step). out holds 3 k rows. */
+static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
+    PyObject *obj, *idobj, *tabobj, *startobj, *outobj;
+    int tshift, sshift;
+    if (!PyArg_ParseTuple(args, "OOOiOiO", &obj, &idobj, &tabobj, &tshift, &startobj, &sshift, &outobj))
+        return NULL;
+    Py_buffer view, iv, tv, sv, ov;
+    Block b;
+    if (get_block(obj, &view, &b) < 0)
+        return NULL;
+    int got[4] = {0, 0, 0, 0};
+    Py_buffer *vs[4] = {&iv, &tv, &sv, &ov};
+    int ok = PyObject_GetBuffer(idobj, &iv, PyBUF_C_CONTIGUOUS) == 0 && (got[0] = 1) &&
+             PyObject_GetBuffer(tabobj, &tv, PyBUF_C_CONTIGUOUS) == 0 && (got[1] = 1) &&
+             PyObject_GetBuffer(startobj, &sv, PyBUF_C_CONTIGUOUS) == 0 && (got[2] = 1) &&
+             PyObject_GetBuffer(outobj, &ov, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 && (got[3] = 1);
+    if (ok && (iv.itemsize != 8 || tv.itemsize != 1 || sv.itemsize != 8 || ov.itemsize != 8 ||
+               ov.len / 48 < 3 * b.n || tshift < 0 || tshift > 60 ||
+               tv.len < (Py_ssize_t)(((UINT64_MAX >> 1) >> tshift) >> 3) + 1 || sshift < 0 || sshift > 62 ||
+               sv.len / 8 != (Py_ssize_t)((UINT64_MAX >> 1) >> sshift) + 2)) {
+        PyErr_SetString(PyExc_ValueError, "pick_sides: the ids, table, starts or output do not fit");
+        ok = 0;
+    }
+    const uint64_t *ids = ok ? iv.buf : NULL;
+    const int64_t *starts = ok ? sv.buf : NULL;
+    Py_ssize_t nid = ok ? iv.len / 8 : 0;
+    if (!ok) {
+        for (int i = 0; i < 4; i++)
+            if (got[i])
+                PyBuffer_Release(vs[i]);
+        release_block(&view, &b);
+        return NULL;
+    }
+    const uint8_t *table = tv.buf;
+    double *out = ov.buf;
+    Py_ssize_t k = b.n, written = 0, n[3] = {0, 0, 0}, room[3] = {64, 64, 64};
+    /* The faces of the hit sides, one list a slot (each in face order as found). */
+    Py_ssize_t *hit[3] = {malloc(64 * sizeof(Py_ssize_t)), malloc(64 * sizeof(Py_ssize_t)),
+                          malloc(64 * sizeof(Py_ssize_t))};
+    int failed = !hit[0] || !hit[1] || !hit[2];
+    Py_BEGIN_ALLOW_THREADS
+    double raw[LEAF][9];
+    for (Py_ssize_t t0 = 0; t0 < k && !failed; t0 += LEAF) {
+        Py_ssize_t m = k - t0 < LEAF ? k - t0 : LEAF;
+        load(&b, t0, m, raw);
+        for (Py_ssize_t j = 0; j < m && !failed; j++) {
+            uint64_t h[3];
+            corner_hashes(raw[j], h);
+            for (int v = 0; v < 3; v++) {
+                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+                if (start == end)
+                    continue; /* a side whose ends hash alike bounds nothing */
+                uint64_t e = edge_hash(start, end) >> 1, top = e >> tshift;
+                if (!(table[top >> 3] >> (top & 7) & 1))
+                    continue;
+                Py_ssize_t at = starts[e >> sshift], stop = starts[(e >> sshift) + 1];
+                if (at < 0)
+                    at = 0;
+                if (stop > nid)
+                    stop = nid; /* (an index that is not one finds less, never reads beyond) */
+                while (at < stop && ids[at] < e)
+                    at++;
+                if (at == stop || ids[at] != e)
+                    continue;
+                if (n[v] == room[v]) {
+                    Py_ssize_t *grown = realloc(hit[v], (room[v] *= 2) * sizeof(Py_ssize_t));
+                    if (!grown) {
+                        failed = 1;
+                        break;
+                    }
+                    hit[v] = grown;
+                }
+                hit[v][n[v]++] = t0 + j;
+            }
+        }
+    }
+    /* The hit sides' end points, slot by slot. */
+    for (int v = 0; v < 3 && !failed; v++)
+        for (Py_ssize_t i = 0; i < n[v]; i++) {
+            double p[1][9];
+            load(&b, hit[v][i], 1, p);
+            int w = v == 2 ? 0 : v + 1;
+            for (int a = 0; a < 3; a++) {
+                out[6 * written + a] = p[0][3 * v + a] + 0.0;
+                out[6 * written + 3 + a] = p[0][3 * w + a] + 0.0;
+            }
+            written++;
+        }
+    Py_END_ALLOW_THREADS
+    for (int v = 0; v < 3; v++)
+        free(hit[v]);
+    for (int i = 0; i < 4; i++)
+        PyBuffer_Release(vs[i]);
+    release_block(&view, &b);
+    if (failed)
+        return PyErr_NoMemory();
+    return PyLong_FromSsize_t(written);
 }

@@ -173,24 +173,32 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
     boundary = 0
     moments = None
     presorted = False
+    found = None
     if buckets is not None:
         if not buckets.overflow and buckets.closed():   # each bucket checked where it lies
             del buckets
             is_closed = bounding = True
-        else:                                       # the open road wants every key, sorted
+        else:                                       # the open road wants every key's group
+            if not buckets.overflow:
+                found = _split_groups(source, fast, buckets, pairs is not None)
             del buckets
-            keys, presorted = _all_keys(source, fast, pairs is not None)
+            if found is None:
+                keys, presorted = _all_keys(source, fast, pairs is not None)
         filled = 0 if keys is None else keys.size
     if keys is not None:
         keys = keys[:filled]
-        is_closed = bounding = keys_pair_up(keys, presorted)
-        if not is_closed:
-            unbalanced = unbalanced_groups(keys)
+        if keys_pair_up(keys, presorted):
+            is_closed = bounding = True
+        else:
             # A 64-bit hash collision can only make a closed mesh look open: most failures
             # prove openness from the sorted keys alone; the few doubtful edges are compared
             # exactly in one more pass.
-            doubtful = doubtful_edges(keys)
-            del keys
+            found = unbalanced_groups(keys), doubtful_edges(keys), False
+        del keys
+    if found is not None:
+        unbalanced, doubtful, pair_up = found
+        is_closed = bounding = pair_up
+        if not is_closed:
             is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
             bounding = is_closed or unbalanced.ids.size == 0
             if not bounding:
@@ -225,6 +233,34 @@ def _all_keys(source: MeshSource, fast, indexed: bool) -> tuple[np.ndarray, bool
         del buckets
         return _keys_in_order(source), False
     return buckets.sorted_keys(), True
+
+
+def _split_groups(source: MeshSource, fast, forward: ForwardBuckets,
+                  indexed: bool) -> tuple[Unbalanced, np.ndarray, bool] | None:
+    """``unbalanced_groups`` and ``doubtful_edges`` of every side's key, and whether they all
+    pair up, for a mesh the forward keys did not prove closed: one more pass deals the other
+    half of the keys (``backward_block``) to buckets beside the forward ones, and the kernel
+    scans the two together bucket by bucket (``split_groups``), without making the forward
+    keys again or moving the keys together. None when a bucket overflows (the caller then makes
+    every key in order)."""
+    backward = Buckets.like(forward)
+    item: Any
+    for item in (source.index_blocks() if indexed else source.read_blocks()):
+        if indexed or kernel_takes(item):
+            if fast.backward_block(item, backward.keys, backward.fill, backward.cap, backward.shift) < 0:
+                return None
+            continue
+        block_keys = column_edge_keys(columns(item))
+        backward.add(block_keys[(block_keys & np.uint64(1)) == 0])
+        if backward.overflow:
+            return None
+    ids, size, sides, doubtful = fast.split_groups(forward.keys, forward.fill, backward.keys, backward.fill,
+                                                   forward.cap, forward.shift)
+    total = int(forward.fill.sum() + backward.fill.sum())
+    unbalanced = Unbalanced(np.frombuffer(ids, dtype=np.uint64).copy(), size, sides, total)
+    if doubtful is None:
+        return unbalanced, np.zeros(0, dtype=np.uint64), False
+    return unbalanced, np.frombuffer(doubtful, dtype=np.uint64).copy(), total > 0 and not doubtful
 
 
 def _keys_in_order(source: MeshSource) -> np.ndarray:

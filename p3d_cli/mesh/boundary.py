@@ -32,7 +32,7 @@ from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combin
 from p3d_cli.mesh.closed import (_lex_less, column_edge_keys, key_groups, side_keys, sides_of_edges)
 from p3d_cli.mesh.columns import columns
 from p3d_cli.geometry.expansions import two_sum
-from p3d_cli.mesh.kernels import compiled, sort
+from p3d_cli.mesh.kernels import compiled, sort, takes
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
 #: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).
@@ -211,7 +211,20 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
     if ids.size == 0:
         return
     members = _Members(ids)
+    kernels = compiled()
+    out = np.empty((0, 6))
+    index = members.starts() if kernels is not None and not every else None
     for block in source_blocks:
+        if kernels is not None and not every and takes(block):
+            # The same sides in the same order, picked by the compiled kernel from the
+            # block's own records (no float64 copy, no keys array).
+            if out.shape[0] < 3 * len(block):
+                out = np.empty((3 * len(block), 6))
+            sides = out[:kernels.pick_sides(block, ids, members.bits, int(members.shift), *index, out)]
+            for first in range(0, sides.shape[0], SIDE_BLOCK):
+                chunk = sides[first:first + SIDE_BLOCK]
+                yield np.ascontiguousarray(chunk[:, :3].T), np.ascontiguousarray(chunk[:, 3:].T)
+            continue
         cols = columns(block)
         if cols.shape[2] == 0:
             continue
@@ -256,6 +269,16 @@ class _Members:
         self.shift = np.uint64(63 - bits)
         self.table = np.zeros(1 << bits, dtype=bool)
         self.table[(ids >> self.shift).astype(np.intp)] = True
+        #: The table packed 8 slots a byte, for the compiled ``pick_sides``.
+        self.bits = np.packbits(self.table, bitorder="little")
+
+    def starts(self) -> tuple[np.ndarray, int]:
+        """An index of the ids by their top bits, for the compiled ``pick_sides``: ``starts[j]``
+        is the first id at or above ``j << shift``, about one id a slot; and ``shift``."""
+        bits = max(1, int(self.ids.size).bit_length())
+        shift = 63 - bits
+        bounds = np.arange((1 << bits) + 1, dtype=np.uint64) << np.uint64(shift)
+        return np.searchsorted(self.ids, bounds).astype(np.int64), shift
 
     def __call__(self, edge: np.ndarray) -> np.ndarray:
         ids = self.ids

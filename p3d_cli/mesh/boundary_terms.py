@@ -53,6 +53,13 @@ _CYCLE = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
 _I, _J = np.array([1, 2, 0]), np.array([2, 0, 1])
 #: The pairs (i, j) of PAIRS as index arrays.
 _PI, _PJ = np.array([i for i, _ in PAIRS]), np.array([j for _, j in PAIRS])
+#: The quantity of each of the cross products' four parts (``ExactSum`` rows).
+_CROSS_ROWS = np.repeat(np.arange(3), 4)
+#: The rows of Q (``ExactSum`` rows), and the sides whose exact parts are added at once.
+_Q_ROWS = np.arange(9)
+_BATCH = 1 << 13
+#: ``2**1074``: ``_units`` counts multiples of the smallest float.
+_UNITS = 1 << 1074
 #: World coordinates up to this magnitude keep ``two_product`` exact (products below 2**960).
 WORLD_LIMIT = 2.0 ** 480
 #: Products below this may lose bits to underflow (``two_product``'s error term is subnormal).
@@ -141,9 +148,16 @@ class Locals:
     def __init__(self) -> None:
         self._high = ExactSum(9)
         self._cross = ExactSum(3)
-        self._low = [Fraction(0)] * 27
-        self._r_high = [Fraction(0)] * 18
+        # Exact sums of floats, as integers in units of 2**-1074 (every finite float is one):
+        # the same numbers as running Fraction sums, without a gcd per addition.
+        self._low = [0] * 27
+        self._r_high = [0] * 18
         self._rounding = np.zeros(27)
+        # Parts for the exact sums, added to them in batches (an exact sum is the same in any
+        # order and grouping; one ``ExactSum.add`` of a few hundred sides costs as much as of
+        # thousands).
+        self._waiting: list[tuple[np.ndarray, np.ndarray]] = []
+        self._waiting_sides = 0
         self.count = 0
         self.underflow = 0            # sides whose cross products may have lost bits to underflow
 
@@ -158,7 +172,6 @@ class Locals:
         p1, e1 = product_of_splits(a[_I], _rows(sa, _I), b[_J], _rows(sb, _J))
         p2, e2 = product_of_splits(a[_J], _rows(sa, _J), b[_I], _rows(sb, _I))
         xh, xl, parts = _cross(p1, e1, p2, e2)
-        self._cross.add(parts.transpose(1, 0, 2).reshape(12, n), np.repeat(np.arange(3), 4))
         small = ((p1 != 0.0) & (np.abs(p1) < _UNDERFLOW)) | ((p2 != 0.0) & (np.abs(p2) < _UNDERFLOW))
         self.underflow += int(small.any(axis=0).sum())
         th, tl = two_sum(a, b)
@@ -171,13 +184,23 @@ class Locals:
         # Q is multiplied by |o|² in the end, R by |o| only: Q's high parts are summed exactly,
         # R's by a cascade of error-free sums (``cascaded_sums``: ~2^-100 of their magnitude,
         # far more than R needs, at a fifth of the cost).
-        self._high.add(q_high.reshape(9, n), np.arange(9))
+        self._waiting.append((parts.transpose(1, 0, 2).reshape(12, n), q_high.reshape(9, n)))
+        self._waiting_sides += n
+        if self._waiting_sides >= _BATCH:
+            self._add_waiting()
         r_sum, r_sum_low, cascade = cascaded_sums(r_high.reshape(18, n))
         low_sums = np.concatenate([q_low.reshape(9, n).sum(axis=1), r_low.reshape(18, n).sum(axis=1)])
         low_sums[9:] += r_sum_low
-        self._low = [x + Fraction(float(s)) for x, s in zip(self._low, low_sums.tolist())]
-        self._r_high = [x + Fraction(float(s)) for x, s in zip(self._r_high, r_sum.tolist())]
+        self._low = [x + _units(s) for x, s in zip(self._low, low_sums.tolist())]
+        self._r_high = [x + _units(s) for x, s in zip(self._r_high, r_sum.tolist())]
         self._bound(np.abs(a), np.abs(b), np.abs(xh), n, cascade)
+
+    def _add_waiting(self) -> None:
+        """Add the parts set aside to the exact sums."""
+        if self._waiting:
+            self._cross.add(np.concatenate([x for x, _ in self._waiting], axis=1), _CROSS_ROWS)
+            self._high.add(np.concatenate([q for _, q in self._waiting], axis=1), _Q_ROWS)
+        self._waiting, self._waiting_sides = [], 0
 
     def _bound(self, a: np.ndarray, b: np.ndarray, mag: np.ndarray, n: int, cascade: float) -> None:
         """Accumulate ``Σ |X_k| T_i``, ``Σ |X_k| W_ij`` and the block's rounding factors."""
@@ -197,15 +220,23 @@ class Locals:
 
     def cross_totals(self) -> tuple[list[Fraction], float]:
         """``P`` (3) exactly but for underflow, and a bound on what underflow can have lost."""
+        self._add_waiting()
         return self._cross.totals(), 16.0 * self.underflow * TINY
 
     def totals(self) -> tuple[list[Fraction], np.ndarray]:
         """``Q`` (9, ``[3k + i]``) and ``R`` (18, ``[6k + pair]``) and their error bounds."""
-        high = self._high.totals() + self._r_high
+        self._add_waiting()
+        high = self._high.totals() + [Fraction(x, _UNITS) for x in self._r_high]
         # X's own u³ term: 6.3 ε³ m_k with m_k <= 2, times T_i <= 2 or W_ij <= 6 (|a|, |b| <= 1).
         cubic = 6.3 * UNIT ** 3 * 12.0 * self.count
         error = 1.01 * (self._rounding * UNIT * UNIT + cubic + 256.0 * self.count * TINY)
-        return [h + lo for h, lo in zip(high, self._low)], error
+        return [h + Fraction(lo, _UNITS) for h, lo in zip(high, self._low)], error
+
+
+def _units(x: float) -> int:
+    """The finite float ``x`` as an integer count of ``2**-1074`` (exact)."""
+    num, den = x.as_integer_ratio()
+    return num << (1075 - den.bit_length())
 
 
 def _rows(pair: tuple, *index) -> tuple:

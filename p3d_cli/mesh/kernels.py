@@ -105,6 +105,17 @@ class Buckets:
         self.fill = np.zeros(buckets, dtype=np.int64)
         self.overflow = False
 
+    @classmethod
+    def like(cls, other: Buckets) -> Buckets:
+        """Empty buckets of ``other``'s shift and room: the keys that go with ``other``'s, for
+        a scan of both bucket by bucket (``split_groups``)."""
+        buckets = cls.__new__(cls)
+        buckets.shift, buckets.cap = other.shift, other.cap
+        buckets.keys = key_buffer(other.keys.size)
+        buckets.fill = np.zeros_like(other.fill)
+        buckets.overflow = False
+        return buckets
+
     def add(self, block_keys: np.ndarray) -> None:
         """Deal keys made by the numpy code (a block the compiled pass left to it)."""
         bucket = (block_keys >> np.uint64(self.shift)).astype(np.int64)
@@ -137,7 +148,9 @@ class ForwardBuckets(Buckets):
     used unequally often in the two directions, and adds ``g(edge)`` times that nonzero
     difference to the balance, which the other such edges cancel only by a 64-bit coincidence
     (as two edges' keys must coincide to fool the sort). ``closed`` False says nothing more:
-    the caller then makes every key (``Buckets``) for the open-mesh road.
+    the caller then deals the other half of the keys beside these (``Buckets.like``, the
+    kernel's ``backward_block``) and scans the two together for the open-mesh road
+    (``split_groups``; ``p3d_cli.mesh.analysis``).
     """
 
     def __init__(self, sides: int) -> None:

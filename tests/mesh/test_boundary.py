@@ -18,11 +18,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from helpers.kernels import bits, needs_kernels
 from helpers.meshes import write_ascii_stl
 from helpers.exact import exact_moments
 import p3d_cli as p3d
 from p3d_cli.io.source import array_source
-from p3d_cli.mesh import boundary, boundary_terms as terms_module
+from p3d_cli.mesh import boundary, boundary_terms as terms_module, kernels
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.boundary import (boundary_of, boundary_sums, boundary_terms, boundary_volume,
                                    unbalanced_groups, unbalanced_of)
@@ -186,6 +187,30 @@ def test_soup_and_membership_paths_give_the_same_terms():
     assert every.sums[0] == some.sums[0] == exact[0]
     for a, b, want, ea, eb in zip(every.sums, some.sums, exact, every.error, some.error):
         assert abs(a - want) <= Fraction(float(ea)) and abs(b - want) <= Fraction(float(eb))
+
+
+@needs_kernels
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("holes", [1, 3, 40])
+def test_compiled_sides_are_the_numpy_ones_bit_for_bit(monkeypatch, dtype, holes):
+    """``unbalanced_sides`` with the compiled ``pick_sides`` and with the numpy code: the same
+    sides, in the same order and chunks, the same bits (a rim of a few ids, tested by equality
+    in numpy, and one of more, by the table and a binary search; -0.0 read as 0.0; a side whose
+    ends are one point left out; several blocks)."""
+    t = open_box(12, [-0.0, 1e8, 3.0], True, 9).astype(dtype)
+    t = np.delete(t, np.arange(0, len(t), max(1, len(t) // holes))[:holes], axis=0)
+    t[5, 1] = t[5, 0]                                        # a side from a point to itself
+    t[:, :, 0][t[:, :, 0] == 0] = -0.0
+    blocks = [t[:100], t[100:101], t[101:]]
+    ids = unbalanced_of(lambda: iter(blocks)).ids
+    assert ids.size > (16 if holes > 1 else 0)
+    compiled = list(boundary.unbalanced_sides(iter(blocks), ids))
+    monkeypatch.setattr(kernels, "KERNELS", None)
+    numpy_sides = list(boundary.unbalanced_sides(iter(blocks), ids))
+    assert len(compiled) == len(numpy_sides)
+    for (u, v), (u2, v2) in zip(compiled, numpy_sides):
+        assert u.flags.c_contiguous and v.flags.c_contiguous
+        assert np.array_equal(bits(u), bits(u2)) and np.array_equal(bits(v), bits(v2))
 
 
 def test_check_volume_term_is_the_same_exact_number():

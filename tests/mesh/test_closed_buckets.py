@@ -153,7 +153,8 @@ def test_adversarial_meshes_same_verdicts(name, triangles):
 
 def test_a_closed_mesh_never_moves_its_keys(monkeypatch):
     """A closed mesh's keys are never sorted together (that move touched every key's page a
-    second time); an open one's are, all of them, for its road."""
+    second time); nor are an open one's: the other half of its keys is dealt beside the
+    forward ones and the two are scanned bucket by bucket (``split_groups``)."""
     calls = []
     original = kernels.Buckets.sorted_keys
 
@@ -165,4 +166,35 @@ def test_a_closed_mesh_never_moves_its_keys(monkeypatch):
     closed = analyze(array_source("stl-binary", BIG, "float32"), "x")
     assert closed.closed is True and closed.bounding is True and calls == []
     opened = analyze(array_source("stl-binary", BIG[1:], "float32"), "x")
-    assert opened.closed is False and opened.bounding is False and calls == [1]
+    assert opened.closed is False and opened.bounding is False and calls == []
+
+
+@given(key_sets())
+def test_split_groups_are_the_groups_of_every_key(keys):
+    """The forward keys' buckets and the backward keys' beside them (``Buckets.like``), scanned
+    together, give ``groups`` of all the keys sorted: the same unbalanced ids, net boundary,
+    sides and doubtful ids."""
+    forward = dealt(keys)
+    backward = kernels.Buckets.like(forward)
+    backward.add(keys[(keys & np.uint64(1)) == 0])
+    assert not backward.overflow
+    split = KERNELS.split_groups(forward.keys, forward.fill, backward.keys, backward.fill, forward.cap,
+                                 forward.shift)
+    assert split == KERNELS.groups(np.sort(keys))
+
+
+@pytest.mark.parametrize("n", [1, 5, 128, 129, 5000, 20_000])
+def test_compiled_backward_keys_are_numpys(n):
+    """``backward_block`` deals exactly the keys with bit 0 clear of ``column_edge_keys``, to
+    the buckets of the forward ones' shift."""
+    block = BIG[:n]
+    forward = kernels.ForwardBuckets(3 * n)
+    backward = kernels.Buckets.like(forward)
+    written = KERNELS.backward_block(block, backward.keys, backward.fill, backward.cap, backward.shift)
+    keys = column_edge_keys(columns(block))
+    expected = np.sort(keys[(keys & np.uint64(1)) == 0])
+    assert written == expected.size == backward.fill.sum()
+    got = np.concatenate([backward.keys[b * backward.cap:b * backward.cap + f] for b, f in enumerate(backward.fill)])
+    assert np.array_equal(np.sort(got), expected)
+    assert all((backward.keys[b * backward.cap:b * backward.cap + f] >> np.uint64(backward.shift) == b).all()
+               for b, f in enumerate(backward.fill))
