@@ -130,16 +130,26 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
             have, done = q0, end
             yield from run(keys, entries[:end - q0], q0, members, grid, None, q0, q1)
 
+    # The finer levels' windows' entries, made once for every coarser level that looks them up
+    # (a mesh of many levels, such as one with long slivers, would otherwise make its finest
+    # level's entries once per coarser level).
+    made: dict[tuple[int, int], np.ndarray] = {}
+
     def probes(at) -> Pairs:
         """The finer levels' faces near a coarser level's faces, looking its cells up."""
         keys, members, grid = built[at]
         entries = fill(keys, members)
         box = entries.view(np.float32)
         box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:6].max(axis=0)
-        for finer_keys, finer_members, _ in built[:at]:
+        last = at == len(built) - 1
+        for finer, (finer_keys, finer_members, _) in enumerate(built[:at]):
             for q0 in range(0, finer_keys.size, WINDOW):
                 query_keys = finer_keys[q0:q0 + WINDOW]
-                query_entries = fill(query_keys, finer_members)
+                query_entries = made.pop((finer, q0), None) if last else made.get((finer, q0))
+                if query_entries is None:
+                    query_entries = fill(query_keys, finer_members)
+                    if not last:
+                        made[(finer, q0)] = query_entries
                 corners = query_entries.view(np.float32)
                 near = np.ones(query_keys.size, dtype=bool)
                 for k in range(3):
