@@ -19,6 +19,8 @@ ENTRY = 36
 WINDOW = 1 << 16
 #: The compiled grid's x cells: the level's cell size over 2**FINE_X (where the keys' bits allow).
 FINE_X = 8
+#: Bins along each axis of a coarser level's boxes' shadow (``_Shadow``), for its probes.
+SHADOW_BINS = 1 << 12
 
 
 def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray,
@@ -141,6 +143,7 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
         entries = fill(keys, members)
         box = entries.view(np.float32)
         box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:6].max(axis=0)
+        shadows = [_Shadow(box[:, k], box[:, 3 + k], float(box_lo[k]), float(box_hi[k])) for k in range(3)]
         last = at == len(built) - 1
         for finer, (finer_keys, finer_members, _) in enumerate(built[:at]):
             for q0 in range(0, finer_keys.size, WINDOW):
@@ -154,6 +157,9 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
                 near = np.ones(query_keys.size, dtype=bool)
                 for k in range(3):
                     near &= (corners[:, k] <= box_hi[k]) & (corners[:, 3 + k] >= box_lo[k])
+                for k in range(3):
+                    rows = np.flatnonzero(near)
+                    near[rows] = shadows[k].meets(corners[rows, k], corners[rows, 3 + k])
                 positions = np.flatnonzero(near).astype(index)
                 if positions.size:
                     yield from run(keys, entries, 0, members, grid,
@@ -166,6 +172,34 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
                 yield from probes(at)
 
     return pairs()
+
+
+class _Shadow:
+    """The union of a level's boxes' extents along one axis, on ``SHADOW_BINS`` bins: a finer
+    box whose extent meets no bin of it meets none of the level's boxes (those far from every
+    flat disc of slivers, though inside the box around them all), and looks no cells up.
+
+    Exact: the bins are a monotone map of the float32 coordinates (rounded differences and
+    products, ``floor`` and clipping keep the order), so two extents that share a point share
+    its bin."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, least: float, most: float):
+        self.least = least
+        self.scale = SHADOW_BINS / (most - least) if most > least else 0.0
+        first, last = self._bins(lo), self._bins(hi)
+        change = np.zeros(SHADOW_BINS + 1, dtype=np.int64)
+        np.add.at(change, first, 1)
+        np.add.at(change, last + 1, -1)
+        covered = np.cumsum(change[:SHADOW_BINS]) > 0
+        self.before = np.concatenate([[0], np.cumsum(covered)])     # covered bins before each
+
+    def _bins(self, x: np.ndarray) -> np.ndarray:
+        at = np.floor((x.astype(np.float64) - self.least) * self.scale)
+        return np.clip(at, 0, SHADOW_BINS - 1).astype(np.int64)
+
+    def meets(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Whether each extent ``[lo, hi]`` covers a bin the level's boxes cover."""
+        return self.before[self._bins(hi) + 1] > self.before[self._bins(lo)]
 
 
 def _unpaged(shape, dtype=np.uint8) -> np.ndarray:
