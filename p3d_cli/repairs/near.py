@@ -96,9 +96,14 @@ def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
 
 def _boxes(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Exact boxes ``(n, 3)`` of the faces."""
-    a, b, c = (points[faces[:, k]] for k in range(3))
-    lo = np.minimum(np.minimum(a, b), c)
-    hi = np.maximum(np.maximum(a, b), c)
+    # One contiguous row of vertex ids per corner, gathered with take (several times faster
+    # than indexing with the faces' strided columns), the extrema made in place.
+    corners = np.ascontiguousarray(np.asarray(faces).T)
+    a, b, c = (np.take(points, corners[k], axis=0) for k in range(3))
+    lo = np.minimum(a, b)
+    np.minimum(lo, c, out=lo)
+    hi = np.maximum(a, b, out=a)
+    np.maximum(hi, c, out=hi)
     return lo, hi
 
 
@@ -207,12 +212,24 @@ def _morton(centres: np.ndarray) -> np.ndarray:
     span = centres.max(axis=0) - low
     span[span <= 0] = 1.0
     cells = (1 << MORTON_BITS) - 1
-    q = np.clip(((centres - low) / span * cells), 0, cells).astype(np.uint64)
-    key = np.zeros(len(centres), dtype=np.uint64)
-    for bit in range(MORTON_BITS):
-        for axis in range(3):
-            key |= ((q[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    q = np.clip(((centres - low) / span * cells), 0, cells).astype(np.int64)
+    # Bit ``b`` of axis ``a`` goes to bit ``3 b + a``: each axis's bits spread by one table.
+    key = _SPREAD[q[:, 0]]
+    key |= _SPREAD[q[:, 1]] << np.uint64(1)
+    key |= _SPREAD[q[:, 2]] << np.uint64(2)
     return key
+
+
+def _spread() -> np.ndarray:
+    """``(2**MORTON_BITS,)`` uint64: each value's bit ``b`` moved to bit ``3 b``."""
+    values = np.arange(1 << MORTON_BITS, dtype=np.uint64)
+    out = np.zeros(values.size, dtype=np.uint64)
+    for bit in range(MORTON_BITS):
+        out |= ((values >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit)
+    return out
+
+
+_SPREAD = _spread()
 
 
 def _meets(triangles: np.ndarray, tri: np.ndarray, lo: np.ndarray, hi: np.ndarray, box: np.ndarray,
