@@ -19,7 +19,7 @@ ENTRY = 36
 WINDOW = 1 << 16
 #: The compiled grid's x cells: the level's cell size over 2**FINE_X (where the keys' bits allow).
 FINE_X = 8
-#: Bins along each axis of a coarser level's boxes' shadow (``_Shadow``), for its probes.
+#: Bins along each axis of a coarser level's boxes' shadow (``Shadow``), for its probes.
 SHADOW_BINS = 1 << 12
 
 
@@ -143,7 +143,7 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
         entries = fill(keys, members)
         box = entries.view(np.float32)
         box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:6].max(axis=0)
-        shadows = [_Shadow(box[:, k], box[:, 3 + k], float(box_lo[k]), float(box_hi[k])) for k in range(3)]
+        shadows = [Shadow(box[:, k], box[:, 3 + k], float(box_lo[k]), float(box_hi[k])) for k in range(3)]
         last = at == len(built) - 1
         for finer, (finer_keys, finer_members, _) in enumerate(built[:at]):
             for q0 in range(0, finer_keys.size, WINDOW):
@@ -174,14 +174,15 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
     return pairs()
 
 
-class _Shadow:
-    """The union of a level's boxes' extents along one axis, on ``SHADOW_BINS`` bins: a finer
-    box whose extent meets no bin of it meets none of the level's boxes (those far from every
-    flat disc of slivers, though inside the box around them all), and looks no cells up.
+class Shadow:
+    """The union of extents ``[lo, hi]`` along one axis (within ``least`` to ``most``), on
+    ``SHADOW_BINS`` bins: an extent that covers no bin of it meets none of them. A coarser
+    level's probes skip the finer boxes far from every one of its boxes (the flat discs of
+    slivers of filled holes, whose one box around them all holds most of the mesh).
 
-    Exact: the bins are a monotone map of the float32 coordinates (rounded differences and
-    products, ``floor`` and clipping keep the order), so two extents that share a point share
-    its bin."""
+    Exact: the bins are a monotone map of the coordinates (rounded differences and products,
+    ``floor`` and clipping keep the order), so two extents that share a point share its bin.
+    """
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray, least: float, most: float):
         self.least = least

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.mesh.compiled_grid import Shadow
 from p3d_cli.mesh.kernels import compiled
 
 #: Faces per leaf of the tree.
@@ -82,6 +83,13 @@ def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
     # Only the faces whose boxes meet the box of all the query triangles can meet one of them.
     inside = np.flatnonzero(((lo <= triangles.max(axis=(0, 1)) + margin)
                              & (hi >= triangles.min(axis=(0, 1)) - margin)).all(axis=1))
+    # Nor any whose extent along an axis misses the union of the triangles' grown extents
+    # there (the walk's first test, per triangle, is this one: fillings in a few flat planes
+    # leave out most of a mesh the box around them all holds).
+    low, high = triangles.min(axis=1) - margin, triangles.max(axis=1) + margin
+    for axis in range(3):
+        shadow = Shadow(low[:, axis], high[:, axis], float(low[:, axis].min()), float(high[:, axis].max()))
+        inside = inside[shadow.meets(lo[inside, axis], hi[inside, axis])]
     # A face of the query's own label is dropped at the leaves, before the geometry: a fan's
     # faces all meet each other's boxes at its apex.
     label = np.full(len(faces), -1, dtype=np.int64) if group is None else np.asarray(group, dtype=np.int64)
