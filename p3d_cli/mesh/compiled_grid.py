@@ -85,6 +85,11 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
         built.append((keys, members, (corner, sizes, bits, fbits, span)))
     del level
 
+    # The finer levels' windows' entries, made once (by the level's own scan) for every
+    # coarser level that looks them up (a mesh of many levels, such as one with long slivers,
+    # would otherwise make its finest level's entries again for each coarser level).
+    made: dict[tuple[int, int], np.ndarray] = {}
+
     def fill(keys, members):
         """The entries of ``keys`` (boxes and vertex ids beside the keys: scans read in order)."""
         entries = _unpaged((keys.size, ENTRY))
@@ -104,9 +109,10 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
             if written:
                 yield out_i[:written].copy(), out_j[:written].copy()
 
-    def own(keys, members, grid) -> Pairs:
+    def own(at, keys, members, grid) -> Pairs:
         """A level's own pairs, WINDOW faces at a time, with the entries of the rows they scan
-        (up to the last one's row plus the span: a few rows, not the whole level's)."""
+        (up to the last one's row plus the span: a few rows, not the whole level's). Below
+        the coarsest level, each window's own entries are kept for the coarser levels' probes."""
         _, _, (bx, by, _), _, (_, sy, sz) = grid
         row_shift = bx + fbits
         entries = _unpaged((0, ENTRY))
@@ -130,12 +136,9 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
                 fast.grid_fill(points, faces, live, frame, keys[q0 + kept:end], fbits, members, marks,
                                entries[kept:end - q0])
             have, done = q0, end
+            if at < len(built) - 1:
+                made[(at, q0)] = entries[:q1 - q0].copy()
             yield from run(keys, entries[:end - q0], q0, members, grid, None, q0, q1)
-
-    # The finer levels' windows' entries, made once for every coarser level that looks them up
-    # (a mesh of many levels, such as one with long slivers, would otherwise make its finest
-    # level's entries once per coarser level).
-    made: dict[tuple[int, int], np.ndarray] = {}
 
     def probes(at) -> Pairs:
         """The finer levels' faces near a coarser level's faces, looking its cells up."""
@@ -167,7 +170,7 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
 
     def pairs() -> Pairs:
         for at, (keys, members, grid) in enumerate(built):
-            yield from own(keys, members, grid)
+            yield from own(at, keys, members, grid)
             if at:
                 yield from probes(at)
 
