@@ -189,7 +189,12 @@ class Shadow:
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray, least: float, most: float):
         self.least = least
-        self.scale = SHADOW_BINS / (most - least) if most > least else 0.0
+        span = most - least
+        # One bin (every extent meets it) for a point, or a span too large or too small for
+        # its bins' arithmetic.
+        self.scale = SHADOW_BINS / span if most > least and np.isfinite(span) else 0.0
+        if not np.isfinite(self.scale):
+            self.scale = 0.0
         first, last = self._bins(lo), self._bins(hi)
         change = np.zeros(SHADOW_BINS + 1, dtype=np.int64)
         np.add.at(change, first, 1)
@@ -198,7 +203,10 @@ class Shadow:
         self.before = np.concatenate([[0], np.cumsum(covered)])     # covered bins before each
 
     def _bins(self, x: np.ndarray) -> np.ndarray:
-        at = np.floor((x.astype(np.float64) - self.least) * self.scale)
+        if self.scale == 0:
+            return np.zeros(len(x), dtype=np.int64)
+        with np.errstate(over="ignore"):      # far beyond the span: infinite, clipped below
+            at = np.floor((x.astype(np.float64) - self.least) * self.scale)
         return np.clip(at, 0, SHADOW_BINS - 1).astype(np.int64)
 
     def meets(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -392,3 +393,18 @@ def test_a_shadow_meets_every_extent_that_meets_one_of_its_own(own, asked):
     meets = shadow.meets(q_lo, q_hi)
     truth = ((q_lo[:, None] <= hi[None, :]) & (lo[None, :] <= q_hi[:, None])).any(axis=1)
     assert not (truth & ~meets).any()
+
+
+def test_a_shadow_of_a_point_or_of_a_span_beyond_its_arithmetic_is_one_bin():
+    """Every extent meets a shadow whose span is zero, overflows, or is too small to invert;
+    extents far beyond a shadow's span are clipped into its end bins, without warnings."""
+    from p3d_cli.mesh.compiled_grid import Shadow
+
+    for lo, hi in (([1.0], [1.0]), ([-1e308], [1e308]), ([0.0, 1e-310], [1e-310, 2e-310])):
+        shadow = Shadow(np.array(lo), np.array(hi), min(lo), max(hi))
+        assert shadow.meets(np.array([-5.0, 0.0, 7.0]), np.array([-4.0, 0.0, 8.0])).all()
+    shadow = Shadow(np.array([0.0, 10.0]), np.array([1.0, 11.0]), 0.0, 11.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = shadow.meets(np.array([2.0, 0.5, -1e308, 1.5]), np.array([9.0, 0.7, 1e308, 1.6]))
+    assert got.tolist() == [False, True, True, False]
