@@ -19,6 +19,8 @@ ENTRY = 36
 WINDOW = 1 << 16
 #: The compiled grid's x cells: the level's cell size over 2**FINE_X (where the keys' bits allow).
 FINE_X = 8
+#: Bins along each axis of a coarser level's boxes' shadow (``Shadow``), for its probes.
+SHADOW_BINS = 1 << 12
 
 
 def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray,
@@ -83,6 +85,11 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
         built.append((keys, members, (corner, sizes, bits, fbits, span)))
     del level
 
+    # The finer levels' windows' entries, made once (by the level's own scan) for every
+    # coarser level that looks them up (a mesh of many levels, such as one with long slivers,
+    # would otherwise make its finest level's entries again for each coarser level).
+    made: dict[tuple[int, int], np.ndarray] = {}
+
     def fill(keys, members):
         """The entries of ``keys`` (boxes and vertex ids beside the keys: scans read in order)."""
         entries = _unpaged((keys.size, ENTRY))
@@ -102,9 +109,10 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
             if written:
                 yield out_i[:written].copy(), out_j[:written].copy()
 
-    def own(keys, members, grid) -> Pairs:
+    def own(at, keys, members, grid) -> Pairs:
         """A level's own pairs, WINDOW faces at a time, with the entries of the rows they scan
-        (up to the last one's row plus the span: a few rows, not the whole level's)."""
+        (up to the last one's row plus the span: a few rows, not the whole level's). Below
+        the coarsest level, each window's own entries are kept for the coarser levels' probes."""
         _, _, (bx, by, _), _, (_, sy, sz) = grid
         row_shift = bx + fbits
         entries = _unpaged((0, ENTRY))
@@ -128,6 +136,8 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
                 fast.grid_fill(points, faces, live, frame, keys[q0 + kept:end], fbits, members, marks,
                                entries[kept:end - q0])
             have, done = q0, end
+            if at < len(built) - 1:
+                made[(at, q0)] = entries[:q1 - q0].copy()
             yield from run(keys, entries[:end - q0], q0, members, grid, None, q0, q1)
 
     def probes(at) -> Pairs:
@@ -136,14 +146,23 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
         entries = fill(keys, members)
         box = entries.view(np.float32)
         box_lo, box_hi = box[:, :3].min(axis=0), box[:, 3:6].max(axis=0)
-        for finer_keys, finer_members, _ in built[:at]:
+        shadows = [Shadow(box[:, k], box[:, 3 + k], float(box_lo[k]), float(box_hi[k])) for k in range(3)]
+        last = at == len(built) - 1
+        for finer, (finer_keys, finer_members, _) in enumerate(built[:at]):
             for q0 in range(0, finer_keys.size, WINDOW):
                 query_keys = finer_keys[q0:q0 + WINDOW]
-                query_entries = fill(query_keys, finer_members)
+                query_entries = made.pop((finer, q0), None) if last else made.get((finer, q0))
+                if query_entries is None:
+                    query_entries = fill(query_keys, finer_members)
+                    if not last:
+                        made[(finer, q0)] = query_entries
                 corners = query_entries.view(np.float32)
                 near = np.ones(query_keys.size, dtype=bool)
                 for k in range(3):
                     near &= (corners[:, k] <= box_hi[k]) & (corners[:, 3 + k] >= box_lo[k])
+                for k in range(3):
+                    rows = np.flatnonzero(near)
+                    near[rows] = shadows[k].meets(corners[rows, k], corners[rows, 3 + k])
                 positions = np.flatnonzero(near).astype(index)
                 if positions.size:
                     yield from run(keys, entries, 0, members, grid,
@@ -151,11 +170,48 @@ def compiled_pairs(fast, points: np.ndarray, faces: np.ndarray, live: np.ndarray
 
     def pairs() -> Pairs:
         for at, (keys, members, grid) in enumerate(built):
-            yield from own(keys, members, grid)
+            yield from own(at, keys, members, grid)
             if at:
                 yield from probes(at)
 
     return pairs()
+
+
+class Shadow:
+    """The union of extents ``[lo, hi]`` along one axis (within ``least`` to ``most``), on
+    ``SHADOW_BINS`` bins: an extent that covers no bin of it meets none of them. A coarser
+    level's probes skip the finer boxes far from every one of its boxes (the flat discs of
+    slivers of filled holes, whose one box around them all holds most of the mesh).
+
+    Exact: the bins are a monotone map of the coordinates (rounded differences and products,
+    ``floor`` and clipping keep the order), so two extents that share a point share its bin.
+    """
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, least: float, most: float):
+        self.least = least
+        span = most - least
+        # One bin (every extent meets it) for a point, or a span too large or too small for
+        # its bins' arithmetic.
+        self.scale = SHADOW_BINS / span if most > least and np.isfinite(span) else 0.0
+        if not np.isfinite(self.scale):
+            self.scale = 0.0
+        first, last = self._bins(lo), self._bins(hi)
+        change = np.zeros(SHADOW_BINS + 1, dtype=np.int64)
+        np.add.at(change, first, 1)
+        np.add.at(change, last + 1, -1)
+        covered = np.cumsum(change[:SHADOW_BINS]) > 0
+        self.before = np.concatenate([[0], np.cumsum(covered)])     # covered bins before each
+
+    def _bins(self, x: np.ndarray) -> np.ndarray:
+        if self.scale == 0:
+            return np.zeros(len(x), dtype=np.int64)
+        with np.errstate(over="ignore"):      # far beyond the span: infinite, clipped below
+            at = np.floor((x.astype(np.float64) - self.least) * self.scale)
+        return np.clip(at, 0, SHADOW_BINS - 1).astype(np.int64)
+
+    def meets(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Whether each extent ``[lo, hi]`` covers a bin the level's boxes cover."""
+        return self.before[self._bins(hi) + 1] > self.before[self._bins(lo)]
 
 
 def _unpaged(shape, dtype=np.uint8) -> np.ndarray:

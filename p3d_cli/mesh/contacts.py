@@ -4,8 +4,11 @@ A pair of faces can touch without crossing (``p3d_cli.mesh.triangle_pairs.CONTAC
 surface around them crosses: an edge of one sheet lies in the plane of a face of another and
 passes through its interior, with the edge's faces going one above and one below; or two sheets
 meet along a common edge line (an edge used by four faces) and interleave. Whether they cross
-is a property of the faces *around* the line, decided here exactly, in rational arithmetic
-(these lines are rare: a few per mesh that has them).
+is a property of the faces *around* the line, decided here exactly, in integer arithmetic
+(these lines are rare: a few per mesh that has them). The coordinates are taken as integers on
+one power-of-two grid (``IntegerPoints``): every sign below is of a polynomial homogeneous in
+differences of points, so scaling every point by the same power of two keeps it, and Python's
+integers do without the fractions' normalisations.
 
 Around the line, each face that contains it is a half-plane, each one the boundary between
 inside and outside: going round the line counter-clockwise, crossing a face whose normal points
@@ -22,18 +25,45 @@ passes through it shows where it leaves.
 
 from __future__ import annotations
 
+import math
 from functools import cmp_to_key
 
 import numpy as np
 
-from p3d_cli.geometry.rational import cross, dot, exact, sign, sub
+from p3d_cli.geometry.rational import cross, dot, sign, sub
+
+
+class IntegerPoints:
+    """The points' coordinates as exact integers on one power-of-two grid: ``grid[v]`` is point
+    ``v`` times ``2**-low`` (``[x, y, z]`` ints), with ``2**low`` the finest unit of any nonzero
+    coordinate, made on first use."""
+
+    def __init__(self, points: np.ndarray):
+        self.points = np.asarray(points, dtype=np.float64)
+        mantissa, exponent = np.frexp(self.points)
+        used = exponent[mantissa != 0]
+        self.low = int(used.min()) - 53 if used.size else 0
+        self._rows: dict[int, list[int]] = {}
+
+    def __getitem__(self, v: int) -> list[int]:
+        row = self._rows.get(v)
+        if row is None:
+            row = self._rows[v] = [self._integer(x) for x in self.points[v].tolist()]
+        return row
+
+    def _integer(self, x: float) -> int:
+        if x == 0:
+            return 0
+        mantissa, exponent = math.frexp(x)
+        return int(mantissa * 2.0 ** 53) << (exponent - 53 - self.low)     # exact: 53 bits
 
 
 class Line:
-    """The oriented line through ``u`` and ``v``, and half-planes around it."""
+    """The oriented line through ``u`` and ``v`` (exact coordinates: ``IntegerPoints``' rows),
+    and half-planes around it."""
 
     def __init__(self, u, v):
-        self.u, self.v = exact(u), exact(v)
+        self.u, self.v = list(u), list(v)
         self.along = sub(self.v, self.u)
 
     def turn(self, q0, q) -> int:
@@ -119,10 +149,11 @@ def crossing_faces(line: Line, half_planes: list) -> list[tuple[int, int]]:
     return sorted(out)
 
 
-def face_half_planes(points: np.ndarray, faces: np.ndarray, face: int, line: Line) -> list:
-    """The half-planes ``(q, normal, face)`` face ``face`` contributes around ``line``: one if the
-    line runs along one of its edges, two if it crosses its interior (a vertex on each side)."""
-    corners = [exact(points[v]) for v in faces[face]]
+def face_half_planes(points: IntegerPoints, faces: np.ndarray, face: int, line: Line) -> list:
+    """The half-planes ``(q, normal, face)`` face ``face`` contributes around ``line`` (its
+    points on ``line``'s grid): one if the line runs along one of its edges, two if it crosses
+    its interior (a vertex on each side)."""
+    corners = [points[int(v)] for v in faces[face]]
     normal = cross(sub(corners[1], corners[0]), sub(corners[2], corners[0]))
     off = [c for c in corners if any(cross(line.along, sub(c, line.u)))]
     if len(off) == 1:

@@ -25,7 +25,7 @@ from p3d_cli.geometry.predicates import in_safe_range, orient2d
 from p3d_cli.mesh.broadphase import box_frame, outward_boxes, pair_blocks
 from p3d_cli.mesh.compiled_grid import compiled_pairs
 from p3d_cli.mesh.kernels import compiled
-from p3d_cli.mesh.contacts import Line, crossing_faces, face_half_planes
+from p3d_cli.mesh.contacts import IntegerPoints, Line, crossing_faces, face_half_planes
 from p3d_cli.mesh.solidity_report import SAMPLES, Crossing, SelfIntersections
 from p3d_cli.mesh.stars import certified_vertices, paired_vertices
 from p3d_cli.mesh.meeting import meeting_point
@@ -238,6 +238,7 @@ def _line_crossings(points, faces, live, contacts, nonmanifold_edges) -> dict:
     if not contacts and not len(nonmanifold_edges):
         return out
     stars = _Stars(faces, live)
+    grid = IntegerPoints(points)
     seen: set[tuple] = set()
     for i, j, edges in contacts:
         for f, g, e in zip(i.tolist(), j.tolist(), edges.tolist()):
@@ -254,14 +255,14 @@ def _line_crossings(points, faces, live, contacts, nonmanifold_edges) -> dict:
             if key in seen:
                 continue
             seen.add(key)
-            line = Line(points[u], points[v])
+            line = Line(grid[u], grid[v])
             half_planes = [h for face in dict.fromkeys(sum(sheets, []))
-                           for h in face_half_planes(points, faces, face, line)]
+                           for h in face_half_planes(grid, faces, face, line)]
             for pair in crossing_faces(line, half_planes):
                 out.setdefault(pair, "crossing")
     for u, v in np.asarray(nonmanifold_edges).tolist():
-        line = Line(points[u], points[v])
-        half_planes = [h for face in stars.edge(u, v) for h in face_half_planes(points, faces, face, line)]
+        line = Line(grid[u], grid[v])
+        half_planes = [h for face in stars.edge(u, v) for h in face_half_planes(grid, faces, face, line)]
         for pair in crossing_faces(line, half_planes):
             out.setdefault(pair, "crossing")
     return out

@@ -28,6 +28,7 @@ filled patch is oriented with them.
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
 from typing import Callable
 
@@ -35,7 +36,7 @@ import numpy as np
 
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.faces import zero_area_faces
-from p3d_cli.geometry.predicates import in_safe_range, orient2d, orient2d_about
+from p3d_cli.geometry.predicates import CCW_BOUND, in_safe_range, orient2d, orient2d_about
 
 
 @dataclass(frozen=True)
@@ -202,16 +203,34 @@ def _simple(plane: np.ndarray, safe: bool) -> bool:
     back = ((b - a) * (after - b)).sum(axis=1) <= 0
     if ((turn == 0) & back).any():
         return False
-    # Every pair of edges i < j that are not consecutive (j >= i + 2, and not the first with
-    # the last), a block of rows at a time (bounded temporaries, few calls).
-    rows = max(1, PAIRS // max(k, 1))
-    column = np.arange(k)
-    for start in range(0, k - 2, rows):
-        first = np.arange(start, min(start + rows, k - 2))[:, None]
-        i, j = np.nonzero((column >= first + 2) & ~((first == 0) & (column == k - 1)))
-        i = i + start
-        if i.size and _segments_meet(a[i], b[i], a[j], b[j], safe).any():
-            return False
+    # Two closed edges meet only if their boxes do (closed, compared exactly): the pairs are
+    # those whose boxes overlap, found by a sweep over the edges sorted by their lowest x, a
+    # block of rows at a time (bounded temporaries, few calls). Every other pair of edges i < j
+    # that are not consecutive (j >= i + 2, and not the first with the last) is disjoint.
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    order = np.argsort(low[:, 0], kind="stable")
+    starts = low[order, 0]
+    # Sorted position p overlaps in x the positions p + 1 .. reach[p] - 1.
+    reach = np.searchsorted(starts, high[order, 0], side="right")
+    counts = np.maximum(reach - np.arange(k) - 1, 0)
+    ends = np.cumsum(counts)
+    begin = 0
+    while begin < k:
+        stop = max(int(np.searchsorted(ends, (ends[begin - 1] if begin else 0) + PAIRS, side="right")), begin + 1)
+        stop = min(stop, k)
+        number = counts[begin:stop]
+        total = int(number.sum())
+        if total:
+            first = np.repeat(np.arange(begin, stop), number)
+            offsets = np.arange(total) - np.repeat(np.cumsum(number) - number, number)
+            i, j = order[first], order[first + 1 + offsets]
+            i, j = np.minimum(i, j), np.maximum(i, j)
+            keep = ((j >= i + 2) & ~((i == 0) & (j == k - 1))
+                    & (low[i, 1] <= high[j, 1]) & (low[j, 1] <= high[i, 1]))
+            i, j = i[keep], j[keep]
+            if i.size and _segments_meet(a[i], b[i], a[j], b[j], safe).any():
+                return False
+        begin = stop
     return True
 
 
@@ -245,12 +264,35 @@ def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge)
     out: list[tuple[int, int, int]] = []
     added: set[tuple[int, int]] = set()
 
+    # The corners sorted by x: a corner in an ear's closed triangle lies in its box (closed,
+    # compared exactly), so only the alive corners of the box's x range and y range are tried.
+    xs, ys = plane[:, 0].tolist(), plane[:, 1].tolist()
+    by_x = np.argsort(plane[:, 0], kind="stable")
+    sorted_x = plane[by_x, 0].tolist()
+    column_y = plane[:, 1]
+
+    def convex(u: int, v: int, w: int) -> bool:
+        # orient2d_about's float filter on Python floats (the same operations, so the same
+        # sign where it decides); the exact test where it does not.
+        if safe:
+            left = (xs[u] - xs[w]) * (ys[v] - ys[w])
+            right = (ys[u] - ys[w]) * (xs[v] - xs[w])
+            det = left - right
+            perm = abs(left) + abs(right)
+            if not (abs(det) <= CCW_BOUND * perm and perm != 0):
+                return ((det > 0) - (det < 0)) == sign
+        return int(orient2d_about(plane[u], plane[v], plane[[w]], safe)[0]) == sign
+
     def ear(v: int) -> bool:
         u, w = before[v], following[v]
-        if int(orient2d_about(plane[u], plane[v], plane[[w]], safe)[0]) != sign:
+        if not convex(u, v, w):
             return False
-        others = np.flatnonzero(alive)
-        others = others[(others != u) & (others != v) & (others != w)]
+        lo_y, hi_y = min(ys[u], ys[v], ys[w]), max(ys[u], ys[v], ys[w])
+        others = by_x[bisect_left(sorted_x, min(xs[u], xs[v], xs[w])):
+                      bisect_right(sorted_x, max(xs[u], xs[v], xs[w]))]
+        heights = column_y[others]
+        others = others[alive[others] & (heights >= lo_y) & (heights <= hi_y)
+                        & (others != u) & (others != v) & (others != w)]
         if others.size:
             c = plane[others]
             # Inside the closed triangle: on the inner side of (or on) each edge; the corners

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from p3d_cli.mesh.compiled_grid import Shadow
 from p3d_cli.mesh.kernels import compiled
 
 #: Faces per leaf of the tree.
@@ -78,28 +79,52 @@ def near_pairs(points: np.ndarray, faces: np.ndarray, query: np.ndarray,
     scale = float(np.abs(points).max()) if len(points) else 0.0
     margin = MARGIN * scale if scale > 0 else MARGIN
     triangles = points[faces[query]]
-    lo, hi = _boxes(points, faces)
-    # Only the faces whose boxes meet the box of all the query triangles can meet one of them.
-    inside = np.flatnonzero(((lo <= triangles.max(axis=(0, 1)) + margin)
-                             & (hi >= triangles.min(axis=(0, 1)) - margin)).all(axis=1))
+    inside, lo, hi = _candidates(points, faces, triangles, margin)
     # A face of the query's own label is dropped at the leaves, before the geometry: a fan's
     # faces all meet each other's boxes at its apex.
     label = np.full(len(faces), -1, dtype=np.int64) if group is None else np.asarray(group, dtype=np.int64)
     mine = np.where(label[query] >= 0, label[query], -2 - np.arange(query.size))
     theirs = label.copy()
     theirs[query] = mine
-    at, position = _tree_query(triangles, lo[inside], hi[inside], margin, mine, theirs[inside])
+    at, position = _tree_query(triangles, lo, hi, margin, mine, theirs[inside])
     face = inside[position]
     order = np.lexsort((face, at))
     return at[order], face[order]
 
 
-def _boxes(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact boxes ``(n, 3)`` of the faces."""
-    a, b, c = (points[faces[:, k]] for k in range(3))
-    lo = np.minimum(np.minimum(a, b), c)
-    hi = np.maximum(np.maximum(a, b), c)
-    return lo, hi
+def _candidates(points: np.ndarray, faces: np.ndarray, triangles: np.ndarray,
+                margin: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The faces that may meet a query triangle, ascending, and their exact boxes ``(c, 3)``.
+
+    Only the faces whose boxes meet the box of all the query triangles (grown by ``margin``)
+    can meet one of them; nor can any whose extent along an axis misses the union of the
+    triangles' grown extents there (the walk's first test, per triangle, is this one:
+    fillings in a few flat planes leave out most of a mesh the box around them all holds).
+    The axes are taken one at a time, the query's narrowest (for the mesh's size) first, each
+    extent made only for the faces the axes before left.
+    """
+    corners = np.ascontiguousarray(faces.T)
+    low, high = triangles.min(axis=1) - margin, triangles.max(axis=1) + margin
+    top, bottom = triangles.max(axis=(0, 1)) + margin, triangles.min(axis=(0, 1)) - margin
+    span = points.max(axis=0) - points.min(axis=0)
+    inside = np.arange(len(faces))
+    extents: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for axis in np.argsort((top - bottom) / np.where(span > 0, span, 1.0), kind="stable").tolist():
+        column = np.ascontiguousarray(points[:, axis])
+        a, b, c = (column[corners[k, inside]] for k in range(3))
+        lo = np.minimum(a, b)
+        np.minimum(lo, c, out=lo)
+        hi = np.maximum(a, b, out=a)
+        np.maximum(hi, c, out=hi)
+        keep = (lo <= top[axis]) & (hi >= bottom[axis])
+        rows = np.flatnonzero(keep)
+        shadow = Shadow(low[:, axis], high[:, axis], float(low[:, axis].min()), float(high[:, axis].max()))
+        keep[rows] = shadow.meets(lo[rows], hi[rows])
+        inside = inside[keep]
+        extents = {k: (x[keep], y[keep]) for k, (x, y) in extents.items()}
+        extents[axis] = (lo[keep], hi[keep])
+    return (inside, np.stack([extents[k][0] for k in range(3)], axis=1),
+            np.stack([extents[k][1] for k in range(3)], axis=1))
 
 
 def _tree_query(triangles: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
@@ -207,12 +232,24 @@ def _morton(centres: np.ndarray) -> np.ndarray:
     span = centres.max(axis=0) - low
     span[span <= 0] = 1.0
     cells = (1 << MORTON_BITS) - 1
-    q = np.clip(((centres - low) / span * cells), 0, cells).astype(np.uint64)
-    key = np.zeros(len(centres), dtype=np.uint64)
-    for bit in range(MORTON_BITS):
-        for axis in range(3):
-            key |= ((q[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit + axis)
+    q = np.clip(((centres - low) / span * cells), 0, cells).astype(np.int64)
+    # Bit ``b`` of axis ``a`` goes to bit ``3 b + a``: each axis's bits spread by one table.
+    key = _SPREAD[q[:, 0]]
+    key |= _SPREAD[q[:, 1]] << np.uint64(1)
+    key |= _SPREAD[q[:, 2]] << np.uint64(2)
     return key
+
+
+def _spread() -> np.ndarray:
+    """``(2**MORTON_BITS,)`` uint64: each value's bit ``b`` moved to bit ``3 b``."""
+    values = np.arange(1 << MORTON_BITS, dtype=np.uint64)
+    out = np.zeros(values.size, dtype=np.uint64)
+    for bit in range(MORTON_BITS):
+        out |= ((values >> np.uint64(bit)) & np.uint64(1)) << np.uint64(3 * bit)
+    return out
+
+
+_SPREAD = _spread()
 
 
 def _meets(triangles: np.ndarray, tri: np.ndarray, lo: np.ndarray, hi: np.ndarray, box: np.ndarray,

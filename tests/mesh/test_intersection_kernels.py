@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -349,3 +350,61 @@ def test_open_meshes_certify_their_inner_fans_and_find_the_same_pairs(holes):
     cert = certified_vertices(*both) & paired_vertices(both[1], len(both[0]))
     assert len(compiled_pair_list(*both, live, cert)) < len(all_pairs) / 3
     assert results(*both, False)[0] > 0
+
+
+def discs_over_torus():
+    """A torus crossed by three flat discs, each a fan of 198 long slivers: the slivers' boxes
+    make several coarse grid levels whose one box around them all holds the whole torus."""
+    points, faces = torus(200, 40)
+    triangles = [points[faces]]
+    angles = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    for z in (-0.5, 0.1, 0.7):
+        rim = np.stack([3.5 * np.cos(angles), 3.5 * np.sin(angles), np.full(200, z)], axis=1)
+        triangles.append(np.stack([np.repeat(rim[:1], 198, axis=0), rim[1:-1], rim[2:]], axis=1))
+    return indexed(np.concatenate(triangles))
+
+
+@pytest.mark.parametrize("window", [7, 1 << 16])
+def test_compiled_pairs_of_sliver_discs_are_the_overlapping_boxes(window, monkeypatch):
+    """The coarse levels' probes (the finer entries kept from their own scan, the faces off
+    the levels' shadows passed over) find every pair of overlapping boxes, each once."""
+    import p3d_cli.mesh.compiled_grid as broadphase
+
+    monkeypatch.setattr(broadphase, "WINDOW", window)
+    points, faces = discs_over_torus()
+    live = np.arange(len(faces), dtype=np.int32)
+    got = compiled_pair_list(points, faces, live)
+    assert all(a < b for a, b in got) and len(got) == len(set(got))
+    assert set(got) == box_pair_set(points, faces, live)
+
+
+@given(st.lists(st.tuples(st.floats(-1e3, 1e3, width=32), st.floats(0, 1e3, width=32)), min_size=1, max_size=30),
+       st.lists(st.tuples(st.floats(-2e3, 2e3, width=32), st.floats(0, 1e3, width=32)), min_size=1, max_size=30))
+def test_a_shadow_meets_every_extent_that_meets_one_of_its_own(own, asked):
+    """Extents ``(start, length)``, float32 as the grid's boxes: ``meets`` is never False for
+    an extent that shares a point with one of the shadow's (it may be True for others)."""
+    from p3d_cli.mesh.compiled_grid import Shadow
+
+    lo = np.array([s for s, _ in own], dtype=np.float32)
+    hi = (lo + np.array([w for _, w in own], dtype=np.float32)).astype(np.float32)
+    shadow = Shadow(lo, hi, float(lo.min()), float(hi.max()))
+    q_lo = np.array([s for s, _ in asked], dtype=np.float32)
+    q_hi = (q_lo + np.array([w for _, w in asked], dtype=np.float32)).astype(np.float32)
+    meets = shadow.meets(q_lo, q_hi)
+    truth = ((q_lo[:, None] <= hi[None, :]) & (lo[None, :] <= q_hi[:, None])).any(axis=1)
+    assert not (truth & ~meets).any()
+
+
+def test_a_shadow_of_a_point_or_of_a_span_beyond_its_arithmetic_is_one_bin():
+    """Every extent meets a shadow whose span is zero, overflows, or is too small to invert;
+    extents far beyond a shadow's span are clipped into its end bins, without warnings."""
+    from p3d_cli.mesh.compiled_grid import Shadow
+
+    for lo, hi in (([1.0], [1.0]), ([-1e308], [1e308]), ([0.0, 1e-310], [1e-310, 2e-310])):
+        shadow = Shadow(np.array(lo), np.array(hi), min(lo), max(hi))
+        assert shadow.meets(np.array([-5.0, 0.0, 7.0]), np.array([-4.0, 0.0, 8.0])).all()
+    shadow = Shadow(np.array([0.0, 10.0]), np.array([1.0, 11.0]), 0.0, 11.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = shadow.meets(np.array([2.0, 0.5, -1e308, 1.5]), np.array([9.0, 0.7, 1e308, 1.6]))
+    assert got.tolist() == [False, True, True, False]

@@ -1,0 +1,96 @@
+"""Filling one loop: the simplicity test and ear clipping against exact oracles.
+
+The simplicity test takes only the edge pairs whose boxes overlap and ear clipping only the
+corners in an ear's box: here both are checked against a brute-force rational oracle on small
+polygons whose corners sit on a coarse integer grid (collinear runs, repeated corners, touching
+edges), and on round ones cut in blocks of a few pairs.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from itertools import combinations
+
+import numpy as np
+import pytest
+
+from p3d_cli.repairs import fill
+
+
+def orient(a, b, c) -> int:
+    value = (Fraction(b[0]) - Fraction(a[0])) * (Fraction(c[1]) - Fraction(a[1])) - \
+        (Fraction(b[1]) - Fraction(a[1])) * (Fraction(c[0]) - Fraction(a[0]))
+    return (value > 0) - (value < 0)
+
+
+def on_segment(a, b, c) -> bool:
+    return min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and min(a[1], b[1]) <= c[1] <= max(a[1], b[1])
+
+
+def segments_meet(p, q, r, s) -> bool:
+    d1, d2, d3, d4 = orient(p, q, r), orient(p, q, s), orient(r, s, p), orient(r, s, q)
+    if d1 * d2 < 0 and d3 * d4 < 0:
+        return True
+    return ((d1 == 0 and on_segment(p, q, r)) or (d2 == 0 and on_segment(p, q, s))
+            or (d3 == 0 and on_segment(r, s, p)) or (d4 == 0 and on_segment(r, s, q)))
+
+
+def simple_oracle(corners) -> bool:
+    """No two edges meet but consecutive ones, at their shared corner, without folding back."""
+    k = len(corners)
+    edges = [(corners[i], corners[(i + 1) % k]) for i in range(k)]
+    for i in range(k):
+        a, b, c = corners[i], corners[(i + 1) % k], corners[(i + 2) % k]
+        if orient(a, b, c) == 0 and (b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]) <= 0:
+            return False
+    for i, j in combinations(range(k), 2):
+        if j - i < 2 or (i == 0 and j == k - 1):
+            continue
+        if segments_meet(*edges[i], *edges[j]):
+            return False
+    return True
+
+
+def twice_area(corners) -> Fraction:
+    return sum((Fraction(corners[i][0]) * Fraction(corners[(i + 1) % len(corners)][1])
+                - Fraction(corners[(i + 1) % len(corners)][0]) * Fraction(corners[i][1])
+                for i in range(len(corners))), Fraction(0))
+
+
+def polygons(seed: int, count: int):
+    rng = np.random.default_rng(seed)
+    for trial in range(count):
+        k = int(rng.integers(3, 12))
+        if trial % 2:
+            corners = rng.integers(0, 4, size=(k, 2)).astype(np.float64)
+        else:
+            angles = np.sort(rng.uniform(0, 2 * np.pi, k))
+            radii = rng.uniform(0.3, 1.0, k)
+            corners = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+        yield np.ascontiguousarray(corners)
+
+
+@pytest.mark.parametrize("pairs", [1, 5, fill.PAIRS])
+def test_simplicity_is_the_oracles(pairs, monkeypatch):
+    monkeypatch.setattr(fill, "PAIRS", pairs)
+    for corners in polygons(7, 400):
+        assert fill._simple(corners, True) == simple_oracle(corners.tolist())
+
+
+def test_ear_clipping_triangulates_every_simple_polygon():
+    """k - 2 triangles of the loop's corners, each turning the loop's way with non-zero area,
+    whose areas add up to the loop's (an exact tiling, given the polygon is simple)."""
+    tried = 0
+    for corners in polygons(11, 400):
+        if not simple_oracle(corners.tolist()):
+            continue
+        k = len(corners)
+        triangles = fill._ear_clipping(corners, np.arange(k), True, lambda a, b: False)
+        assert triangles is not None and triangles.shape == (k - 2, 3)
+        area = twice_area(corners.tolist())
+        for t in triangles.tolist():
+            assert twice_area([corners[v].tolist() for v in t]) * area > 0
+        assert sum(twice_area([corners[v].tolist() for v in t]) for t in triangles.tolist()) == area
+        tried += 1
+    assert tried > 100
+
