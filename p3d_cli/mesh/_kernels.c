@@ -823,6 +823,73 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
     return PyLong_FromSsize_t(degenerate);
 }
 
+/* The answers of groups() as a scan finds them, edge by edge (groups and split_groups). */
+typedef struct {
+    uint64_t *unbalanced, *doubtful;
+    Py_ssize_t nu, nd, cu, cd;
+    long long edges, sides;
+    int proven_open, failed;
+} GroupScan;
+
+/* Append x to a growing array (*a, *n, *cap); 0 when memory ran out. */
+static int push_u64(uint64_t **a, Py_ssize_t *n, Py_ssize_t *cap, uint64_t x) {
+    if (*n == *cap) {
+        uint64_t *grown = realloc(*a, (*cap *= 2) * 8);
+        if (!grown)
+            return 0;
+        *a = grown;
+    }
+    (*a)[(*n)++] = x;
+    return 1;
+}
+
+/* A fresh scan; failed is set when its arrays cannot be had. */
+static void scan_start(GroupScan *s) {
+    s->nu = s->nd = 0;
+    s->cu = s->cd = 64;
+    s->edges = s->sides = 0;
+    s->proven_open = 0;
+    s->unbalanced = malloc(s->cu * 8);
+    s->doubtful = malloc(s->cd * 8);
+    s->failed = !s->unbalanced || !s->doubtful;
+}
+
+/* One edge's group: count sides, forward of them in direction 1. */
+static void scan_edge(GroupScan *s, uint64_t edge, Py_ssize_t forward, Py_ssize_t count) {
+    long long net = 2 * (long long)forward - count;
+    if (net != 0) {
+        if (!push_u64(&s->unbalanced, &s->nu, &s->cu, edge))
+            s->failed = 1;
+        s->edges += net < 0 ? -net : net;
+        s->sides += count;
+    }
+    if (!(count == 2 && forward == 1) && !s->proven_open) {
+        if (count < 4 || 2 * forward != count)
+            s->proven_open = 1;
+        else if (!push_u64(&s->doubtful, &s->nd, &s->cd, edge))
+            s->failed = 1;
+    }
+}
+
+/* groups()'s result tuple (or a MemoryError), and the scan's arrays freed. */
+static PyObject *scan_result(GroupScan *s) {
+    PyObject *result = NULL;
+    if (s->failed)
+        PyErr_NoMemory();
+    else {
+        PyObject *d = s->proven_open ? (Py_INCREF(Py_None), Py_None)
+                                     : PyBytes_FromStringAndSize((const char *)s->doubtful, s->nd * 8);
+        PyObject *u = PyBytes_FromStringAndSize((const char *)s->unbalanced, s->nu * 8);
+        if (d && u)
+            result = Py_BuildValue("OLLO", u, s->edges, s->sides, d);
+        Py_XDECREF(d);
+        Py_XDECREF(u);
+    }
+    free(s->unbalanced);
+    free(s->doubtful);
+    return result;
+}
+
 /* groups(keys) -> (unbalanced ids, net boundary edges, their sides, doubtful ids or None).
  * One scan of sorted side keys, grouped by edge (key >> 1), with the answers of
  * p3d_cli.mesh.boundary.unbalanced_groups (groups whose directions are used unequally often:
@@ -842,68 +909,23 @@ static PyObject *py_groups(PyObject *self, PyObject *args) {
         return NULL;
     }
     const uint64_t *keys = kview.buf;
-    Py_ssize_t n = kview.len / 8, nu = 0, nd = 0, cu = 64, cd = 64;
-    long long edges = 0, sides = 0;
-    int proven_open = 0;
-    uint64_t *unbalanced = malloc(cu * 8), *doubtful = malloc(cd * 8);
-    int failed = !unbalanced || !doubtful;
+    Py_ssize_t n = kview.len / 8;
+    GroupScan scan;
+    scan_start(&scan);
     Py_BEGIN_ALLOW_THREADS
-    for (Py_ssize_t i = 0; i < n && !failed;) {
+    for (Py_ssize_t i = 0; i < n && !scan.failed;) {
         uint64_t edge = keys[i] >> 1;
         Py_ssize_t j = i, forward = 0;
         while (j < n && (keys[j] >> 1) == edge) {
             forward += keys[j] & 1;
             j++;
         }
-        Py_ssize_t count = j - i;
-        long long net = 2 * (long long)forward - count;
-        if (net != 0) {
-            if (nu == cu) {
-                uint64_t *grown = realloc(unbalanced, (cu *= 2) * 8);
-                if (!grown) {
-                    failed = 1;
-                    break;
-                }
-                unbalanced = grown;
-            }
-            unbalanced[nu++] = edge;
-            edges += net < 0 ? -net : net;
-            sides += count;
-        }
-        if (!(count == 2 && forward == 1) && !proven_open) {
-            if (count < 4 || 2 * forward != count)
-                proven_open = 1;
-            else {
-                if (nd == cd) {
-                    uint64_t *grown = realloc(doubtful, (cd *= 2) * 8);
-                    if (!grown) {
-                        failed = 1;
-                        break;
-                    }
-                    doubtful = grown;
-                }
-                doubtful[nd++] = edge;
-            }
-        }
+        scan_edge(&scan, edge, forward, j - i);
         i = j;
     }
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&kview);
-    PyObject *result = NULL;
-    if (failed)
-        PyErr_NoMemory();
-    else {
-        PyObject *d = proven_open ? (Py_INCREF(Py_None), Py_None)
-                                  : PyBytes_FromStringAndSize((const char *)doubtful, nd * 8);
-        PyObject *u = PyBytes_FromStringAndSize((const char *)unbalanced, nu * 8);
-        if (d && u)
-            result = Py_BuildValue("OLLO", u, edges, sides, d);
-        Py_XDECREF(d);
-        Py_XDECREF(u);
-    }
-    free(unbalanced);
-    free(doubtful);
-    return result;
+    return scan_result(&scan);
 }
 
 /* pairs(keys, bits, pi) -> whether the sorted side keys of p3d check's fast path pair up.
@@ -2483,18 +2505,6 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args) {
     return PyLong_FromSsize_t(overflow ? -1 : written);
 }
 
-/* Append x to a growing array (*a, *n, *cap); 0 when memory ran out. */
-static int push_u64(uint64_t **a, Py_ssize_t *n, Py_ssize_t *cap, uint64_t x) {
-    if (*n == *cap) {
-        uint64_t *grown = realloc(*a, (*cap *= 2) * 8);
-        if (!grown)
-            return 0;
-        *a = grown;
-    }
-    (*a)[(*n)++] = x;
-    return 1;
-}
-
 /* split_groups(fkeys, ffill, bkeys, bfill, cap, shift) ->
  *   (unbalanced ids, net boundary edges, their sides, doubtful ids or None)
  * groups() of every key, given as forward_block's buckets (bit 0 set) and backward_block's
@@ -2515,21 +2525,20 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
         PyBuffer_Release(&ff);
         return NULL;
     }
-    Py_ssize_t buckets = ff.len / 8, nu = 0, nd = 0, cu = 64, cd = 64;
+    Py_ssize_t buckets = ff.len / 8;
     const int64_t *ffill = ff.buf, *bfill = bf.buf;
     uint64_t *fa = fk.buf, *ba = bk.buf;
-    long long edges = 0, sides = 0;
-    int proven_open = 0;
-    uint64_t *unbalanced = malloc(cu * 8), *doubtful = malloc(cd * 8),
-             *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
-    int failed = !unbalanced || !doubtful || !tmp;
+    GroupScan scan;
+    scan_start(&scan);
+    uint64_t *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
+    scan.failed |= !tmp;
     Py_BEGIN_ALLOW_THREADS
-    for (Py_ssize_t bucket = 0; bucket < buckets && !failed; bucket++) {
+    for (Py_ssize_t bucket = 0; bucket < buckets && !scan.failed; bucket++) {
         uint64_t *f = fa + bucket * cap, *g = ba + bucket * cap;
         Py_ssize_t nf = ffill[bucket], ng = bfill[bucket], i = 0, j = 0;
         msd(f, nf, shift, tmp);
         msd(g, ng, shift, tmp);
-        while ((i < nf || j < ng) && !failed) {
+        while ((i < nf || j < ng) && !scan.failed) {
             uint64_t ef = i < nf ? f[i] >> 1 : UINT64_MAX, eg = j < ng ? g[j] >> 1 : UINT64_MAX;
             uint64_t edge = ef < eg ? ef : eg;
             Py_ssize_t forward = 0, count = 0;
@@ -2538,19 +2547,7 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
             count = forward;
             while (j < ng && (g[j] >> 1) == edge)
                 j++, count++;
-            long long net = 2 * (long long)forward - count;
-            if (net != 0) {
-                if (!push_u64(&unbalanced, &nu, &cu, edge))
-                    failed = 1;
-                edges += net < 0 ? -net : net;
-                sides += count;
-            }
-            if (!(count == 2 && forward == 1) && !proven_open) {
-                if (count < 4 || 2 * forward != count)
-                    proven_open = 1;
-                else if (!push_u64(&doubtful, &nd, &cd, edge))
-                    failed = 1;
-            }
+            scan_edge(&scan, edge, forward, count);
         }
     }
     Py_END_ALLOW_THREADS
@@ -2559,21 +2556,7 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     PyBuffer_Release(&ff);
     PyBuffer_Release(&bk);
     PyBuffer_Release(&bf);
-    PyObject *result = NULL;
-    if (failed)
-        PyErr_NoMemory();
-    else {
-        PyObject *d = proven_open ? (Py_INCREF(Py_None), Py_None)
-                                  : PyBytes_FromStringAndSize((const char *)doubtful, nd * 8);
-        PyObject *u = PyBytes_FromStringAndSize((const char *)unbalanced, nu * 8);
-        if (d && u)
-            result = Py_BuildValue("OLLO", u, edges, sides, d);
-        Py_XDECREF(d);
-        Py_XDECREF(u);
-    }
-    free(unbalanced);
-    free(doubtful);
-    return result;
+    return scan_result(&scan);
 }
 
 /* pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written.
