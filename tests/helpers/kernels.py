@@ -25,6 +25,17 @@ needs_kernels = pytest.mark.skipif(kernels.KERNELS is None and os.environ.get("C
 SAME_BITS = np.lib.NumpyVersion(np.__version__) >= "2.3.0"
 
 
+def numpy_road(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` with the compiled kernels switched off: the numpy code they
+    replace, for the kernel tests to compare with."""
+    saved = kernels.KERNELS
+    kernels.KERNELS = None
+    try:
+        return function(*args, **kwargs)
+    finally:
+        kernels.KERNELS = saved
+
+
 def bits(x) -> np.ndarray:
     """The float64 values' bit patterns, to compare sums bit for bit (``-0.0`` is not ``0.0``)."""
     return np.asarray(x, dtype=np.float64).view(np.uint64)

@@ -20,7 +20,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from helpers.kernels import needs_kernels
+from helpers.kernels import needs_kernels, numpy_road
 from helpers.real_meshes import REPO
 from helpers.solids import box, indexed
 from p3d_cli.geometry.predicates import O3D_BOUND, in_safe_range
@@ -35,15 +35,6 @@ KERNELS = kernels.KERNELS
 pytestmark = needs_kernels
 
 REAL = REPO.parent / "shared" / "real-meshes"
-
-
-def numpy_road(function, *args, **kw):
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        return function(*args, **kw)
-    finally:
-        kernels.KERNELS = saved
 
 
 def torus(u: int, v: int, at=(0.0, 0.0, 0.0), scale: float = 1.0):

@@ -16,7 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from helpers.kernels import SAME_BITS, bits, needs_kernels
+from helpers.kernels import SAME_BITS, bits, needs_kernels, numpy_road
 from helpers.real_meshes import REPO
 from p3d_cli.io import load_mesh
 from p3d_cli.io.source import array_source
@@ -166,12 +166,7 @@ def attempt(source, options):
 
 def assert_same_analysis(source, **options):
     fast = attempt(source, options)
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        slow = attempt(source, options)
-    finally:
-        kernels.KERNELS = saved
+    slow = numpy_road(attempt, source, options)
     if isinstance(slow, str) or isinstance(fast, str):
         assert fast == slow
         return
@@ -271,15 +266,6 @@ def test_json_output_alike(tmp_path):
         outputs.append((done.returncode, done.stdout))
     assert outputs[0] == outputs[1]
     assert json.loads(outputs[0][1])["closed"] is False
-
-
-def numpy_road(function, *args):
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        return function(*args)
-    finally:
-        kernels.KERNELS = saved
 
 
 @pytest.mark.parametrize("degenerate", [False, True])

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from helpers.kernels import needs_kernels
+from helpers.kernels import needs_kernels, numpy_road
 from helpers.meshes import cube_triangles
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
@@ -287,18 +287,6 @@ def test_high_valence_fans_need_more_doubling_rounds_and_agree():
         same(got, general(t))
     assert got.nonmanifold_vertices == 1 and got.shells == 2
     assert got.nonmanifold_vertex_samples[0].point == (0.0, 0.0, 1.0)
-
-
-def numpy_road(function, *args):
-    """``function(*args)`` with the compiled kernels switched off."""
-    from p3d_cli.mesh import kernels
-
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        return function(*args)
-    finally:
-        kernels.KERNELS = saved
 
 
 @needs_kernels

@@ -14,8 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from helpers.kernels import SAME_BITS, bits, needs_kernels
-from p3d_cli.mesh import kernels
+from helpers.kernels import SAME_BITS, bits, needs_kernels, numpy_road
 
 pytestmark = needs_kernels
 
@@ -32,13 +31,7 @@ def test_shell_volume_is_the_numpy_codes(n, dtype):
     faces[..., 0] = np.maximum(faces[..., 0], 0)          # a bound of 0 beside a nonzero one
     if n % 2:
         faces[..., 2] = rng.choice([0.0, -0.0], faces.shape[:2])   # both bounds ±0: numpy's
-    fast = _volume(faces)
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        slow = _volume(faces)
-    finally:
-        kernels.KERNELS = saved
+    fast, slow = _volume(faces), numpy_road(_volume, faces)
     if SAME_BITS:
         assert bits(fast) == bits(slow)
     else:
@@ -55,11 +48,5 @@ def test_components_roots_are_the_numpy_rounds(size, arcs, seed):
     rng = np.random.default_rng(seed)
     a, b = rng.integers(0, size, arcs), rng.integers(0, size, arcs)
     pieces = lambda: ((a[lo:lo + 50], b[lo:lo + 50]) for lo in range(0, arcs, 50))   # noqa: E731
-    fast = chunked_roots(size, pieces)
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        slow = chunked_roots(size, pieces)
-    finally:
-        kernels.KERNELS = saved
+    fast, slow = chunked_roots(size, pieces), numpy_road(chunked_roots, size, pieces)
     assert np.array_equal(fast, slow)

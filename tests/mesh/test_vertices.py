@@ -12,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from helpers.kernels import bits, needs_kernels
-from p3d_cli.mesh import kernels
+from helpers.kernels import bits, needs_kernels, numpy_road
 
 pytestmark = needs_kernels
 
@@ -29,13 +28,7 @@ def test_vertex_confirmation_is_the_numpy_codes(dtype):
     faces = points[rng.integers(0, 400, (5000, 3))]
     faces[::7] *= -1.0                                  # -0.0 where 0.0 was
     blocks = lambda: (faces[lo:lo + 999] for lo in range(0, len(faces), 999))   # noqa: E731
-    fast = group_corners(blocks, len(faces))
-    saved = kernels.KERNELS
-    kernels.KERNELS = None
-    try:
-        slow = group_corners(blocks, len(faces))
-    finally:
-        kernels.KERNELS = saved
+    fast, slow = group_corners(blocks, len(faces)), numpy_road(group_corners, blocks, len(faces))
     assert np.array_equal(fast.ids, slow.ids) and np.array_equal(fast.first, slow.first)
     assert fast.points.dtype == slow.points.dtype and np.array_equal(bits(fast.points), bits(slow.points))
     assert bits(fast.volume) == bits(slow.volume)
