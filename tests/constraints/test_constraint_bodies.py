@@ -31,18 +31,24 @@ constraints:
     return load_scene(str(tmp_path / "scene.yaml"), "scene.yaml")
 
 
-def test_each_distinct_mesh_is_integrated_once(cube_scene, tmp_path, monkeypatch):
-    integrated = []
+@pytest.fixture
+def integrated(monkeypatch):
+    """The ``(spec, where)`` of every shape the scene's bodies integrate, in order."""
+    calls = []
     real = bodies_module.shape_moments
 
-    def count(spec, where):
-        integrated.append(spec)
+    def spy(spec, where):
+        calls.append((spec, where))
         return real(spec, where)
 
-    monkeypatch.setattr(bodies_module, "shape_moments", count)
+    monkeypatch.setattr(bodies_module, "shape_moments", spy)
+    return calls
+
+
+def test_each_distinct_mesh_is_integrated_once(cube_scene, tmp_path, integrated):
     result = solve_scene(cube_scene)
     # cube.stl and ./cube.stl are one file: integrated once, for the first body needing it.
-    assert [str(pathlib.Path(p).resolve()) for p in integrated] == [str((tmp_path / "cube.stl").resolve())]
+    assert [str(pathlib.Path(p).resolve()) for p, _ in integrated] == [str((tmp_path / "cube.stl").resolve())]
     # 'one' (density 2) and 'two' (mass 3) both took the cube's properties; the cube's centre
     # (0.5, 0.5, 0.5) is each body's centre of mass.
     states = {b.name: b for b in result.bodies}
@@ -50,19 +56,11 @@ def test_each_distinct_mesh_is_integrated_once(cube_scene, tmp_path, monkeypatch
     assert result.momentum[0] == pytest.approx([2.0, 0, 0])
 
 
-def test_bodies_that_give_everything_and_fixed_or_resting_bodies_are_never_integrated(cube_scene, monkeypatch):
-    calls = []
-    real = bodies_module.shape_moments
-
-    def spy(spec, where):
-        calls.append(where)
-        return real(spec, where)
-
-    monkeypatch.setattr(bodies_module, "shape_moments", spy)
+def test_bodies_that_give_everything_and_fixed_or_resting_bodies_are_never_integrated(cube_scene, integrated):
     solve_scene(cube_scene)
     # Only the one shared mesh for 'one' (the first body needing it): not 'plain' (gives mass,
     # inertia and centre), not 'ground' (fixed), not 'resting' (nothing links or moves it).
-    assert calls == ["scene.yaml: bodies.one.shape"]
+    assert [where for _, where in integrated] == ["scene.yaml: bodies.one.shape"]
 
 
 def test_scene_of_plain_bodies_needs_no_shape_at_all(monkeypatch):
