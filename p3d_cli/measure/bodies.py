@@ -30,7 +30,7 @@ def solidity(mesh: MeshSource) -> tuple[TopologyReport, Layout | None]:
     from p3d_cli.mesh.solidity import with_solidity
     from p3d_cli.mesh.topology import topology_and_layout
 
-    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, mesh.where)
+    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, mesh.where, edges=False)
     if layout is not None:
         report = with_solidity(report, mesh.read_blocks, layout)
     return report, layout

@@ -1144,6 +1144,8 @@ static PyObject *py_unite(PyObject *self, PyObject *args);
 static PyObject *py_flatten(PyObject *self, PyObject *args);
 static PyObject *py_near_walk(PyObject *self, PyObject *args);
 static PyObject *py_fan_cycles(PyObject *self, PyObject *args);
+static PyObject *py_open_pairs(PyObject *self, PyObject *args);
+static PyObject *py_fan_chains(PyObject *self, PyObject *args);
 static PyObject *py_area_filter(PyObject *self, PyObject *args);
 static PyObject *py_backward_block(PyObject *self, PyObject *args);
 static PyObject *py_split_groups(PyObject *self, PyObject *args);
@@ -1909,6 +1911,8 @@ static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
      "paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)"},
     {"pairs", py_pairs, METH_VARARGS, "pairs(keys, bits, pi) -> whether the sorted side keys pair up"},
+    {"open_pairs", py_open_pairs, METH_VARARGS, "open_pairs(keys, bits, pi) -> boundary sides, or -1"},
+    {"fan_chains", py_fan_chains, METH_VARARGS, "fan_chains(pi, first) -> number of fans (chains and cycles)"},
     {"confirm", py_confirm, METH_VARARGS, "confirm(block, fan, first, axes) -> whether every corner is its fan's"},
     {"side_keys", py_side_keys, METH_VARARGS, "side_keys(block, keys, keep) -> sides whose ends hash alike"},
     {"groups", py_groups, METH_VARARGS, "groups(sorted keys) -> (unbalanced ids, edges, sides, doubtful ids or None)"},
@@ -2665,4 +2669,152 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
     if (failed)
         return PyErr_NoMemory();
     return PyLong_FromSsize_t(written);
+}
+
+/* ---- p3d check's fast path with boundary edges (p3d_cli.mesh.paired, open meshes) ---- */
+
+/* open_pairs(keys, bits, pi) -> boundary sides, or -1: pairs(keys, bits, pi) for a soup whose
+ * edges may also be used once. In the sorted side keys, a group (keys equal above the direction
+ * bit) of one side is a boundary side: pi[side] = -1; a group of two sides running opposite ways
+ * is linked as pairs links it. -1 (pi partly written) when some group is anything else: two
+ * sides the same way, or three or more (colliding hashes, or a non-manifold or misoriented
+ * edge), which p3d_cli.mesh.paired groups with numpy. pi: int32 or int64, as long as the keys. */
+#define OPEN_PAIRS(T)                                                                              \
+    static Py_ssize_t open_pairs_##T(const uint64_t *keys, Py_ssize_t n, int bits, T *pi) {       \
+        const uint64_t mask = ((uint64_t)1 << bits) - 1;                                           \
+        Py_ssize_t i = 0, boundary = 0;                                                            \
+        while (i < n) {                                                                            \
+            uint64_t a = keys[i], edge = a >> (bits + 1);                                          \
+            int64_t sa = (int64_t)(a & mask);                                                      \
+            if (i + 1 < n && keys[i + 1] >> (bits + 1) == edge) {                                  \
+                uint64_t b = keys[i + 1];                                                          \
+                if (((a ^ b) >> bits) != 1 || (i + 2 < n && keys[i + 2] >> (bits + 1) == edge))   \
+                    return -1;                                                                     \
+                int64_t sb = (int64_t)(b & mask);                                                  \
+                pi[sa] = (T)(sb % 3 == 2 ? sb - 2 : sb + 1);                                       \
+                pi[sb] = (T)(sa % 3 == 2 ? sa - 2 : sa + 1);                                       \
+                i += 2;                                                                            \
+            } else {                                                                               \
+                pi[sa] = -1;                                                                       \
+                boundary++;                                                                        \
+                i++;                                                                               \
+            }                                                                                      \
+        }                                                                                          \
+        return boundary;                                                                           \
+    }
+OPEN_PAIRS(int32_t)
+OPEN_PAIRS(int64_t)
+
+static PyObject *py_open_pairs(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *piobj;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OiO", &keyobj, &bits, &piobj))
+        return NULL;
+    Py_buffer kv, pv;
+    if (get_array(keyobj, &kv, 'Q', 0, "open_pairs") < 0)
+        return NULL;
+    if (get_array(piobj, &pv, 'i', 1, "open_pairs") < 0) {
+        PyBuffer_Release(&kv);
+        return NULL;
+    }
+    Py_ssize_t n = kv.len / 8, found = -2;
+    int wide = pv.itemsize == 8;
+    if (pv.len / pv.itemsize == n && bits >= 1 && bits <= 62 && (wide || n <= 2147483647)) {
+        Py_BEGIN_ALLOW_THREADS
+        found = wide ? open_pairs_int64_t((const uint64_t *)kv.buf, n, bits, (int64_t *)pv.buf)
+                     : open_pairs_int32_t((const uint64_t *)kv.buf, n, bits, (int32_t *)pv.buf);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&kv);
+    PyBuffer_Release(&pv);
+    if (found == -2) {
+        PyErr_SetString(PyExc_ValueError, "open_pairs: keys and pi do not match");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(found);
+}
+
+/* fan_chains(pi, first) -> number of fans: fan_cycles for a map with open ends. pi[c] is the
+ * next corner of c's fan, or -1 where c's side is a boundary side (the fan is an open chain
+ * there); pi must be one-to-one. Overwrites pi with the fan number of every corner, the fans
+ * (cycles and chains) numbered by their smallest corner, and sets first[c] where c is its fan's
+ * smallest corner: from each corner not yet seen, in ascending order, the walk goes back to its
+ * chain's start (or round its cycle) and then forward, numbering. -1 when pi is not one-to-one
+ * or out of range, -2 when out of memory. */
+#define FAN_CHAINS(T)                                                                              \
+    static Py_ssize_t fan_chains_##T(T *pi, unsigned char *first, Py_ssize_t size) {             \
+        T *back = malloc((size_t)(size > 0 ? size : 1) * sizeof(T));                               \
+        if (!back)                                                                                 \
+            return -2;                                                                             \
+        for (Py_ssize_t c = 0; c < size; c++)                                                      \
+            back[c] = -1;                                                                          \
+        for (Py_ssize_t c = 0; c < size; c++) {                                                    \
+            T to = pi[c];                                                                          \
+            if (to < -1 || to >= size || (to >= 0 && back[to] >= 0)) {                            \
+                free(back);                                                                        \
+                return -1;                                                                         \
+            }                                                                                      \
+            if (to >= 0)                                                                           \
+                back[to] = (T)c;                                                                   \
+        }                                                                                          \
+        Py_ssize_t count = 0;                                                                      \
+        for (Py_ssize_t c = 0; c < size; c++) {                                                    \
+            if (pi[c] <= -2) {                                                                     \
+                first[c] = 0;                                                                      \
+                continue;                                                                          \
+            }                                                                                      \
+            first[c] = 1;                                                                          \
+            Py_ssize_t start = c;                                                                  \
+            while (back[start] >= 0 && back[start] != c)                                           \
+                start = back[start];                                                               \
+            T mark = (T)(-(count + 2));                                                            \
+            Py_ssize_t x = start;                                                                  \
+            for (;;) {                                                                             \
+                T next = pi[x];                                                                    \
+                if (next <= -2) {                                                                  \
+                    free(back);                                                                    \
+                    return -1;                                                                     \
+                }                                                                                  \
+                pi[x] = mark;                                                                      \
+                if (next == -1 || next == start)                                                   \
+                    break;                                                                         \
+                x = next;                                                                          \
+            }                                                                                      \
+            count++;                                                                               \
+        }                                                                                          \
+        free(back);                                                                                \
+        for (Py_ssize_t c = 0; c < size; c++)                                                      \
+            pi[c] = (T)(-pi[c] - 2);                                                               \
+        return count;                                                                              \
+    }
+FAN_CHAINS(int32_t)
+FAN_CHAINS(int64_t)
+
+static PyObject *py_fan_chains(PyObject *self, PyObject *args) {
+    PyObject *piobj, *fobj;
+    if (!PyArg_ParseTuple(args, "OO", &piobj, &fobj))
+        return NULL;
+    Py_buffer pv, fv;
+    if (get_array(piobj, &pv, 'i', 1, "fan_chains") < 0)
+        return NULL;
+    if (get_array(fobj, &fv, 'B', 1, "fan_chains") < 0) {
+        PyBuffer_Release(&pv);
+        return NULL;
+    }
+    Py_ssize_t size = pv.len / pv.itemsize, count = -1;
+    if (fv.len == size) {
+        Py_BEGIN_ALLOW_THREADS
+        count = pv.itemsize == 4 ? fan_chains_int32_t((int32_t *)pv.buf, (unsigned char *)fv.buf, size)
+                                 : fan_chains_int64_t((int64_t *)pv.buf, (unsigned char *)fv.buf, size);
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&pv);
+    PyBuffer_Release(&fv);
+    if (count == -2)
+        return PyErr_NoMemory();
+    if (count < 0) {
+        PyErr_SetString(PyExc_ValueError, "fan_chains: pi must be one-to-one and first as long");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(count);
 }

@@ -34,6 +34,7 @@ The results are those of the general path (``topology``): the tests compare both
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,8 +43,9 @@ from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import corner_slot
 from p3d_cli.mesh.kernels import NotTaken, compiled, confirm_fans, sort
 from p3d_cli.mesh.paired_keys import keyed_pass
-from p3d_cli.mesh.shells import Components, _numbered, chunked_roots
+from p3d_cli.mesh.shells import Components, _numbered, chunked_roots, roots
 from p3d_cli.mesh.vertices import CHUNK
+from p3d_cli.mesh.volume import SignedVolume
 
 #: Offsets from corner ``3 f + k`` to the next corner of face ``f``, by ``k``.
 _NEXT = np.array([1, 1, -2], dtype=np.int64)
@@ -66,7 +68,13 @@ class Paired:
     zero_area : (z,) int64
         Faces of exactly zero area, ascending.
     volume : float
+        The local sums' volume; NaN when there are boundary sides (whose exact term the
+        caller adds to ``sums``, as the general path does).
     shells : Components
+    boundary : (b,) int64
+        The boundary sides (each the one use of its edge), ascending; empty when closed.
+    sums : SignedVolume
+        The signed volume's sums, about the general path's origin.
     """
 
     ids: np.ndarray
@@ -75,10 +83,14 @@ class Paired:
     zero_area: np.ndarray
     volume: float
     shells: Components
+    boundary: np.ndarray
+    sums: SignedVolume
 
 
-def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Paired | None:
-    """The fast path's findings, or None when some edge is not used exactly once each way.
+def paired_topology(blocks, n: int, where: str | None = None, hasher=None,
+                    boundary: bool = False) -> Paired | None:
+    """The fast path's findings, or None when some edge is not used exactly once each way
+    (with ``boundary``: once each way, or once).
 
     Parameters
     ----------
@@ -92,33 +104,44 @@ def paired_topology(blocks, n: int, where: str | None = None, hasher=None) -> Pa
     hasher : callable, optional
         ``hasher(cols) -> (3, k) uint64`` corner hashes (default ``closed.corner_hashes``'):
         any function gives the same results, which lets the tests force collisions.
+    boundary : bool
+        Also take a soup whose edges are used once each way or once (boundary edges): its
+        fans around the boundary's vertices are open chains (``Paired.boundary``).
     """
     bits = max(int(3 * n - 1).bit_length(), 1)
-    first = keyed_pass(blocks, n, bits, where, hasher)
+    first = keyed_pass(blocks, n, bits, where, hasher, balanced=not boundary)
     if first is None:
         return None
-    keys, presorted, zero, volume = first
+    keys, presorted, zero, sums = first
     del first                           # memory: the keys go as soon as they are read
     if not presorted:
         sort(keys)  # radix, when compiled: the same order
-    pi = _orbit_map(keys, bits, blocks)
+    pi = _orbit_map(keys, bits, blocks, boundary)
     del keys
     if pi is None:
         return None
-    fan, count, is_first = _fan_ids(pi)     # overwrites pi: the fans take its buffer
+    lone = np.flatnonzero(pi < 0) if boundary else np.zeros(0, dtype=np.int64)
+    fan, count, is_first = _fan_ids(pi) if lone.size == 0 else _chain_ids(pi)   # in pi's buffer
     del pi
     points = _confirm(blocks, fan, count, is_first)
     del is_first
     if points is None:
         return None
     ids, vertices, nonmanifold = _merge_fans(fan, count, points)
-    return Paired(ids, vertices, nonmanifold, zero, volume, _shells(fan, count))
+    return Paired(ids, vertices, nonmanifold, zero, sums.volume() if lone.size == 0 else math.nan,
+                  _shells(fan, count), lone.astype(np.int64), sums)
 
 
-def _orbit_map(keys: np.ndarray, bits: int, blocks):
+def _orbit_map(keys: np.ndarray, bits: int, blocks, boundary: bool = False):
     """``pi[c] = next(twin(c))`` from the sorted side keys, or None when some key group is
-    not one side each way (after pairing the sides of colliding groups exactly)."""
+    not one side each way (after pairing the sides of colliding groups exactly). With
+    ``boundary``, a side whose exact edge no other side uses is a boundary side: ``pi = -1``."""
     pi = np.empty(keys.size, dtype=np.int32 if keys.size < 2**31 else np.int64)
+    if boundary:
+        fast = compiled()
+        if fast is not None and keys.flags.c_contiguous and fast.open_pairs(keys, bits, pi) >= 0:
+            return pi
+        return _orbit_map_grouped(keys, bits, blocks, pi, boundary)
     mask, shift, one = np.uint64((1 << bits) - 1), np.uint64(bits), np.uint64(1)
     pairs = keys.reshape(-1, 2) if keys.size % 2 == 0 else None
     step = CHUNK
@@ -147,9 +170,11 @@ def _link(pi: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
     pi[b] = a + _NEXT[corner_slot(a)]
 
 
-def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
+def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray, boundary: bool = False):
     """``_orbit_map`` when the keys do not simply pair up: group them, pair the two-side
     groups, and the sides of balanced groups of four or more (colliding hashes) exactly."""
+    if boundary:
+        return _open_orbit_map(keys, bits, blocks, pi)
     shift, mask = np.uint64(bits), np.uint64((1 << bits) - 1)
     edge = keys >> np.uint64(bits + 1)
     new = np.ones(edge.size, dtype=bool)
@@ -196,6 +221,79 @@ def _exact_twins(blocks, sides: np.ndarray):
     if a.size > 1 and ((lo[a[1:]] == lo[a[:-1]]).all(axis=1) & (hi[a[1:]] == hi[a[:-1]]).all(axis=1)).any():
         return None
     return sides[a], sides[b]
+
+
+def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
+    """``_orbit_map_grouped`` with boundary sides: a group of one side is a boundary side; a
+    group of two sides running opposite ways, a pair; every other group (two sides the same
+    way, three or more: colliding hashes, or a misoriented or non-manifold edge) is sorted out
+    by the exact end points of its sides, where each exact edge must be used once each way or
+    once (None otherwise)."""
+    shift, mask = np.uint64(bits), np.uint64((1 << bits) - 1)
+    edge = keys >> np.uint64(bits + 1)
+    new = np.ones(edge.size, dtype=bool)
+    np.not_equal(edge[1:], edge[:-1], out=new[1:])
+    starts = np.flatnonzero(new)
+    del edge, new
+    counts = np.diff(np.append(starts, keys.size))
+    forward = np.add.reduceat(((keys >> shift) & np.uint64(1)).astype(np.int64), starts)
+    pi[(keys[starts[counts == 1]] & mask).astype(np.int64)] = -1
+    two = starts[(counts == 2) & (forward == 1)]
+    _link(pi, (keys[two] & mask).astype(np.int64), (keys[two + 1] & mask).astype(np.int64))
+    hard = np.flatnonzero((counts > 2) | ((counts == 2) & (forward != 1)))
+    if hard.size == 0:
+        return pi
+    sizes = counts[hard]
+    offsets = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    sides = (keys[np.repeat(starts[hard], sizes) + offsets] & mask).astype(np.int64)
+    found = _exact_edges(blocks, sides)
+    if found is None:
+        return None
+    a, b, lone = found
+    _link(pi, a, b)
+    pi[lone] = -1
+    return pi
+
+
+def _exact_edges(blocks, sides: np.ndarray):
+    """``_exact_twins`` where an exact edge may also be used once: ``(a, b, lone)``, the twin
+    sides and the boundary sides; None when some exact edge is used otherwise."""
+    from p3d_cli.mesh.vertices import corner_coords
+
+    coords = corner_coords(blocks, np.concatenate([sides, sides + _NEXT[corner_slot(sides)]]))
+    start, end = coords[:sides.size], coords[sides.size:]
+    lo_first = _lex_less(start, end)
+    lo = np.where(lo_first[:, None], start, end)
+    hi = np.where(lo_first[:, None], end, start)
+    order = np.lexsort((~lo_first, hi[:, 2], hi[:, 1], hi[:, 0], lo[:, 2], lo[:, 1], lo[:, 0]))
+    lo, hi, lo_first, sides = lo[order], hi[order], lo_first[order], sides[order]
+    new = np.ones(sides.size, dtype=bool)
+    new[1:] = (lo[1:] != lo[:-1]).any(axis=1) | (hi[1:] != hi[:-1]).any(axis=1)
+    at = np.flatnonzero(new)
+    sizes = np.diff(np.append(at, sides.size))
+    pairs = at[sizes == 2]
+    if (sizes > 2).any() or not (lo_first[pairs].all() and not lo_first[pairs + 1].any()):
+        return None
+    return sides[pairs], sides[pairs + 1], sides[at[sizes == 1]]
+
+
+def _chain_ids(pi: np.ndarray):
+    """``_fan_ids`` where ``pi`` is -1 at the boundary sides: the fans around the boundary's
+    vertices are open chains. The compiled kernels walk each chain or cycle once
+    (``fan_chains``); numpy joins ``c`` and ``pi[c]`` by union-find. Same numbers as
+    ``_fan_ids``: by smallest corner, into pi's buffer."""
+    first = np.empty(pi.size, dtype=bool)
+    fast = compiled()
+    if fast is not None and pi.flags.c_contiguous and pi.flags.writeable:
+        count = fast.fan_chains(pi, first)
+        return pi, count, first
+    linked = np.flatnonzero(pi >= 0)
+    parent = roots(pi.size, linked, pi[linked])
+    first = parent == np.arange(pi.size)
+    number = np.cumsum(first, dtype=pi.dtype)
+    number -= 1
+    pi[:] = number[parent]
+    return pi, int(number[-1]) + 1, first
 
 
 def _lex_less(a: np.ndarray, b: np.ndarray) -> np.ndarray:

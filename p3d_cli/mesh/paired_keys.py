@@ -23,10 +23,11 @@ from p3d_cli.mesh.volume import SignedVolume
 _ONE = np.uint64(1)
 
 
-def keyed_pass(blocks, n: int, bits: int, where, hasher):
+def keyed_pass(blocks, n: int, bits: int, where, hasher, balanced: bool = True):
     """Pass 1: the side keys ``edge hash | direction << bits | side``, zero-area faces and the
-    volume; None as soon as a side's two ends hash alike (the general path's case), or when
-    the edge keys do not balance."""
+    volume's sums (``SignedVolume``); None as soon as a side's two ends hash alike (the general
+    path's case), or when the edge keys do not balance and ``balanced`` asks them to (a mesh
+    with boundary edges does not balance)."""
     low = np.uint64((1 << (bits + 1)) - 1)
     shift = np.uint64(bits)
     zero: list[np.ndarray] = []
@@ -126,14 +127,14 @@ def keyed_pass(blocks, n: int, bits: int, where, hasher):
         done += k
     if done != n:
         count_error(where, n, str(done))
-    if balance % 2**64:
+    if balanced and balance % 2**64:
         return None
     assert volume is not None
     if buckets is not None:
         keys = buckets.sorted_keys()
         del buckets
-        return keys, True, np.concatenate(zero), volume.volume()
-    return keys, False, np.concatenate(zero), volume.volume()
+        return keys, True, np.concatenate(zero), volume
+    return keys, False, np.concatenate(zero), volume
 
 
 _SIDES: list[np.ndarray] = []

@@ -127,14 +127,19 @@ def topology_of_blocks(blocks, n: int, where: str | None = None) -> TopologyRepo
         The volume (or a shell's) is beyond float64: coordinates past about 1e100 (a
         volume of 1e300 and more), where an infinite or NaN volume would be a wrong number.
     """
-    return topology_and_layout(blocks, n, where)[0]
+    return topology_and_layout(blocks, n, where, edges=False)[0]
 
 
-def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[TopologyReport, Layout | None]:
+def topology_and_layout(blocks, n: int, where: str | None = None,
+                        edges: bool = True) -> tuple[TopologyReport, Layout | None]:
     """``topology_of_blocks``, and the vertex ids, shells and edges it found (None for no faces),
-    for the passes that follow (self-intersections, the shells' nesting, ``p3d repair``)."""
+    for the passes that follow (self-intersections, the shells' nesting, ``p3d repair``).
+
+    ``edges``: whether the layout of a mesh with problem edges must hold them grouped
+    (``Layout.edges``, which ``p3d repair`` reads). Without, a mesh whose only problem edges
+    are boundary edges takes the fast path too, and its layout's ``edges`` is None."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
-        report, layout = _topology_of_blocks(blocks, n, where)
+        report, layout = _topology_of_blocks(blocks, n, where, not edges)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
         from p3d_cli.errors import RangeError
 
@@ -143,10 +148,13 @@ def topology_and_layout(blocks, n: int, where: str | None = None) -> tuple[Topol
     return report, layout
 
 
-def _topology_of_blocks(blocks, n: int, where: str | None) -> tuple[TopologyReport, Layout | None]:
+def _topology_of_blocks(blocks, n: int, where: str | None,
+                        boundary: bool = False) -> tuple[TopologyReport, Layout | None]:
     if n == 0:
         return _empty_report(), None
-    fast = paired_topology(blocks, n, where)
+    fast = paired_topology(blocks, n, where, boundary=boundary)
+    if fast is not None and fast.boundary.size:
+        return _open_report(blocks, n, fast)
     if fast is not None:
         layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area,
                         np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
@@ -254,6 +262,63 @@ def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
     )
 
 
+def _open_report(blocks, n: int, fast: Paired) -> tuple[TopologyReport, Layout]:
+    """The report and layout of a soup whose every edge is used once each way or once (a
+    boundary edge: ``fast.boundary``), no repeated vertex: the general path's, from the fast
+    path's findings (the layout without grouped edges)."""
+    ids = fast.ids
+    faces = ids.reshape(n, 3)
+    found = fast.shells
+    lone = fast.boundary
+    # No edge used more than twice: a duplicate and its face are a shell of two (see
+    # _duplicate_candidates).
+    small = np.bincount(found.labels, minlength=found.count) <= 2
+    duplicates = duplicate_faces(faces, np.flatnonzero(small[found.labels]))
+    volume = _with_boundary(blocks, fast.sums, lone, next_corner(lone), 3 * n)
+    vertex_samples = [int(v) for v in fast.nonmanifold[:SAMPLES]]
+    points = _sample_points(blocks, ids, vertex_samples)
+    zero = fast.zero_area
+    open_shells = np.unique(found.labels[lone // 3]).astype(np.int64)
+    layout = Layout(ids, int(ids.max()) + 1, found, zero, np.zeros((0, 2), dtype=np.int64), open_shells)
+    report = TopologyReport(
+        faces=n, vertices=fast.vertices, edges=(3 * n + lone.size) // 2, boundary_edges=int(lone.size),
+        nonmanifold_edges=0, misoriented_edges=0, nonmanifold_vertices=int(fast.nonmanifold.size),
+        zero_area_faces=int(zero.size), faces_with_repeated_vertex=0, degenerate_faces=int(zero.size),
+        duplicate_faces=int(duplicates.shape[0]), shells=int(found.count),
+        shell_list=tuple(shell_volumes(blocks, n, found, volume)), volume=volume,
+        boundary_edge_samples=_lone_samples(blocks, lone),
+        nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
+                                         for v in vertex_samples),
+        degenerate_face_samples=tuple(int(f) for f in zero[:SAMPLES]),
+        duplicate_face_samples=tuple((int(a), int(b)) for a, b in duplicates[:SAMPLES]),
+    )
+    return report, layout
+
+
+def _lone_samples(blocks, lone: np.ndarray) -> tuple[EdgeSample, ...]:
+    """``_edge_samples`` of the boundary sides ``lone`` (ascending): the first ``SAMPLES`` in
+    file order, the sides of one face in the general path's edge order, each edge's ends in
+    its vertex order (full corner hash, then coordinates: ``p3d_cli.mesh.vertices``)."""
+    some = lone[:3 * SAMPLES]   # whole faces: the first SAMPLES faces' sides at least
+    ends = corner_coords(blocks, np.concatenate([some, next_corner(some)]))
+    hashes = corner_hashes(ends)
+    order = np.lexsort((ends[:, 2], ends[:, 1], ends[:, 0], hashes))
+    new = np.ones(order.size, dtype=bool)
+    new[1:] = (hashes[order][1:] != hashes[order][:-1]) | (ends[order][1:] != ends[order][:-1]).any(axis=1)
+    rank = np.empty(order.size, dtype=np.int64)
+    rank[order] = np.cumsum(new) - 1          # equal points, equal ranks: the vertex order
+    k = some.size
+    swap = rank[:k] > rank[k:]
+    lo = np.where(swap, np.arange(k) + k, np.arange(k))
+    hi = np.where(swap, np.arange(k), np.arange(k) + k)
+    out = []
+    for i in np.lexsort((rank[hi], rank[lo], some // 3))[:SAMPLES]:
+        a, b = ends[lo[i]], ends[hi[i]]
+        out.append(EdgeSample((int(some[i] // 3),), ((float(a[0]), float(a[1]), float(a[2])),
+                                                     (float(b[0]), float(b[1]), float(b[2])))))
+    return tuple(out)
+
+
 def _volume(blocks, corners, edges: Edges, ids: np.ndarray) -> float:
     """The signed volume ``p3d props`` reports for the same triangles (one convention,
     docs/method.md, "Open and non-manifold meshes"): the local sums when every edge cancels,
@@ -273,21 +338,28 @@ def _volume(blocks, corners, edges: Edges, ids: np.ndarray) -> float:
     counts = edges.counts[groups].astype(np.int64)
     net = np.add.reduceat(step, np.cumsum(counts) - counts)
     odd = np.repeat(net != 0, counts)
-    chosen = int(odd.sum())
-    if chosen == 0:
+    if not odd.any():
         return corners.volume                       # non-manifold but bounding
-    if 2 * chosen <= edges.side.size:
-        ends = corner_coords(blocks, np.concatenate([side[odd], after[odd]]))
+    return _with_boundary(blocks, corners.volume_sums, side[odd], after[odd], edges.side.size)
+
+
+def _with_boundary(blocks, sums, side: np.ndarray, after: np.ndarray, sides: int) -> float:
+    """The volume of the local ``sums`` plus the exact term of the unbalanced sides (corner
+    ``side`` to corner ``after``; any order), of ``sides`` sides in all: read from these sides
+    when they are at most half of all, else by ``p3d props``' own road."""
+    chosen = side.size
+    if 2 * chosen <= sides:
+        ends = corner_coords(blocks, np.concatenate([side, after]))
         start, end = ends[:chosen], ends[chosen:]
         six_volume, _ = sides_volume(((np.ascontiguousarray(start[lo:lo + SIDE_BLOCK].T),
                                        np.ascontiguousarray(end[lo:lo + SIDE_BLOCK].T))
-                                      for lo in range(0, chosen, SIDE_BLOCK)), corners.volume_sums.origin)
-        return corners.volume_sums.volume(six_volume)
+                                      for lo in range(0, chosen, SIDE_BLOCK)), sums.origin)
+        return sums.volume(six_volume)
     unbalanced = unbalanced_of(blocks)
     if unbalanced.ids.size == 0:
-        return corners.volume                       # non-manifold but bounding
-    six_volume, _ = boundary_volume(blocks(), unbalanced, corners.volume_sums.origin)
-    return corners.volume_sums.volume(six_volume)
+        return sums.volume()                        # non-manifold but bounding
+    six_volume, _ = boundary_volume(blocks(), unbalanced, sums.origin)
+    return sums.volume(six_volume)
 
 
 def _duplicate_candidates(n: int, edges: Edges, found, repeated: np.ndarray) -> np.ndarray:

@@ -171,7 +171,7 @@ def check_source(mesh, source: str, required=tuple(CHECKS), min_volume: float | 
 
         triangles, welded = weld_triangles(_finite(mesh, where), weld)
         mesh = array_source(mesh.format, triangles, "float64")
-    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, where)
+    report, layout = topology_and_layout(mesh.read_blocks, mesh.face_count, where, edges=False)
     required = tuple(required)
     if any(name in required for name in SOLIDITY) and layout is not None:
         from p3d_cli.mesh.solidity import with_solidity
