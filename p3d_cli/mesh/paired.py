@@ -29,6 +29,17 @@ keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
 5. **Shells** by union-find over the fans (each face joins its three: a fan's faces are
    joined across its edges), which numbers them by first face with no sort.
 
+**Boundary edges** (``boundary=True``: ``p3d check``, not ``p3d repair``, which needs the edges
+grouped). A mesh with holes does not balance, so pass 1 does not stop there. After the sort a
+key group of one side is a *boundary side* (no other side has its exact edge: equal edges have
+equal keys), ``pi = -1`` there, and the fans round the boundary's vertices are open chains
+instead of cycles (``fan_chains`` walks each from its start; numpy joins ``c`` and ``pi[c]`` by
+union-find). Groups that are neither one side nor one each way (colliding keys, or a misoriented
+or non-manifold edge) are sorted out by their sides' exact end points; any exact edge used
+otherwise than once each way or once sends the mesh to the general path, and pass 2 proves
+every twin as before. A vertex with several chains or cycles (two holes meeting at a point)
+is a non-manifold vertex, as the general path counts it.
+
 The results are those of the general path (``topology``): the tests compare both.
 """
 
@@ -42,6 +53,7 @@ import numpy as np
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import corner_slot
 from p3d_cli.mesh.kernels import NotTaken, compiled, confirm_fans, sort
+from p3d_cli.mesh.paired_exact import exact_edges, exact_twins
 from p3d_cli.mesh.paired_keys import keyed_pass
 from p3d_cli.mesh.shells import Components, _numbered, chunked_roots, roots
 from p3d_cli.mesh.vertices import CHUNK
@@ -191,36 +203,11 @@ def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray, boun
     sizes = counts[crowded]
     offsets = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
     sides = (keys[np.repeat(starts[crowded], sizes) + offsets] & mask).astype(np.int64)
-    twins = _exact_twins(blocks, sides)
+    twins = exact_twins(blocks, sides)
     if twins is None:
         return None
     _link(pi, *twins)
     return pi
-
-
-def _exact_twins(blocks, sides: np.ndarray):
-    """Pair sides by their exact end points: ``(a, b)`` with side ``b`` running back along
-    side ``a``; None when some exact edge is not used once each way."""
-    from p3d_cli.mesh.vertices import corner_coords
-
-    ends = sides + _NEXT[corner_slot(sides)]
-    coords = corner_coords(blocks, np.concatenate([sides, ends]))
-    start, end = coords[:sides.size], coords[sides.size:]
-    # Each undirected edge as (lower point, higher point) in lexicographic order.
-    lo_first = _lex_less(start, end)
-    lo = np.where(lo_first[:, None], start, end)
-    hi = np.where(lo_first[:, None], end, start)
-    order = np.lexsort((~lo_first, hi[:, 2], hi[:, 1], hi[:, 0], lo[:, 2], lo[:, 1], lo[:, 0]))
-    if order.size % 2:
-        return None
-    a, b = order[0::2], order[1::2]
-    same = (lo[a] == lo[b]).all(axis=1) & (hi[a] == hi[b]).all(axis=1)
-    if not (same.all() and lo_first[a].all() and not lo_first[b].any()):
-        return None
-    # Sorted, a third use of an edge would meet its pair's edge in the next pair.
-    if a.size > 1 and ((lo[a[1:]] == lo[a[:-1]]).all(axis=1) & (hi[a[1:]] == hi[a[:-1]]).all(axis=1)).any():
-        return None
-    return sides[a], sides[b]
 
 
 def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
@@ -246,35 +233,13 @@ def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
     sizes = counts[hard]
     offsets = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
     sides = (keys[np.repeat(starts[hard], sizes) + offsets] & mask).astype(np.int64)
-    found = _exact_edges(blocks, sides)
+    found = exact_edges(blocks, sides)
     if found is None:
         return None
     a, b, lone = found
     _link(pi, a, b)
     pi[lone] = -1
     return pi
-
-
-def _exact_edges(blocks, sides: np.ndarray):
-    """``_exact_twins`` where an exact edge may also be used once: ``(a, b, lone)``, the twin
-    sides and the boundary sides; None when some exact edge is used otherwise."""
-    from p3d_cli.mesh.vertices import corner_coords
-
-    coords = corner_coords(blocks, np.concatenate([sides, sides + _NEXT[corner_slot(sides)]]))
-    start, end = coords[:sides.size], coords[sides.size:]
-    lo_first = _lex_less(start, end)
-    lo = np.where(lo_first[:, None], start, end)
-    hi = np.where(lo_first[:, None], end, start)
-    order = np.lexsort((~lo_first, hi[:, 2], hi[:, 1], hi[:, 0], lo[:, 2], lo[:, 1], lo[:, 0]))
-    lo, hi, lo_first, sides = lo[order], hi[order], lo_first[order], sides[order]
-    new = np.ones(sides.size, dtype=bool)
-    new[1:] = (lo[1:] != lo[:-1]).any(axis=1) | (hi[1:] != hi[:-1]).any(axis=1)
-    at = np.flatnonzero(new)
-    sizes = np.diff(np.append(at, sides.size))
-    pairs = at[sizes == 2]
-    if (sizes > 2).any() or not (lo_first[pairs].all() and not lo_first[pairs + 1].any()):
-        return None
-    return sides[pairs], sides[pairs + 1], sides[at[sizes == 1]]
 
 
 def _chain_ids(pi: np.ndarray):
@@ -294,14 +259,6 @@ def _chain_ids(pi: np.ndarray):
     number -= 1
     pi[:] = number[parent]
     return pi, int(number[-1]) + 1, first
-
-
-def _lex_less(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise ``tuple(a) < tuple(b)`` for ``(k, 3)`` arrays."""
-    less = a[:, 2] < b[:, 2]
-    for axis in (1, 0):
-        less = (a[:, axis] < b[:, axis]) | ((a[:, axis] == b[:, axis]) & less)
-    return less
 
 
 def _fan_ids(pi: np.ndarray):

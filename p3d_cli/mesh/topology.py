@@ -34,7 +34,9 @@ ends coincide bounds nothing and is skipped, as in ``closed``).
 
 Cost: a clean mesh (every edge used once each way) takes ``p3d_cli.mesh.paired``'s fast
 path: one ``numpy.sort`` of ``3n`` packed 64-bit side keys, fans by pointer doubling, one
-exact confirmation pass. Any other mesh takes the general path: one ``numpy.sort`` of ``3n``
+exact confirmation pass; so does a mesh whose other edges are all boundary edges, unless the
+caller needs its edges grouped (``topology_and_layout(edges=True)``, ``p3d repair``). Any other
+mesh takes the general path: one ``numpy.sort`` of ``3n``
 packed 64-bit corner keys; everything else is a linear pass, a stable sort of already nearly
 sorted keys, or a union-find of a few rounds. Both give the same report (the tests compare).
 """
@@ -190,7 +192,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None,
     vertex_samples = [int(v) for v in nonmanifold[:SAMPLES]]
     points = _sample_points(blocks, ids, [v for samples in edge_samples for _, a, b in samples
                                           for v in (a, b)] + vertex_samples)
-    boundary, nonmanifold_edges, misoriented = (
+    lone, nonmanifold_edges, misoriented = (
         tuple(EdgeSample(faces, (points[a], points[b])) for faces, a, b in samples)
         for samples in edge_samples)
     report = TopologyReport(
@@ -200,7 +202,7 @@ def _topology_of_blocks(blocks, n: int, where: str | None,
         zero_area_faces=int(zero.size), faces_with_repeated_vertex=int(repeated.size),
         degenerate_faces=int(zero.size), duplicate_faces=int(duplicates.shape[0]),
         shells=int(found.count), shell_list=tuple(shell_volumes(blocks, n, found, volume)),
-        volume=volume, boundary_edge_samples=boundary,
+        volume=volume, boundary_edge_samples=lone,
         nonmanifold_edge_samples=nonmanifold_edges, misoriented_edge_samples=misoriented,
         nonmanifold_vertex_samples=tuple(VertexSample(vertex_sample_faces(ids, v), points[v])
                                          for v in vertex_samples),

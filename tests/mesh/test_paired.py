@@ -140,8 +140,8 @@ def test_colliding_edge_keys_are_paired_exactly(classes, monkeypatch):
     t = np.concatenate([torus(12, 9), torus(12, 9, shift=(20.0, 0.0, 0.0))])
     t = t[np.random.default_rng(classes).permutation(len(t))]
     calls = []
-    real = paired._exact_twins
-    monkeypatch.setattr(paired, "_exact_twins", lambda *a: calls.append(a[1].size) or real(*a))
+    real = paired.exact_twins
+    monkeypatch.setattr(paired, "exact_twins", lambda *a: calls.append(a[1].size) or real(*a))
     got = fast(t, torus_hasher(12, 9, classes))
     assert calls and calls[0] >= 4, "the weak hash should have made edge keys collide"
     assert got is not None
