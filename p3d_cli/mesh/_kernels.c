@@ -1911,7 +1911,7 @@ static PyMethodDef methods[] = {
     {"paired_keys", py_paired_keys, METH_VARARGS,
      "paired_keys(block, bits, first_face, keys, fill, cap, shift) -> (degenerate, s1, s2, written)"},
     {"pairs", py_pairs, METH_VARARGS, "pairs(keys, bits, pi) -> whether the sorted side keys pair up"},
-    {"open_pairs", py_open_pairs, METH_VARARGS, "open_pairs(keys, bits, pi) -> boundary sides, or -1"},
+    {"open_pairs", py_open_pairs, METH_VARARGS, "open_pairs(keys, bits, pi) -> (boundary sides, other sides)"},
     {"fan_chains", py_fan_chains, METH_VARARGS, "fan_chains(pi, first) -> number of fans (chains and cycles)"},
     {"confirm", py_confirm, METH_VARARGS, "confirm(block, fan, first, axes) -> whether every corner is its fan's"},
     {"side_keys", py_side_keys, METH_VARARGS, "side_keys(block, keys, keep) -> sides whose ends hash alike"},
@@ -2673,14 +2673,16 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
 
 /* ---- p3d check's fast path with boundary edges (p3d_cli.mesh.paired, open meshes) ---- */
 
-/* open_pairs(keys, bits, pi) -> boundary sides, or -1: pairs(keys, bits, pi) for a soup whose
- * edges may also be used once. In the sorted side keys, a group (keys equal above the direction
- * bit) of one side is a boundary side: pi[side] = -1; a group of two sides running opposite ways
- * is linked as pairs links it. -1 (pi partly written) when some group is anything else: two
- * sides the same way, or three or more (colliding hashes, or a non-manifold or misoriented
- * edge), which p3d_cli.mesh.paired groups with numpy. pi: int32 or int64, as long as the keys. */
+/* open_pairs(keys, bits, pi) -> (boundary sides, other sides): pairs(keys, bits, pi) for a soup
+ * whose edges may also be used once. In the sorted side keys, a group (keys equal above the
+ * direction bit) of one side is a boundary side: pi[side] = -1; a group of two sides running
+ * opposite ways is linked as pairs links it; the sides of any other group (two sides the same
+ * way, or three or more: colliding hashes, or a non-manifold or misoriented edge) get
+ * pi = -2, for p3d_cli.mesh.paired to sort out by their exact end points. pi: int32 or int64,
+ * as long as the keys. */
 #define OPEN_PAIRS(T)                                                                              \
-    static Py_ssize_t open_pairs_##T(const uint64_t *keys, Py_ssize_t n, int bits, T *pi) {       \
+    static Py_ssize_t open_pairs_##T(const uint64_t *keys, Py_ssize_t n, int bits, T *pi,        \
+                                     Py_ssize_t *other) {                                          \
         const uint64_t mask = ((uint64_t)1 << bits) - 1;                                           \
         Py_ssize_t i = 0, boundary = 0;                                                            \
         while (i < n) {                                                                            \
@@ -2688,8 +2690,11 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
             int64_t sa = (int64_t)(a & mask);                                                      \
             if (i + 1 < n && keys[i + 1] >> (bits + 1) == edge) {                                  \
                 uint64_t b = keys[i + 1];                                                          \
-                if (((a ^ b) >> bits) != 1 || (i + 2 < n && keys[i + 2] >> (bits + 1) == edge))   \
-                    return -1;                                                                     \
+                if (((a ^ b) >> bits) != 1 || (i + 2 < n && keys[i + 2] >> (bits + 1) == edge)) { \
+                    for (; i < n && keys[i] >> (bits + 1) == edge; i++, (*other)++)                \
+                        pi[keys[i] & mask] = -2;                                                   \
+                    continue;                                                                      \
+                }                                                                                  \
                 int64_t sb = (int64_t)(b & mask);                                                  \
                 pi[sa] = (T)(sb % 3 == 2 ? sb - 2 : sb + 1);                                       \
                 pi[sb] = (T)(sa % 3 == 2 ? sa - 2 : sa + 1);                                       \
@@ -2717,21 +2722,21 @@ static PyObject *py_open_pairs(PyObject *self, PyObject *args) {
         PyBuffer_Release(&kv);
         return NULL;
     }
-    Py_ssize_t n = kv.len / 8, found = -2;
+    Py_ssize_t n = kv.len / 8, found = -1, other = 0;
     int wide = pv.itemsize == 8;
     if (pv.len / pv.itemsize == n && bits >= 1 && bits <= 62 && (wide || n <= 2147483647)) {
         Py_BEGIN_ALLOW_THREADS
-        found = wide ? open_pairs_int64_t((const uint64_t *)kv.buf, n, bits, (int64_t *)pv.buf)
-                     : open_pairs_int32_t((const uint64_t *)kv.buf, n, bits, (int32_t *)pv.buf);
+        found = wide ? open_pairs_int64_t((const uint64_t *)kv.buf, n, bits, (int64_t *)pv.buf, &other)
+                     : open_pairs_int32_t((const uint64_t *)kv.buf, n, bits, (int32_t *)pv.buf, &other);
         Py_END_ALLOW_THREADS
     }
     PyBuffer_Release(&kv);
     PyBuffer_Release(&pv);
-    if (found == -2) {
+    if (found < 0) {
         PyErr_SetString(PyExc_ValueError, "open_pairs: keys and pi do not match");
         return NULL;
     }
-    return PyLong_FromSsize_t(found);
+    return Py_BuildValue("nn", found, other);
 }
 
 /* fan_chains(pi, first) -> number of fans: fan_cycles for a map with open ends. pi[c] is the

@@ -151,9 +151,12 @@ def _orbit_map(keys: np.ndarray, bits: int, blocks, boundary: bool = False):
     pi = np.empty(keys.size, dtype=np.int32 if keys.size < 2**31 else np.int64)
     if boundary:
         fast = compiled()
-        if fast is not None and keys.flags.c_contiguous and fast.open_pairs(keys, bits, pi) >= 0:
-            return pi
-        return _orbit_map_grouped(keys, bits, blocks, pi, boundary)
+        if fast is None or not keys.flags.c_contiguous:
+            return _orbit_map_grouped(keys, bits, blocks, pi, boundary)
+        _, other = fast.open_pairs(keys, bits, pi)
+        # The sides of other groups, marked -2: by their exact end points (the numpy road's
+        # ``_open_orbit_map`` does the same with the same sides).
+        return pi if other == 0 else _link_exactly(blocks, pi, np.flatnonzero(pi == -2))
     mask, shift, one = np.uint64((1 << bits) - 1), np.uint64(bits), np.uint64(1)
     pairs = keys.reshape(-1, 2) if keys.size % 2 == 0 else None
     step = CHUNK
@@ -232,7 +235,12 @@ def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
         return pi
     sizes = counts[hard]
     offsets = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    sides = (keys[np.repeat(starts[hard], sizes) + offsets] & mask).astype(np.int64)
+    return _link_exactly(blocks, pi, (keys[np.repeat(starts[hard], sizes) + offsets] & mask).astype(np.int64))
+
+
+def _link_exactly(blocks, pi: np.ndarray, sides: np.ndarray):
+    """Twin or boundary the given sides (whole key groups) by their exact end points; None
+    when some exact edge among them is used otherwise than once each way or once."""
     found = exact_edges(blocks, sides)
     if found is None:
         return None

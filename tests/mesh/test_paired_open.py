@@ -152,6 +152,7 @@ def test_colliding_edge_keys_of_an_open_mesh_are_sorted_out_exactly(classes, mon
     assert calls, "the weak hash should have made edge keys collide"
     assert got is not None and got[0].boundary_edges == 9
     same(got, general(t))
+    same(numpy_road(fast, t, torus_hasher(12, 9, classes)), got)
 
 
 def test_falsely_paired_boundary_sides_fail_the_exact_confirmation():
