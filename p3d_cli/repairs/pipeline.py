@@ -168,7 +168,8 @@ def checked(triangles: np.ndarray, required: tuple[str, ...], fillings: np.ndarr
     plane (``Holes.fillings``): the pair test would find their pairs within one filling
     ``NONE``, so they are left out (the report is the same)."""
     blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
-    report, layout = topology_and_layout(blocks, len(triangles))
+    # Nothing after reads the output's grouped edges: the fast path may take its boundary.
+    report, layout = topology_and_layout(blocks, len(triangles), edges=False)
     if any(name in SOLIDITY for name in required) and layout is not None:
         report = with_solidity(report, blocks, layout, fillings)
     return report
