@@ -281,25 +281,36 @@ static void bound(Pass *c, const double p[][9], Py_ssize_t n) {
 
 /* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
  * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller). */
+static void leaf_keys(const double p[][9], Py_ssize_t n, uint64_t h[3][LEAF], uint64_t keys[3][LEAF],
+                      uint64_t g[3][LEAF]);
+static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys[3][LEAF],
+                         const uint64_t g[3][LEAF], Py_ssize_t n);
+
+/* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
+ * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller).
+ * The hashes of the leaf are made first, all at once (leaf_keys), then dealt in file order. */
 static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
+    uint64_t h[3][LEAF], all[3][LEAF], g[3][LEAF];
+    leaf_keys(p, n, h, all, c->forward_only ? g : NULL);
+    if (c->forward_only && c->fill) {
+        forward_keys(c, (const uint64_t (*)[LEAF])h, (const uint64_t (*)[LEAF])all, (const uint64_t (*)[LEAF])g, n);
+        return;
+    }
     uint64_t *keys = c->fill ? c->keys : c->keys + c->written;
     Py_ssize_t w = 0;
     for (Py_ssize_t k = 0; k < n; k++) {
-        uint64_t h[3];
-        corner_hashes(p[k], h);
         for (int v = 0; v < 3; v++) {
-            uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+            uint64_t start = h[v][k], end = h[v == 2 ? 0 : v + 1][k];
             if (start == end)
                 continue; /* a side whose ends hash alike bounds nothing */
-            uint64_t key = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
+            uint64_t key = all[v][k];
             if (c->forward_only) {
-                uint64_t g = mix(key | 1);
                 if (start > end) {
-                    c->balance -= g;
+                    c->balance -= g[v][k];
                     c->backward++;
                     continue;
                 }
-                c->balance += g;
+                c->balance += g[v][k];
             }
             if (c->fill) {
                 uint64_t b = key >> c->shift;
@@ -2665,4 +2676,88 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
     if (failed)
         return PyErr_NoMemory();
     return PyLong_FromSsize_t(written);
+}
+
+/* ---- the edge keys of a leaf, all at once (issue 32) ---------------------------------------- */
+
+/* The keys of edge_keys for the triangles of a leaf (n <= LEAF): h[v][k] the hash of corner v
+ * of triangle k (corner_hashes), keys[v][k] the key of its side v -> v + 1 (as edge_keys makes
+ * it; meaningless where the two ends hash alike) and, when g is not NULL, g[v][k] =
+ * mix(keys[v][k] | 1). The same integer operations as corner_hashes and edge_hash, but
+ * arranged as loops over the leaf's triangles, whose iterations do not depend on each other:
+ * the processor overlaps many triangles' mixes instead of waiting on one triangle's chain of
+ * multiplications, and a build for AVX-512 (whose vectors multiply 64-bit integers) or AVX2 is
+ * chosen at run time where the processor has it. Integer arithmetic: every copy gives the same
+ * bits. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define KEY_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#else
+#define KEY_CLONES
+#endif
+
+KEY_CLONES
+static void leaf_keys(const double p[][9], Py_ssize_t n, uint64_t h[3][LEAF], uint64_t keys[3][LEAF],
+                      uint64_t g[3][LEAF]) {
+    uint64_t bits[9][LEAF];
+    for (Py_ssize_t k = 0; k < n; k++)
+        for (int i = 0; i < 9; i++)
+            bits[i][k] = bits_of(p[k][i]);
+    for (int v = 0; v < 3; v++) {
+        const uint64_t *x = bits[3 * v], *y = bits[3 * v + 1], *z = bits[3 * v + 2];
+        uint64_t *hv = h[v];
+        for (Py_ssize_t k = 0; k < n; k++)
+            hv[k] = mix(mix(mix(x[k] ^ GOLDEN) ^ y[k]) ^ z[k]);
+    }
+    for (int v = 0; v < 3; v++) {
+        const uint64_t *s = h[v], *e = h[v == 2 ? 0 : v + 1];
+        uint64_t *out = keys[v];
+        for (Py_ssize_t k = 0; k < n; k++) {
+            uint64_t a = s[k], b = e[k], lo = a < b ? a : b, hi = a < b ? b : a;
+            out[k] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(a < b);
+        }
+        if (g) {
+            uint64_t *gv = g[v];
+            for (Py_ssize_t k = 0; k < n; k++)
+                gv[k] = mix(out[k] | 1);
+        }
+    }
+}
+
+/* edge_keys' deal for forward_block (forward_only, bucketed) from leaf_keys' arrays: the same
+ * keys dealt to the same buckets in the same order, the same balance and backward count.
+ * Whether a side runs forward is a coin toss for hashed corners, so a branch on it would be
+ * mispredicted half the time: here the direction picks the sign of g and the address of the
+ * store (a backward side's key goes to a scratch word) by arithmetic. */
+static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys[3][LEAF],
+                         const uint64_t g[3][LEAF], Py_ssize_t n) {
+    uint64_t *out = c->keys, scratch = 0, balance = c->balance;
+    int64_t *fill = c->fill;
+    const Py_ssize_t cap = c->cap;
+    const int shift = c->shift;
+    Py_ssize_t backward = 0, w = 0;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        for (int v = 0; v < 3; v++) {
+            uint64_t start = h[v][k], end = h[v == 2 ? 0 : v + 1][k];
+            if (start == end)
+                continue; /* a side whose ends hash alike bounds nothing (rare: predicted) */
+            uint64_t key = keys[v][k], fwd = key & 1, back = fwd ^ 1;
+            uint64_t sign = (uint64_t)0 - back;             /* all ones for a backward side */
+            balance += (g[v][k] ^ sign) + back;             /* +g or -g, mod 2^64 */
+            backward += (Py_ssize_t)back;
+            uint64_t b = key >> shift;
+            int64_t f = fill[b];
+            if (f == cap) {                                 /* rare: predicted */
+                c->overflow |= (int)fwd;
+                continue;
+            }
+            uintptr_t keep = (uintptr_t)0 - (uintptr_t)fwd; /* a mask, not a branch */
+            uint64_t *slot = (uint64_t *)(((uintptr_t)(out + b * cap + f) & keep) | ((uintptr_t)&scratch & ~keep));
+            *slot = key;
+            fill[b] = f + (int64_t)fwd;
+            w += (Py_ssize_t)fwd;
+        }
+    }
+    c->balance = balance;
+    c->backward += backward;
+    c->written += w;
 }
