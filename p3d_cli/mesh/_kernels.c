@@ -2489,23 +2489,26 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args) {
     int overflow = 0;
     Py_BEGIN_ALLOW_THREADS
     double raw[LEAF][9];
+    uint64_t h[3][LEAF], all[3][LEAF], scratch = 0;
     for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
         Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
         load(&b, t0, m, raw);
+        leaf_keys((const double (*)[9])raw, m, h, all, NULL);
         for (Py_ssize_t k = 0; k < m; k++) {
-            uint64_t h[3];
-            corner_hashes(raw[k], h);
             for (int v = 0; v < 3; v++) {
-                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
-                if (start <= end)
-                    continue; /* a forward side, or one whose ends hash alike */
-                uint64_t key = edge_hash(start, end) & ~(uint64_t)1, at = key >> shift;
-                if (fill[at] == cap) {
-                    overflow = 1;
+                /* a backward side: its ends hash apart, the larger first (key bit 0 clear); the
+                 * others' keys go to a scratch word, by a mask rather than a coin-toss branch */
+                uint64_t key = all[v][k], back = h[v][k] > h[v == 2 ? 0 : v + 1][k], at = key >> shift;
+                int64_t f = fill[at];
+                if (f == cap) { /* rare: predicted */
+                    overflow |= (int)back;
                     continue;
                 }
-                keys[at * cap + fill[at]++] = key;
-                written++;
+                uintptr_t keep = (uintptr_t)0 - (uintptr_t)back;
+                uint64_t *slot = (uint64_t *)(((uintptr_t)(keys + at * cap + f) & keep) | ((uintptr_t)&scratch & ~keep));
+                *slot = key;
+                fill[at] = f + (int64_t)back;
+                written += (Py_ssize_t)back;
             }
         }
     }
@@ -2621,17 +2624,16 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
     int failed = !hit[0] || !hit[1] || !hit[2];
     Py_BEGIN_ALLOW_THREADS
     double raw[LEAF][9];
+    uint64_t h[3][LEAF], all[3][LEAF];
     for (Py_ssize_t t0 = 0; t0 < k && !failed; t0 += LEAF) {
         Py_ssize_t m = k - t0 < LEAF ? k - t0 : LEAF;
         load(&b, t0, m, raw);
+        leaf_keys((const double (*)[9])raw, m, h, all, NULL);
         for (Py_ssize_t j = 0; j < m && !failed; j++) {
-            uint64_t h[3];
-            corner_hashes(raw[j], h);
             for (int v = 0; v < 3; v++) {
-                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
-                if (start == end)
+                if (h[v][j] == h[v == 2 ? 0 : v + 1][j])
                     continue; /* a side whose ends hash alike bounds nothing */
-                uint64_t e = edge_hash(start, end) >> 1, top = e >> tshift;
+                uint64_t e = all[v][j] >> 1, top = e >> tshift;
                 if (!(table[top >> 3] >> (top & 7) & 1))
                     continue;
                 Py_ssize_t at = starts[e >> sshift], stop = starts[(e >> sshift) + 1];
