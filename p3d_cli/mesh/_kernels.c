@@ -264,19 +264,31 @@ static void load(const Block *b, Py_ssize_t t0, Py_ssize_t n, double p[][9]) {
     }
 }
 
-/* Bounds and the finite test of loaded corners. */
+/* Bounds and the finite test of loaded corners. Selections, not branches (minsd and maxsd
+ * take x exactly when x < lo, x > hi, as the tests did), and the exponent bits of every
+ * coordinate or-ed together: all ones somewhere is a NaN or an infinity. */
 static void bound(Pass *c, const double p[][9], Py_ssize_t n) {
+    double lo0 = c->lo[0], lo1 = c->lo[1], lo2 = c->lo[2], hi0 = c->hi[0], hi1 = c->hi[1], hi2 = c->hi[2];
+    uint64_t special = 0;
+    const uint64_t ones = (uint64_t)0x7ff << 52;
     for (Py_ssize_t k = 0; k < n; k++)
-        for (int i = 0; i < 9; i++) {
-            double x = p[k][i];
-            int a = i % 3;
-            if (!isfinite(x))
-                c->finite = 0;
-            if (x < c->lo[a])
-                c->lo[a] = x;
-            if (x > c->hi[a])
-                c->hi[a] = x;
+        for (int v = 0; v < 3; v++) {
+            double x = p[k][3 * v], y = p[k][3 * v + 1], z = p[k][3 * v + 2];
+            uint64_t bx, by, bz;
+            memcpy(&bx, &x, 8);
+            memcpy(&by, &y, 8);
+            memcpy(&bz, &z, 8);
+            special |= ((bx & ones) == ones) | ((by & ones) == ones) | ((bz & ones) == ones);
+            lo0 = x < lo0 ? x : lo0;
+            lo1 = y < lo1 ? y : lo1;
+            lo2 = z < lo2 ? z : lo2;
+            hi0 = x > hi0 ? x : hi0;
+            hi1 = y > hi1 ? y : hi1;
+            hi2 = z > hi2 ? z : hi2;
         }
+    c->lo[0] = lo0, c->lo[1] = lo1, c->lo[2] = lo2, c->hi[0] = hi0, c->hi[1] = hi1, c->hi[2] = hi2;
+    if (special)
+        c->finite = 0;
 }
 
 /* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
