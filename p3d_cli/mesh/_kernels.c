@@ -2706,8 +2706,10 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
  * multiplications, and a build for AVX-512 (whose vectors multiply 64-bit integers) or AVX2 is
  * chosen at run time where the processor has it. Integer arithmetic: every copy gives the same
  * bits. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && __GNUC__ >= 11
 #define KEY_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#elif defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define KEY_CLONES __attribute__((target_clones("avx2", "default"))) /* no x86-64-v4 before GCC 11 */
 #else
 #define KEY_CLONES
 #endif
