@@ -264,42 +264,65 @@ static void load(const Block *b, Py_ssize_t t0, Py_ssize_t n, double p[][9]) {
     }
 }
 
-/* Bounds and the finite test of loaded corners. */
+/* Bounds and the finite test of loaded corners. Selections, not branches (minsd and maxsd
+ * take x exactly when x < lo, x > hi, as the tests did), and the exponent bits of every
+ * coordinate or-ed together: all ones somewhere is a NaN or an infinity. */
 static void bound(Pass *c, const double p[][9], Py_ssize_t n) {
+    double lo0 = c->lo[0], lo1 = c->lo[1], lo2 = c->lo[2], hi0 = c->hi[0], hi1 = c->hi[1], hi2 = c->hi[2];
+    uint64_t special = 0;
+    const uint64_t ones = (uint64_t)0x7ff << 52;
     for (Py_ssize_t k = 0; k < n; k++)
-        for (int i = 0; i < 9; i++) {
-            double x = p[k][i];
-            int a = i % 3;
-            if (!isfinite(x))
-                c->finite = 0;
-            if (x < c->lo[a])
-                c->lo[a] = x;
-            if (x > c->hi[a])
-                c->hi[a] = x;
+        for (int v = 0; v < 3; v++) {
+            double x = p[k][3 * v], y = p[k][3 * v + 1], z = p[k][3 * v + 2];
+            uint64_t bx, by, bz;
+            memcpy(&bx, &x, 8);
+            memcpy(&by, &y, 8);
+            memcpy(&bz, &z, 8);
+            special |= ((bx & ones) == ones) | ((by & ones) == ones) | ((bz & ones) == ones);
+            lo0 = x < lo0 ? x : lo0;
+            lo1 = y < lo1 ? y : lo1;
+            lo2 = z < lo2 ? z : lo2;
+            hi0 = x > hi0 ? x : hi0;
+            hi1 = y > hi1 ? y : hi1;
+            hi2 = z > hi2 ? z : hi2;
         }
+    c->lo[0] = lo0, c->lo[1] = lo1, c->lo[2] = lo2, c->hi[0] = hi0, c->hi[1] = hi1, c->hi[2] = hi2;
+    if (special)
+        c->finite = 0;
 }
 
 /* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
  * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller). */
+static void leaf_keys(const double p[][9], Py_ssize_t n, uint64_t h[3][LEAF], uint64_t keys[3][LEAF],
+                      uint64_t g[3][LEAF]);
+static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys[3][LEAF],
+                         const uint64_t g[3][LEAF], Py_ssize_t n);
+
+/* Edge keys of loaded triangles (p3d_cli.mesh.closed.column_edge_keys): for each side whose
+ * ends hash apart, mix(min * GOLDEN + max) with bit 0 the direction (1: from the smaller).
+ * The hashes of the leaf are made first, all at once (leaf_keys), then dealt in file order. */
 static void edge_keys(Pass *c, const double p[][9], Py_ssize_t n) {
+    uint64_t h[3][LEAF], all[3][LEAF], g[3][LEAF];
+    leaf_keys(p, n, h, all, c->forward_only ? g : NULL);
+    if (c->forward_only && c->fill) {
+        forward_keys(c, (const uint64_t (*)[LEAF])h, (const uint64_t (*)[LEAF])all, (const uint64_t (*)[LEAF])g, n);
+        return;
+    }
     uint64_t *keys = c->fill ? c->keys : c->keys + c->written;
     Py_ssize_t w = 0;
     for (Py_ssize_t k = 0; k < n; k++) {
-        uint64_t h[3];
-        corner_hashes(p[k], h);
         for (int v = 0; v < 3; v++) {
-            uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
+            uint64_t start = h[v][k], end = h[v == 2 ? 0 : v + 1][k];
             if (start == end)
                 continue; /* a side whose ends hash alike bounds nothing */
-            uint64_t key = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
+            uint64_t key = all[v][k];
             if (c->forward_only) {
-                uint64_t g = mix(key | 1);
                 if (start > end) {
-                    c->balance -= g;
+                    c->balance -= g[v][k];
                     c->backward++;
                     continue;
                 }
-                c->balance += g;
+                c->balance += g[v][k];
             }
             if (c->fill) {
                 uint64_t b = key >> c->shift;
@@ -1150,6 +1173,7 @@ static PyObject *py_area_filter(PyObject *self, PyObject *args);
 static PyObject *py_backward_block(PyObject *self, PyObject *args);
 static PyObject *py_split_groups(PyObject *self, PyObject *args);
 static PyObject *py_pick_sides(PyObject *self, PyObject *args);
+static PyObject *py_populate(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1950,6 +1974,8 @@ static PyMethodDef methods[] = {
      "backward_block(block, keys, fill, cap, shift) -> keys written (-1: overflow): the other half of the keys"},
     {"split_groups", py_split_groups, METH_VARARGS,
      "split_groups(fkeys, ffill, bkeys, bfill, cap, shift) -> groups(...) of both halves' keys together"},
+    {"populate", py_populate, METH_VARARGS,
+     "populate(keys, fill, cap, shift, sure) -> whether each bucket's first `sure` slots' pages were made at once"},
     {"pick_sides", py_pick_sides, METH_VARARGS,
      "pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written: those whose edge id is in ids"},
     {NULL, NULL, 0, NULL}};
@@ -2482,23 +2508,26 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args) {
     int overflow = 0;
     Py_BEGIN_ALLOW_THREADS
     double raw[LEAF][9];
+    uint64_t h[3][LEAF], all[3][LEAF], scratch = 0;
     for (Py_ssize_t t0 = 0; t0 < b.n; t0 += LEAF) {
         Py_ssize_t m = b.n - t0 < LEAF ? b.n - t0 : LEAF;
         load(&b, t0, m, raw);
+        leaf_keys((const double (*)[9])raw, m, h, all, NULL);
         for (Py_ssize_t k = 0; k < m; k++) {
-            uint64_t h[3];
-            corner_hashes(raw[k], h);
             for (int v = 0; v < 3; v++) {
-                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
-                if (start <= end)
-                    continue; /* a forward side, or one whose ends hash alike */
-                uint64_t key = edge_hash(start, end) & ~(uint64_t)1, at = key >> shift;
-                if (fill[at] == cap) {
-                    overflow = 1;
+                /* a backward side: its ends hash apart, the larger first (key bit 0 clear); the
+                 * others' keys go to a scratch word, by a mask rather than a coin-toss branch */
+                uint64_t key = all[v][k], back = h[v][k] > h[v == 2 ? 0 : v + 1][k], at = key >> shift;
+                int64_t f = fill[at];
+                if (f == cap) { /* rare: predicted */
+                    overflow |= (int)back;
                     continue;
                 }
-                keys[at * cap + fill[at]++] = key;
-                written++;
+                uintptr_t keep = (uintptr_t)0 - (uintptr_t)back;
+                uint64_t *slot = (uint64_t *)(((uintptr_t)(keys + at * cap + f) & keep) | ((uintptr_t)&scratch & ~keep));
+                *slot = key;
+                fill[at] = f + (int64_t)back;
+                written += (Py_ssize_t)back;
             }
         }
     }
@@ -2614,17 +2643,16 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
     int failed = !hit[0] || !hit[1] || !hit[2];
     Py_BEGIN_ALLOW_THREADS
     double raw[LEAF][9];
+    uint64_t h[3][LEAF], all[3][LEAF];
     for (Py_ssize_t t0 = 0; t0 < k && !failed; t0 += LEAF) {
         Py_ssize_t m = k - t0 < LEAF ? k - t0 : LEAF;
         load(&b, t0, m, raw);
+        leaf_keys((const double (*)[9])raw, m, h, all, NULL);
         for (Py_ssize_t j = 0; j < m && !failed; j++) {
-            uint64_t h[3];
-            corner_hashes(raw[j], h);
             for (int v = 0; v < 3; v++) {
-                uint64_t start = h[v], end = h[v == 2 ? 0 : v + 1];
-                if (start == end)
+                if (h[v][j] == h[v == 2 ? 0 : v + 1][j])
                     continue; /* a side whose ends hash alike bounds nothing */
-                uint64_t e = edge_hash(start, end) >> 1, top = e >> tshift;
+                uint64_t e = all[v][j] >> 1, top = e >> tshift;
                 if (!(table[top >> 3] >> (top & 7) & 1))
                     continue;
                 Py_ssize_t at = starts[e >> sshift], stop = starts[(e >> sshift) + 1];
@@ -2822,4 +2850,131 @@ static PyObject *py_fan_chains(PyObject *self, PyObject *args) {
         return NULL;
     }
     return PyLong_FromSsize_t(count);
+}
+
+/* ---- the edge keys of a leaf, all at once (issue 32) ---------------------------------------- */
+
+/* The keys of edge_keys for the triangles of a leaf (n <= LEAF): h[v][k] the hash of corner v
+ * of triangle k (corner_hashes), keys[v][k] the key of its side v -> v + 1 (as edge_keys makes
+ * it; meaningless where the two ends hash alike) and, when g is not NULL, g[v][k] =
+ * mix(keys[v][k] | 1). The same integer operations as corner_hashes and edge_hash, but
+ * arranged as loops over the leaf's triangles, whose iterations do not depend on each other:
+ * the processor overlaps many triangles' mixes instead of waiting on one triangle's chain of
+ * multiplications, and a build for AVX-512 (whose vectors multiply 64-bit integers) or AVX2 is
+ * chosen at run time where the processor has it. Integer arithmetic: every copy gives the same
+ * bits. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && __GNUC__ >= 11
+#define KEY_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#elif defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define KEY_CLONES __attribute__((target_clones("avx2", "default"))) /* no x86-64-v4 before GCC 11 */
+#else
+#define KEY_CLONES
+#endif
+
+KEY_CLONES
+static void leaf_keys(const double p[][9], Py_ssize_t n, uint64_t h[3][LEAF], uint64_t keys[3][LEAF],
+                      uint64_t g[3][LEAF]) {
+    uint64_t bits[9][LEAF];
+    for (Py_ssize_t k = 0; k < n; k++)
+        for (int i = 0; i < 9; i++)
+            bits[i][k] = bits_of(p[k][i]);
+    for (int v = 0; v < 3; v++) {
+        const uint64_t *x = bits[3 * v], *y = bits[3 * v + 1], *z = bits[3 * v + 2];
+        uint64_t *hv = h[v];
+        for (Py_ssize_t k = 0; k < n; k++)
+            hv[k] = mix(mix(mix(x[k] ^ GOLDEN) ^ y[k]) ^ z[k]);
+    }
+    for (int v = 0; v < 3; v++) {
+        const uint64_t *s = h[v], *e = h[v == 2 ? 0 : v + 1];
+        uint64_t *out = keys[v];
+        for (Py_ssize_t k = 0; k < n; k++) {
+            uint64_t a = s[k], b = e[k], lo = a < b ? a : b, hi = a < b ? b : a;
+            out[k] = (mix(lo * GOLDEN + hi) & ~(uint64_t)1) | (uint64_t)(a < b);
+        }
+        if (g) {
+            uint64_t *gv = g[v];
+            for (Py_ssize_t k = 0; k < n; k++)
+                gv[k] = mix(out[k] | 1);
+        }
+    }
+}
+
+/* edge_keys' deal for forward_block (forward_only, bucketed) from leaf_keys' arrays: the same
+ * keys dealt to the same buckets in the same order, the same balance and backward count.
+ * Whether a side runs forward is a coin toss for hashed corners, so a branch on it would be
+ * mispredicted half the time: here the direction picks the sign of g and the address of the
+ * store (a backward side's key goes to a scratch word) by arithmetic. */
+static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys[3][LEAF],
+                         const uint64_t g[3][LEAF], Py_ssize_t n) {
+    uint64_t *out = c->keys, scratch = 0, balance = c->balance;
+    int64_t *fill = c->fill;
+    const Py_ssize_t cap = c->cap;
+    const int shift = c->shift;
+    Py_ssize_t backward = 0, w = 0;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        for (int v = 0; v < 3; v++) {
+            uint64_t start = h[v][k], end = h[v == 2 ? 0 : v + 1][k];
+            if (start == end)
+                continue; /* a side whose ends hash alike bounds nothing (rare: predicted) */
+            uint64_t key = keys[v][k], fwd = key & 1, back = fwd ^ 1;
+            uint64_t sign = (uint64_t)0 - back;             /* all ones for a backward side */
+            balance += (g[v][k] ^ sign) + back;             /* +g or -g, mod 2^64 */
+            backward += (Py_ssize_t)back;
+            uint64_t b = key >> shift;
+            int64_t f = fill[b];
+            if (f == cap) {                                 /* rare: predicted */
+                c->overflow |= (int)fwd;
+                continue;
+            }
+            uintptr_t keep = (uintptr_t)0 - (uintptr_t)fwd; /* a mask, not a branch */
+            uint64_t *slot = (uint64_t *)(((uintptr_t)(out + b * cap + f) & keep) | ((uintptr_t)&scratch & ~keep));
+            *slot = key;
+            fill[b] = f + (int64_t)fwd;
+            w += (Py_ssize_t)fwd;
+        }
+    }
+    c->balance = balance;
+    c->backward += backward;
+    c->written += w;
+}
+
+/* ---- the bucket pages every mesh fills, made at once (issue 32) ---------------------------- */
+
+/* populate(keys, fill, cap, shift, sure) -> whether it was done: asks the kernel for the whole pages
+ * of the first `sure` slots of every bucket of forward_block's buffer in one call per bucket
+ * (MADV_POPULATE_WRITE, Linux 5.14 on), instead of one page fault per page as the keys reach
+ * them (a fifth of the pass's system time at 16M triangles). `sure` is a count every bucket
+ * of a mesh's keys reaches (the mean less eight standard deviations), so the pages are those
+ * the keys write anyway: no more resident memory. False, and nothing done, elsewhere. */
+static PyObject *py_populate(PyObject *self, PyObject *args) {
+    PyObject *keyobj, *fillobj;
+    Py_ssize_t cap, sure;
+    int shift, done = 0;
+    if (!PyArg_ParseTuple(args, "OOnin", &keyobj, &fillobj, &cap, &shift, &sure))
+        return NULL;
+    Py_buffer kview, fview;
+    if (get_buckets(keyobj, fillobj, cap, shift, 0, &kview, &fview) < 0)
+        return NULL;
+    Py_ssize_t buckets = fview.len / 8;
+    if (sure > cap)
+        sure = cap;
+#if defined(__linux__)
+#ifndef MADV_POPULATE_WRITE
+#define MADV_POPULATE_WRITE 23
+#endif
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
+    done = page > 1 && sure > 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t b = 0; done && b < buckets; b++) {
+        uintptr_t lo = (uintptr_t)((uint64_t *)kview.buf + b * cap), hi = lo + (uintptr_t)sure * 8;
+        lo = (lo + page - 1) / page * page;
+        hi = hi / page * page;
+        if (hi > lo && madvise((void *)lo, hi - lo, MADV_POPULATE_WRITE) != 0)
+            done = 0; /* an older kernel: the keys fault their pages in as before */
+    }
+    Py_END_ALLOW_THREADS
+#endif
+    PyBuffer_Release(&kview);
+    PyBuffer_Release(&fview);
+    return PyBool_FromLong(done);
 }

@@ -244,6 +244,7 @@ def _split_groups(source: MeshSource, fast, forward: ForwardBuckets,
     keys again or moving the keys together. None when a bucket overflows (the caller then makes
     every key in order)."""
     backward = Buckets.like(forward)
+    backward.populate(forward.backward)
     item: Any
     for item in (source.index_blocks() if indexed else source.read_blocks()):
         if indexed or kernel_takes(item):

@@ -116,6 +116,17 @@ class Buckets:
         buckets.overflow = False
         return buckets
 
+    def populate(self, count: int) -> None:
+        """Make the pages of the slots that every bucket fills with ``count`` hashed keys (the
+        mean less eight standard deviations, as ``cap`` adds them) in one call a bucket, not
+        one page fault a page: no more memory, less system time (Linux; nothing elsewhere)."""
+        import math
+
+        kernels = KERNELS
+        if kernels is not None:
+            mean = count / self.fill.size
+            kernels.populate(self.keys, self.fill, self.cap, self.shift, max(0, int(mean - 8 * math.sqrt(2 * mean))))
+
     def add(self, block_keys: np.ndarray) -> None:
         """Deal keys made by the numpy code (a block the compiled pass left to it)."""
         bucket = (block_keys >> np.uint64(self.shift)).astype(np.int64)
@@ -157,6 +168,7 @@ class ForwardBuckets(Buckets):
         super().__init__((sides + 1) // 2)      # the count of a bucket: a Poisson count of keys
         self.balance = 0
         self.backward = 0
+        self.populate((sides + 1) // 2)
 
     def add(self, block_keys: np.ndarray) -> None:
         """Deal the forward keys of a block the compiled pass left to the numpy code, and add

@@ -261,6 +261,27 @@ def test_index_out_of_range(tmp_path, fmt):
     assert "face 3" in err.what and "vertex 8" in err.what and "8 vertices" in err.what
 
 
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_triangle_index_out_of_range(tmp_path, fmt):
+    """Triangles of a binary file come as (n, 3) rows of the file's records: the message still
+    names the face and the index."""
+    triangles = [(q[0], q[i], q[i + 1]) for q in CUBE_QUADS for i in (1, 2)]
+    triangles[7] = (5, 9, 6)
+    err = raises(tmp_path, ply_bytes(fmt, cube_elements(quads=triangles)))
+    assert "face 7" in err.what and "vertex 9" in err.what and "8 vertices" in err.what
+
+
+def test_binary_triangles_are_read_where_they_lie(tmp_path):
+    """A little-endian file's triangle indices reach the kernels as a view of its records (a
+    count byte and three int32 each), not a copy, with the values written."""
+    triangles = [(q[0], q[i], q[i + 1]) for q in CUBE_QUADS for i in (1, 2)]
+    source = load_mesh(write(tmp_path, ply_bytes("binary_little_endian", cube_elements(quads=triangles))))
+    _, (faces,) = source.indexed_arrays()
+    assert not faces.flags.owndata and faces.strides == (13, 4) and faces.dtype == np.int32
+    assert faces.tolist() == [list(t) for t in triangles]
+    assert p3d.props(source).volume == 1.0
+
+
 def test_negative_index(tmp_path):
     quads = list(CUBE_QUADS)
     quads[0] = (0, -1, 2, 1)

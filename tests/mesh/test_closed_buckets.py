@@ -103,6 +103,20 @@ def test_compiled_forward_keys_are_numpys(n):
     assert np.array_equal(every.sorted_keys(), np.sort(column_edge_keys(columns(triangles))))
 
 
+def test_populated_buckets_hold_the_same_keys():
+    """``populate`` (made by ``ForwardBuckets`` for the slots every bucket fills) changes no key,
+    clamps ``sure`` to ``cap`` and refuses buckets that do not fit the buffer."""
+    n = 100_000
+    triangles = np.random.default_rng(7).normal(size=(n, 3, 3))
+    fast, slow = kernels.ForwardBuckets(3 * n), kernels.ForwardBuckets(3 * n)
+    assert KERNELS.populate(fast.keys, fast.fill, fast.cap, fast.shift, 10 * fast.cap) in (True, False)
+    KERNELS.forward_block(triangles, 0.0, 0.0, 0.0, fast.keys, fast.fill, fast.cap, fast.shift)
+    slow.add(column_edge_keys(columns(triangles)))
+    assert np.array_equal(fast.sorted_keys(), slow.sorted_keys())
+    with pytest.raises(ValueError):
+        KERNELS.populate(fast.keys, fast.fill, fast.cap + 1, fast.shift, 1)
+
+
 def test_distinct_on_many_keys():
     """Enough keys for many buckets (each sorted by the radix passes, not insertion alone)."""
     rng = np.random.default_rng(5)

@@ -69,6 +69,7 @@ def _vertices(header: Header, vertex: Element, columns) -> tuple[np.ndarray, boo
 
 def _check_range(where: str, corners: np.ndarray, vertex_count: int, name: str, sizes=None) -> None:
     if corners.size and (corners.min() < 0 or corners.max() >= vertex_count):
+        corners = corners.reshape(-1)   # (a binary file's triangles come as (n, 3) rows)
         bad = int(np.flatnonzero((corners < 0) | (corners >= vertex_count))[0])
         item = int(np.searchsorted(np.cumsum(sizes), bad, side="right")) if sizes is not None else None
         which = f"face {item}" if item is not None else f"a {name} index list"

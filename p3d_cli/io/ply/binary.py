@@ -104,6 +104,11 @@ def _columns(element: Element, table: np.ndarray, keep: set):
             if p.name in keep:
                 items = np.asarray(table[f"p{i}"]).reshape(len(table), -1)
                 k = items.shape[1]
+                if element.name == "face" and k == 3:
+                    # Triangles: their (n, 3) indices where they lie in the file's records (a
+                    # count byte and three indices each), not copied; the kernels read them
+                    # with these strides. The sizes are one number seen n times.
+                    return items, np.broadcast_to(np.int64(3), (len(table),))
                 return items.reshape(-1), np.full(len(table), k, dtype=np.int64)
     return [table[f"p{i}"] if p.name in keep else None for i, p in enumerate(element.properties)]
 
