@@ -38,7 +38,7 @@ _PAIRS = 1 << 15
 
 def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.ndarray | None = None,
                        nonmanifold_edges: np.ndarray | None = None, fans: bool = False,
-                       patches: np.ndarray | None = None) -> SelfIntersections:
+                       patches: np.ndarray | None = None, nearby: np.ndarray | None = None) -> SelfIntersections:
     """The face pairs of an indexed triangle surface whose interiors cross or overlap.
 
     Parameters
@@ -63,6 +63,11 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         only in the edges and corners they share (a triangulation of a polygon seen on a
         plane, such as a filled hole): the pair test would find their pairs ``NONE``, so they
         are not given to it. Lines of contact still take every face around them.
+    nearby : (p, 2) int, optional
+        With ``patches``: every pair of faces, one of them in a patch, that may touch (a
+        superset, such as ``p3d_cli.repairs.near``'s). A pair with a face in a patch and not
+        among them is disjoint, which the pair test would find ``NONE`` without a contact, so it
+        is not given to it (a fan of slivers' boxes hold many faces its triangles miss).
 
     Returns
     -------
@@ -73,6 +78,7 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     n = len(faces)
     if patches is not None:
         patches = np.asarray(patches, dtype=np.int64)
+    known = None if patches is None or nearby is None else _Nearby(patches, nearby, n)
     # In pieces: the whole array's magnitudes at once would cost twice the points' memory.
     safe = all(in_safe_range(points[at:at + _BLOCK]) for at in range(0, len(points), _BLOCK))
     if degenerate is None:
@@ -107,9 +113,9 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
                 batch.append((i[at:at + _PAIRS], j[at:at + _PAIRS]))
                 waiting += batch[-1][0].size
                 if waiting >= _PAIRS:
-                    _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
+                    _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches, known)
                     batch, waiting = [], 0
-        _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
+        _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches, known)
     elif live.size > 1:
         lo, hi = _boxes(points, faces, live)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
@@ -123,9 +129,9 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
             pending.append((members[p[rest]], members[q[rest]]))
             waiting += rest.size
             if waiting >= _PAIRS:
-                _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
+                _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches, known)
                 pending, waiting = [], 0
-        _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
+        _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches, known)
     lines = _line_crossings(points, faces, live, contacts, nonmanifold_edges)
     return _result(points, faces, found, kinds, lines, live.size)
 
@@ -155,9 +161,9 @@ def crowded_edges(faces: np.ndarray) -> np.ndarray:
     return keys[0][keys[1] > 2]
 
 
-def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches=None) -> None:
-    """Classify the pending pairs (but those within one of ``patches``) and keep what they
-    find (``found``/``kinds``/``contacts``)."""
+def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches=None, known=None) -> None:
+    """Classify the pending pairs (but those within one of ``patches``, and those of a patch's
+    face that ``known`` says are apart) and keep what they find (``found``/``kinds``/``contacts``)."""
     if not pending:
         return
     i = np.concatenate([x for x, _ in pending])
@@ -165,10 +171,36 @@ def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches
     if patches is not None and i.size:
         apart = (patches[i] < 0) | (patches[i] != patches[j])
         i, j = i[apart], j[apart]
+        if known is not None and i.size:
+            keep = known.may_touch(i, j)
+            i, j = i[keep], j[keep]
     if i.size == 0:
         return
     kind, edges = classify(points, faces, i, j, safe)
     _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts)
+
+
+class _Nearby:
+    """``may_touch(i, j)``: whether each pair is not one of a patch's face left out of
+    ``nearby`` (``self_intersections``), by a sorted array of the pairs' keys."""
+
+    def __init__(self, patches: np.ndarray, nearby: np.ndarray, n: int):
+        pairs = np.asarray(nearby, dtype=np.int64).reshape(-1, 2)
+        self.n = n
+        self.patched = patches >= 0
+        self.keys = np.unique(pairs.min(axis=1) * n + pairs.max(axis=1))
+
+    def may_touch(self, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        out = np.ones(i.size, dtype=bool)
+        rows = np.flatnonzero(self.patched[i] | self.patched[j])
+        if rows.size and self.keys.size:
+            a, b = i[rows].astype(np.int64), j[rows].astype(np.int64)
+            key = np.minimum(a, b) * self.n + np.maximum(a, b)
+            at = np.minimum(np.searchsorted(self.keys, key), self.keys.size - 1)
+            out[rows] = self.keys[at] == key
+        elif rows.size:
+            out[rows] = False
+        return out
 
 
 def _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts) -> None:
