@@ -65,9 +65,10 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         are not given to it. Lines of contact still take every face around them.
     nearby : (p, 2) int, optional
         With ``patches``: every pair of faces, one of them in a patch, that may touch (a
-        superset, such as ``p3d_cli.repairs.near``'s). A pair with a face in a patch and not
-        among them is disjoint, which the pair test would find ``NONE`` without a contact, so it
-        is not given to it (a fan of slivers' boxes hold many faces its triangles miss).
+        superset, such as ``p3d_cli.repairs.near``'s). These pairs are tested, and the broad
+        phase pairs only the faces in no patch: a pair with a face in a patch and not among them
+        is disjoint, which the pair test would find ``NONE`` without a contact (the boxes of a
+        fan of slivers hold many faces its triangles miss, and each other's).
 
     Returns
     -------
@@ -78,7 +79,6 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
     n = len(faces)
     if patches is not None:
         patches = np.asarray(patches, dtype=np.int64)
-    known = None if patches is None or nearby is None else _Nearby(patches, nearby, n)
     # In pieces: the whole array's magnitudes at once would cost twice the points' memory.
     safe = all(in_safe_range(points[at:at + _BLOCK]) for at in range(0, len(points), _BLOCK))
     if degenerate is None:
@@ -101,8 +101,17 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         certified = certified_vertices(points, faces, safe)
         if not fans:                 # only where every edge pairs up (the fans are closed there)
             certified &= paired_vertices(faces, len(points))
+    boxed = live
+    if patches is not None and nearby is not None:
+        # The patches' faces are paired with the faces given as near them, the others by the
+        # broad phase among themselves.
+        boxed = live[patches[live] < 0]
+        given = _given_pairs(patches, nearby, live, n)
+        for at in range(0, given[0].size, _PAIRS):
+            _test(points, faces, [(given[0][at:at + _PAIRS], given[1][at:at + _PAIRS])], safe, crowded, found,
+                  kinds, contacts, patches)
     fast = compiled()
-    chunks = (compiled_pairs(fast, points, faces, live, certified) if fast is not None and safe and live.size > 1
+    chunks = (compiled_pairs(fast, points, faces, boxed, certified) if fast is not None and safe and boxed.size > 1
               else None)
     if chunks is not None:
         # The compiled grid: the pairs to test, the certified fans' set aside, in batches.
@@ -113,25 +122,25 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
                 batch.append((i[at:at + _PAIRS], j[at:at + _PAIRS]))
                 waiting += batch[-1][0].size
                 if waiting >= _PAIRS:
-                    _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches, known)
+                    _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
                     batch, waiting = [], 0
-        _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches, known)
-    elif live.size > 1:
-        lo, hi = _boxes(points, faces, live)
+        _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
+    elif boxed.size > 1:
+        lo, hi = _boxes(points, faces, boxed)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
         waiting = 0
         assert certified is not None  # noqa: S101 - made above whenever two faces are live
         for members, p, q in pair_blocks(lo, hi):
-            members = live[members]
+            members = boxed[members]
             corners = faces[members]
             # The pairs left once the certified fans' are set aside: tested in batches.
             rest = uncertified(corners, p, q, certified)
             pending.append((members[p[rest]], members[q[rest]]))
             waiting += rest.size
             if waiting >= _PAIRS:
-                _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches, known)
+                _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
                 pending, waiting = [], 0
-        _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches, known)
+        _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches)
     lines = _line_crossings(points, faces, live, contacts, nonmanifold_edges)
     return _result(points, faces, found, kinds, lines, live.size)
 
@@ -161,9 +170,9 @@ def crowded_edges(faces: np.ndarray) -> np.ndarray:
     return keys[0][keys[1] > 2]
 
 
-def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches=None, known=None) -> None:
-    """Classify the pending pairs (but those within one of ``patches``, and those of a patch's
-    face that ``known`` says are apart) and keep what they find (``found``/``kinds``/``contacts``)."""
+def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches=None) -> None:
+    """Classify the pending pairs (but those within one of ``patches``) and keep what they
+    find (``found``/``kinds``/``contacts``)."""
     if not pending:
         return
     i = np.concatenate([x for x, _ in pending])
@@ -171,36 +180,24 @@ def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches
     if patches is not None and i.size:
         apart = (patches[i] < 0) | (patches[i] != patches[j])
         i, j = i[apart], j[apart]
-        if known is not None and i.size:
-            keep = known.may_touch(i, j)
-            i, j = i[keep], j[keep]
     if i.size == 0:
         return
     kind, edges = classify(points, faces, i, j, safe)
     _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts)
 
 
-class _Nearby:
-    """``may_touch(i, j)``: whether each pair is not one of a patch's face left out of
-    ``nearby`` (``self_intersections``), by a sorted array of the pairs' keys."""
-
-    def __init__(self, patches: np.ndarray, nearby: np.ndarray, n: int):
-        pairs = np.asarray(nearby, dtype=np.int64).reshape(-1, 2)
-        self.n = n
-        self.patched = patches >= 0
-        self.keys = np.unique(pairs.min(axis=1) * n + pairs.max(axis=1))
-
-    def may_touch(self, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        out = np.ones(i.size, dtype=bool)
-        rows = np.flatnonzero(self.patched[i] | self.patched[j])
-        if rows.size and self.keys.size:
-            a, b = i[rows].astype(np.int64), j[rows].astype(np.int64)
-            key = np.minimum(a, b) * self.n + np.maximum(a, b)
-            at = np.minimum(np.searchsorted(self.keys, key), self.keys.size - 1)
-            out[rows] = self.keys[at] == key
-        elif rows.size:
-            out[rows] = False
-        return out
+def _given_pairs(patches: np.ndarray, nearby: np.ndarray, live: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of ``nearby`` with a face in a patch, both faces live and not in one patch,
+    each once (smaller face first, ascending)."""
+    pairs = np.asarray(nearby, dtype=np.int64).reshape(-1, 2)
+    alive = np.zeros(n, dtype=bool)
+    alive[live] = True
+    i, j = pairs.min(axis=1), pairs.max(axis=1)
+    keep = (alive[i] & alive[j] & (i != j) & ((patches[i] >= 0) | (patches[j] >= 0))
+            & ((patches[i] < 0) | (patches[i] != patches[j])))
+    keys = np.unique(i[keep] * n + j[keep])
+    index = live.dtype
+    return (keys // n).astype(index), (keys % n).astype(index)
 
 
 def _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts) -> None:
