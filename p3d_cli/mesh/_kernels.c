@@ -1174,6 +1174,7 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args);
 static PyObject *py_split_groups(PyObject *self, PyObject *args);
 static PyObject *py_pick_sides(PyObject *self, PyObject *args);
 static PyObject *py_populate(PyObject *self, PyObject *args);
+static PyObject *py_ear_holds(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1978,6 +1979,9 @@ static PyMethodDef methods[] = {
      "populate(keys, fill, cap, shift, sure) -> whether each bucket's first `sure` slots' pages were made at once"},
     {"pick_sides", py_pick_sides, METH_VARARGS,
      "pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written: those whose edge id is in ids"},
+    {"ear_holds", py_ear_holds, METH_VARARGS,
+     "ear_holds(plane, order, alive, sign, bound, u, v, w, first, last) -> 1, 0 or -1 (undecided): whether a "
+     "corner lies in the ear"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -2977,4 +2981,95 @@ static PyObject *py_populate(PyObject *self, PyObject *args) {
     PyBuffer_Release(&kview);
     PyBuffer_Release(&fview);
     return PyBool_FromLong(done);
+}
+
+/* ---- ear clipping's corner test (p3d_cli.repairs.fill) ------------------------------------ */
+
+/* orient2d_about's float filter (p3d_cli.geometry.predicates): the sign of
+ * (ax - cx)(by - cy) - (ay - cy)(bx - cx), the same operations in the same order, decided when
+ * |det| > bound * perm or perm == 0 (Shewchuk's stage-A bound); *sure is cleared otherwise. */
+static inline int ear_turn(const double *p, int64_t a, int64_t b, int64_t c, double bound, int *sure) {
+    double left = (p[2 * a] - p[2 * c]) * (p[2 * b + 1] - p[2 * c + 1]);
+    double right = (p[2 * a + 1] - p[2 * c + 1]) * (p[2 * b] - p[2 * c]);
+    double det = left - right;
+    double perm = fabs(left) + fabs(right);
+    if (fabs(det) <= bound * perm && perm != 0) {
+        *sure = 0;
+        return 0;
+    }
+    return (det > 0) - (det < 0);
+}
+
+/* ear_holds(plane, order, alive, sign, bound, u, v, w, first, last): whether an alive corner c
+ * of order[first:last] other than u, v, w, with y within u v w's, lies in the closed triangle
+ * u v w (sign times each of orient(u, v, c), orient(v, w, c), orient(w, u, c) >= 0): 1 when one
+ * certainly does, 0 when none does, -1 when the filter leaves a corner undecided and none is
+ * certainly in (the caller decides exactly). plane (k, 2) float64, order (k,) int64, alive (k,)
+ * bool. */
+static PyObject *py_ear_holds(PyObject *self, PyObject *args) {
+    PyObject *po, *oo, *ao;
+    int sign;
+    double bound;
+    Py_ssize_t u, v, w, first, last;
+    if (!PyArg_ParseTuple(args, "OOOidnnnnn", &po, &oo, &ao, &sign, &bound, &u, &v, &w, &first, &last))
+        return NULL;
+    Py_buffer b[3];
+    int got[3] = {0};
+    PyObject *objs[3] = {po, oo, ao};
+    const char kinds[3] = {'d', 'q', 'B'};
+    for (int k = 0; k < 3; k++) {
+        if (get_array(objs[k], &b[k], kinds[k], 0, "ear_holds") < 0) {
+            release_all(b, got, 3);
+            return NULL;
+        }
+        got[k] = 1;
+    }
+    Py_ssize_t n = b[2].len;
+    if (b[0].len != 16 * n || b[1].len != 8 * n || u < 0 || v < 0 || w < 0 || u >= n || v >= n || w >= n ||
+        first < 0 || last > n || (sign != 1 && sign != -1)) {
+        release_all(b, got, 3);
+        PyErr_SetString(PyExc_ValueError, "ear_holds: the corners, order and indices do not match");
+        return NULL;
+    }
+    const double *p = b[0].buf;
+    const int64_t *order = b[1].buf;
+    const unsigned char *alive = b[2].buf;
+    double lo = p[2 * u + 1], hi = lo;
+    if (p[2 * v + 1] < lo) lo = p[2 * v + 1];
+    if (p[2 * w + 1] < lo) lo = p[2 * w + 1];
+    if (p[2 * v + 1] > hi) hi = p[2 * v + 1];
+    if (p[2 * w + 1] > hi) hi = p[2 * w + 1];
+    int found = 0, open = 0, bad = 0;
+    for (Py_ssize_t i = first; i < last; i++) {
+        int64_t c = order[i];
+        if (c < 0 || c >= n) {
+            bad = 1;
+            break;
+        }
+        if (!alive[c] || c == u || c == v || c == w || !(p[2 * c + 1] >= lo && p[2 * c + 1] <= hi))
+            continue;
+        int sure = 1, outside = 0;
+        int64_t ends[3][2] = {{u, v}, {v, w}, {w, u}};
+        for (int e = 0; e < 3 && !outside; e++) {
+            int s = 1;
+            int t = ear_turn(p, ends[e][0], ends[e][1], c, bound, &s);
+            if (!s)
+                sure = 0;
+            else if (t * sign < 0)
+                outside = 1;
+        }
+        if (outside)
+            continue;
+        if (sure) {
+            found = 1;
+            break;
+        }
+        open = 1;
+    }
+    release_all(b, got, 3);
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "ear_holds: an order entry is out of range");
+        return NULL;
+    }
+    return PyLong_FromLong(found ? 1 : (open ? -1 : 0));
 }

@@ -38,7 +38,7 @@ _PAIRS = 1 << 15
 
 def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.ndarray | None = None,
                        nonmanifold_edges: np.ndarray | None = None, fans: bool = False,
-                       patches: np.ndarray | None = None) -> SelfIntersections:
+                       patches: np.ndarray | None = None, nearby: np.ndarray | None = None) -> SelfIntersections:
     """The face pairs of an indexed triangle surface whose interiors cross or overlap.
 
     Parameters
@@ -63,6 +63,12 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         only in the edges and corners they share (a triangulation of a polygon seen on a
         plane, such as a filled hole): the pair test would find their pairs ``NONE``, so they
         are not given to it. Lines of contact still take every face around them.
+    nearby : (p, 2) int, optional
+        With ``patches``: every pair of faces, one of them in a patch, that may touch (a
+        superset, such as ``p3d_cli.repairs.near``'s). These pairs are tested, and the broad
+        phase pairs only the faces in no patch: a pair with a face in a patch and not among them
+        is disjoint, which the pair test would find ``NONE`` without a contact (the boxes of a
+        fan of slivers hold many faces its triangles miss, and each other's).
 
     Returns
     -------
@@ -95,8 +101,17 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
         certified = certified_vertices(points, faces, safe)
         if not fans:                 # only where every edge pairs up (the fans are closed there)
             certified &= paired_vertices(faces, len(points))
+    boxed = live
+    if patches is not None and nearby is not None:
+        # The patches' faces are paired with the faces given as near them, the others by the
+        # broad phase among themselves.
+        boxed = live[patches[live] < 0]
+        given = _given_pairs(patches, nearby, live, n)
+        for at in range(0, given[0].size, _PAIRS):
+            _test(points, faces, [(given[0][at:at + _PAIRS], given[1][at:at + _PAIRS])], safe, crowded, found,
+                  kinds, contacts, patches)
     fast = compiled()
-    chunks = (compiled_pairs(fast, points, faces, live, certified) if fast is not None and safe and live.size > 1
+    chunks = (compiled_pairs(fast, points, faces, boxed, certified) if fast is not None and safe and boxed.size > 1
               else None)
     if chunks is not None:
         # The compiled grid: the pairs to test, the certified fans' set aside, in batches.
@@ -110,13 +125,13 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, degenerate: np.nda
                     _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
                     batch, waiting = [], 0
         _test(points, faces, batch, safe, crowded, found, kinds, contacts, patches)
-    elif live.size > 1:
-        lo, hi = _boxes(points, faces, live)
+    elif boxed.size > 1:
+        lo, hi = _boxes(points, faces, boxed)
         pending: list[tuple[np.ndarray, np.ndarray]] = []
         waiting = 0
         assert certified is not None  # noqa: S101 - made above whenever two faces are live
         for members, p, q in pair_blocks(lo, hi):
-            members = live[members]
+            members = boxed[members]
             corners = faces[members]
             # The pairs left once the certified fans' are set aside: tested in batches.
             rest = uncertified(corners, p, q, certified)
@@ -169,6 +184,20 @@ def _test(points, faces, pending, safe, crowded, found, kinds, contacts, patches
         return
     kind, edges = classify(points, faces, i, j, safe)
     _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts)
+
+
+def _given_pairs(patches: np.ndarray, nearby: np.ndarray, live: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of ``nearby`` with a face in a patch, both faces live and not in one patch,
+    each once (smaller face first, ascending)."""
+    pairs = np.asarray(nearby, dtype=np.int64).reshape(-1, 2)
+    alive = np.zeros(n, dtype=bool)
+    alive[live] = True
+    i, j = pairs.min(axis=1), pairs.max(axis=1)
+    keep = (alive[i] & alive[j] & (i != j) & ((patches[i] >= 0) | (patches[j] >= 0))
+            & ((patches[i] < 0) | (patches[i] != patches[j])))
+    keys = np.unique(i[keep] * n + j[keep])
+    index = live.dtype
+    return (keys // n).astype(index), (keys % n).astype(index)
 
 
 def _keep(kind, edges, i, j, faces, crowded, found, kinds, contacts) -> None:

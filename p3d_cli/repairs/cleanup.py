@@ -39,7 +39,7 @@ def weld_step(draft: Draft, tolerance: float) -> tuple[Draft, StepReport]:
     return welded, StepReport(
         "weld", counts={"vertices_merged": int(merged.size), "faces_moved": int(moved.size),
                         "tolerance": float(tolerance), "largest_distance": largest},
-        faces=tuple(int(f) for f in draft.origin[moved]), places=places)
+        faces=tuple(draft.origin[moved].tolist()), places=places)
 
 
 def _most_used(group: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -73,7 +73,7 @@ def degenerate_step(draft: Draft, known: np.ndarray | None = None) -> tuple[Draf
     keep = np.ones(len(draft.faces), dtype=bool)
     keep[gone] = False
     return draft.keep(keep), StepReport("degenerate", counts={"faces_removed": int(gone.size)},
-                                        faces=tuple(int(f) for f in draft.origin[gone]))
+                                        faces=tuple(draft.origin[gone].tolist()))
 
 
 def duplicate_step(draft: Draft, known: np.ndarray | None = None) -> tuple[Draft, StepReport]:
@@ -97,5 +97,5 @@ def duplicate_step(draft: Draft, known: np.ndarray | None = None) -> tuple[Draft
     keep[pairs[:, 1]] = False
     places = tuple({"face": int(draft.origin[b]), "repeats": int(draft.origin[a])} for a, b in pairs.tolist())
     return draft.keep(keep), StepReport("duplicate", counts={"faces_removed": int(pairs.shape[0])},
-                                        faces=tuple(int(f) for f in draft.origin[pairs[:, 1]]), places=places)
+                                        faces=tuple(draft.origin[pairs[:, 1]].tolist()), places=places)
 

@@ -36,6 +36,7 @@ import numpy as np
 
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.faces import zero_area_faces
+from p3d_cli.mesh.kernels import compiled
 from p3d_cli.geometry.predicates import CCW_BOUND, in_safe_range, orient2d, orient2d_about
 
 
@@ -97,6 +98,10 @@ FLATNESS = 1e-3
 MAX_EDGES = 1000
 #: Edge pairs tested together by the simplicity test (bounded temporaries).
 PAIRS = 1 << 18
+#: Ear clipping tries the corners in an ear's x range one at a time, on Python floats, up to
+#: this many (an ear of a round loop has a few: numpy's calls would cost more than the tests);
+#: more go through the array test.
+LOOPED = 24
 
 
 def fill_hole(points: np.ndarray, vertices: np.ndarray, *, policy: str = "flat", flatness: float = FLATNESS,
@@ -253,6 +258,7 @@ def _segments_meet(p: np.ndarray, q: np.ndarray, r: np.ndarray, s: np.ndarray, s
 def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge) -> np.ndarray | None:
     """Triangles ``(k - 2, 3)`` of vertex ids wound like the loop, or None when clipping gets
     stuck (every remaining ear would repeat an existing edge)."""
+    plane = np.ascontiguousarray(plane, dtype=np.float64)
     k = len(plane)
     # The polygon's winding in the plane: the sign at its lowest corner (lexicographic), which
     # a simple polygon always turns strictly at.
@@ -269,9 +275,12 @@ def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge)
     xs, ys = plane[:, 0].tolist(), plane[:, 1].tolist()
     by_x = np.argsort(plane[:, 0], kind="stable")
     sorted_x = plane[by_x, 0].tolist()
+    order = by_x.tolist()
     column_y = plane[:, 1]
+    living = [True] * k
+    fast = compiled()
 
-    def convex(u: int, v: int, w: int) -> bool:
+    def turn(u: int, v: int, w: int) -> int:
         # orient2d_about's float filter on Python floats (the same operations, so the same
         # sign where it decides); the exact test where it does not.
         if safe:
@@ -280,29 +289,47 @@ def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge)
             det = left - right
             perm = abs(left) + abs(right)
             if not (abs(det) <= CCW_BOUND * perm and perm != 0):
-                return ((det > 0) - (det < 0)) == sign
-        return int(orient2d_about(plane[u], plane[v], plane[[w]], safe)[0]) == sign
+                return (det > 0) - (det < 0)
+        return int(orient2d_about(plane[u], plane[v], plane[[w]], safe)[0])
 
-    def ear(v: int) -> bool:
-        u, w = before[v], following[v]
-        if not convex(u, v, w):
-            return False
+    def holds_corner(u: int, v: int, w: int, first: int, last: int) -> bool:
+        """Whether an alive corner of sorted positions ``first..last - 1`` (but u, v, w) lies
+        in the closed triangle u v w: one corner at a time for a few, as arrays for many (the
+        same exact signs either way), or by the compiled kernels' float filter where it decides."""
+        if fast is not None and safe:
+            held = fast.ear_holds(plane, by_x, alive, sign, CCW_BOUND, u, v, w, first, last)
+            if held >= 0:
+                return held == 1
         lo_y, hi_y = min(ys[u], ys[v], ys[w]), max(ys[u], ys[v], ys[w])
-        others = by_x[bisect_left(sorted_x, min(xs[u], xs[v], xs[w])):
-                      bisect_right(sorted_x, max(xs[u], xs[v], xs[w]))]
+        if last - first <= LOOPED:
+            for c in order[first:last]:
+                if (living[c] and lo_y <= ys[c] <= hi_y and c != u and c != v and c != w
+                        and turn(u, v, c) * sign >= 0 and turn(v, w, c) * sign >= 0 and turn(w, u, c) * sign >= 0):
+                    return True
+            return False
+        others = by_x[first:last]
         heights = column_y[others]
         others = others[alive[others] & (heights >= lo_y) & (heights <= hi_y)
                         & (others != u) & (others != v) & (others != w)]
-        if others.size:
-            c = plane[others]
-            # Inside the closed triangle: on the inner side of (or on) each edge; the corners
-            # that fail one edge are not tried on the next.
-            for x, y in ((u, v), (v, w), (w, u)):
-                c = c[orient2d_about(plane[x], plane[y], c, safe) * sign >= 0]
-                if c.size == 0:
-                    break
-            if c.size:
+        if others.size == 0:
+            return False
+        c = plane[others]
+        # Inside the closed triangle: on the inner side of (or on) each edge; the corners
+        # that fail one edge are not tried on the next.
+        for x, y in ((u, v), (v, w), (w, u)):
+            c = c[orient2d_about(plane[x], plane[y], c, safe) * sign >= 0]
+            if c.size == 0:
                 return False
+        return True
+
+    def ear(v: int) -> bool:
+        u, w = before[v], following[v]
+        if turn(u, v, w) != sign:
+            return False
+        first = bisect_left(sorted_x, min(xs[u], xs[v], xs[w]))
+        last = bisect_right(sorted_x, max(xs[u], xs[v], xs[w]))
+        if holds_corner(u, v, w, first, last):
+            return False
         a, b = int(vertices[u]), int(vertices[w])
         return (min(a, b), max(a, b)) not in added and not has_edge(a, b)
 
@@ -316,7 +343,7 @@ def _ear_clipping(plane: np.ndarray, vertices: np.ndarray, safe: bool, has_edge)
             a, b = int(vertices[u]), int(vertices[w])
             added.add((min(a, b), max(a, b)))
             following[u], before[w] = w, u
-            alive[v] = False
+            alive[v] = living[v] = False
             remaining -= 1
             stuck = 0
             v = u

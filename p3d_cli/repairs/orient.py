@@ -154,7 +154,7 @@ def orient_step(draft: Draft, found: Patches) -> tuple[Draft, StepReport]:
                    for p in touched.tolist())
     return draft.flip(found.flip), StepReport(
         "orient", counts={"faces_flipped": int(flipped.size), "shells": int(touched.size)},
-        faces=tuple(int(f) for f in draft.origin[flipped]), places=places, notes=notes)
+        faces=tuple(draft.origin[flipped].tolist()), places=places, notes=notes)
 
 
 def nonorientable_notes(draft: Draft, found: Patches) -> tuple[str, ...]:
@@ -219,11 +219,12 @@ def outward_step(draft: Draft, triangles: np.ndarray, found: Patches,
     wrong = [p for p in closed.tolist() if (volume[p] > 0) != (depth[p] % 2 == 0)]
     flip = np.isin(labels, np.array(wrong, dtype=np.int64))
     flipped = np.flatnonzero(flip)
+    origin = draft.origin[flipped]
     places = tuple({"shell_first_face": first_origin(draft, labels, p), "faces": int(np.count_nonzero(labels == p)),
                     "signed_volume_before": float(volume[p]), "cavity": bool(depth[p] % 2)} for p in wrong)
     report = StepReport(
         "outward", counts={"shells_flipped": len(wrong), "faces_flipped": int(flipped.size),
                            "closed_shells": int(closed.size), "cavities": sum(depth[p] % 2 for p in closed.tolist())},
-        faces=tuple(int(f) for f in draft.origin[flipped] if f >= 0),
-        new_faces=tuple(int(f) for f in flipped if draft.origin[f] < 0), places=places, notes=tuple(notes))
+        faces=tuple(origin[origin >= 0].tolist()), new_faces=tuple(flipped[origin < 0].tolist()), places=places,
+        notes=tuple(notes))
     return (draft.flip(flip) if flipped.size else draft), report, flipped

@@ -94,3 +94,39 @@ def test_ear_clipping_triangulates_every_simple_polygon():
         tried += 1
     assert tried > 100
 
+
+
+def round_loops(seed: int, count: int):
+    """Loops of many corners on a circle, some pulled in (their ears' boxes hold many
+    corners), some on a float32 grid far from the origin (the filter cannot decide some signs)."""
+    rng = np.random.default_rng(seed)
+    for trial in range(count):
+        k = int(rng.integers(20, 200))
+        angles = np.sort(rng.uniform(0, 2 * np.pi, k))
+        radii = rng.uniform(0.5, 1.0, k) if trial % 3 else np.ones(k)
+        corners = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+        if trial % 2:
+            corners = (1e4 + corners).astype(np.float32).astype(np.float64)
+        yield np.ascontiguousarray(corners)
+
+
+@pytest.mark.parametrize("looped", [0, 10**9])
+def test_ear_clipping_is_the_same_on_every_road(looped, monkeypatch):
+    """The compiled corner test, the numpy one and the one-corner-at-a-time loop clip the same
+    ears (exact signs on every road), an existing edge passed over on each."""
+    from helpers.kernels import numpy_road
+
+    monkeypatch.setattr(fill, "LOOPED", looped)
+    tried = 0
+    for corners in list(polygons(13, 200)) + list(round_loops(5, 30)):
+        if not fill._simple(corners, True):       # the oracle's answer (above), faster
+            continue
+        k = len(corners)
+        for has_edge in (lambda a, b: False, lambda a, b: {a, b} == {1, k - 1}):
+            compiled = fill._ear_clipping(corners, np.arange(k), True, has_edge)
+            plain = numpy_road(fill._ear_clipping, corners, np.arange(k), True, has_edge)
+            assert (compiled is None) == (plain is None)
+            if compiled is not None:
+                assert compiled.tolist() == plain.tolist()
+                tried += 1
+    assert tried > 100

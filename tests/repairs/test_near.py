@@ -155,6 +155,52 @@ def test_the_fillings_clipped_on_a_plane_are_refused_as_the_whole_test_does():
     assert np.array_equal(self_intersections(points, faces, patches=patches).pairs, self_intersections(points, faces).pairs)
 
 
+@pytest.mark.parametrize("u, v, rows", [(40, 10, (0, 2, 4, 6, 8)), (60, 20, (1, 7, 13))])
+@pytest.mark.parametrize("road", ["compiled", "numpy"])
+def test_the_pairs_near_the_patches_leave_the_whole_test_as_it_was(u, v, rows, road, monkeypatch):
+    """Told which faces may touch the patches' faces (``near_pairs``), the self-intersection
+    test pairs those faces with them alone and reports every pair, contacts along lines
+    included, as the whole test does (on the compiled broad phase and on numpy's)."""
+    if road == "numpy":
+        monkeypatch.setattr(kernels, "KERNELS", None)
+    points, faces, fillings = holed_torus(u, v, rows)
+    patches = np.full(len(faces), -1)
+    group = np.full(len(faces), -1)
+    for k, filling in enumerate(fillings):
+        patches[filling] = group[filling] = k
+    new = np.concatenate(fillings)
+    at, face = near_pairs(points, faces, new, group)
+    whole = self_intersections(points, faces, patches=patches)
+    told = self_intersections(points, faces, patches=patches, nearby=np.stack([new[at], face], axis=1))
+    assert whole.count > 0
+    assert np.array_equal(told.pairs, whole.pairs) and told.kinds == whole.kinds
+    # Told that nothing is near them, the patches' faces are paired with nothing.
+    alone = self_intersections(points, faces, patches=patches, nearby=np.zeros((0, 2), dtype=np.int64))
+    assert not np.isin(alone.pairs, new).any()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_fillings_on_planes_in_a_soup_are_refused_as_the_whole_test_does(seed):
+    """Flat convex fans (triangulations on a plane) among random triangles: their pairs with
+    themselves left out, their pairs with faces not near them too."""
+    rng = np.random.default_rng(seed + 10)
+    points, faces = soup(seed + 10, 200)
+    fillings, extra = [], []
+    for k in range(6):
+        size = int(rng.choice([1, SCREENED, 40]))
+        angle = np.linspace(0, 2 * np.pi, size + 2, endpoint=False)
+        centre = points[:200].mean(axis=0) + (rng.random(3) - 0.5) * 8       # in and beside the soup
+        rim = centre + (0.5 + rng.random() * 2) * np.stack([np.cos(angle), np.sin(angle), 0 * angle], 1)
+        ids = len(points) + np.arange(size + 2)
+        points = np.concatenate([points, rim])
+        fillings.append(len(faces) + sum(len(e) for e in extra) + np.arange(size))
+        extra.append(np.stack([np.full(size, ids[0]), ids[1:-1], ids[2:]], axis=1))
+    faces = np.concatenate([faces] + extra)
+    want = whole_test(points, faces, fillings)
+    assert want.any() and not want.all()
+    assert crossing_fillings(points, faces, fillings, [True] * len(fillings)).tolist() == want.tolist()
+
+
 def numpy_walk(monkeypatch, *args):
     """``near_pairs`` on the numpy road, a few triangles walking together."""
     with monkeypatch.context() as m:
