@@ -190,14 +190,8 @@ def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray, boun
     groups, and the sides of balanced groups of four or more (colliding hashes) exactly."""
     if boundary:
         return _open_orbit_map(keys, bits, blocks, pi)
-    shift, mask = np.uint64(bits), np.uint64((1 << bits) - 1)
-    edge = keys >> np.uint64(bits + 1)
-    new = np.ones(edge.size, dtype=bool)
-    np.not_equal(edge[1:], edge[:-1], out=new[1:])
-    starts = np.flatnonzero(new)
-    del edge, new
-    counts = np.diff(np.append(starts, keys.size))
-    forward = np.add.reduceat(((keys >> shift) & np.uint64(1)).astype(np.int64), starts)
+    mask = np.uint64((1 << bits) - 1)
+    starts, counts, forward = _key_groups(keys, bits)
     if ((counts % 2 == 1) | (2 * forward != counts)).any():
         return None                     # an edge not used once each way, whatever the hash
     two = starts[counts == 2]
@@ -213,20 +207,27 @@ def _orbit_map_grouped(keys: np.ndarray, bits: int, blocks, pi: np.ndarray, boun
     return pi
 
 
-def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
-    """``_orbit_map_grouped`` with boundary sides: a group of one side is a boundary side; a
-    group of two sides running opposite ways, a pair; every other group (two sides the same
-    way, three or more: colliding hashes, or a misoriented or non-manifold edge) is sorted out
-    by the exact end points of its sides, where each exact edge must be used once each way or
-    once (None otherwise)."""
-    shift, mask = np.uint64(bits), np.uint64((1 << bits) - 1)
+def _key_groups(keys: np.ndarray, bits: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The groups of sorted side keys with one edge hash: each group's first position, its
+    number of sides and how many of them run forward."""
     edge = keys >> np.uint64(bits + 1)
     new = np.ones(edge.size, dtype=bool)
     np.not_equal(edge[1:], edge[:-1], out=new[1:])
     starts = np.flatnonzero(new)
     del edge, new
     counts = np.diff(np.append(starts, keys.size))
-    forward = np.add.reduceat(((keys >> shift) & np.uint64(1)).astype(np.int64), starts)
+    forward = np.add.reduceat(((keys >> np.uint64(bits)) & np.uint64(1)).astype(np.int64), starts)
+    return starts, counts, forward
+
+
+def _open_orbit_map(keys: np.ndarray, bits: int, blocks, pi: np.ndarray):
+    """``_orbit_map_grouped`` with boundary sides: a group of one side is a boundary side; a
+    group of two sides running opposite ways, a pair; every other group (two sides the same
+    way, three or more: colliding hashes, or a misoriented or non-manifold edge) is sorted out
+    by the exact end points of its sides, where each exact edge must be used once each way or
+    once (None otherwise)."""
+    mask = np.uint64((1 << bits) - 1)
+    starts, counts, forward = _key_groups(keys, bits)
     pi[(keys[starts[counts == 1]] & mask).astype(np.int64)] = -1
     two = starts[(counts == 2) & (forward == 1)]
     _link(pi, (keys[two] & mask).astype(np.int64), (keys[two + 1] & mask).astype(np.int64))
