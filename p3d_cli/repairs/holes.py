@@ -33,10 +33,19 @@ class Holes:
         Every loop, with the faces (draft numbers) around it.
     stray : (s,) int64
         Draft faces of boundary sides on no closed loop.
+    nearby : (p, 2) int64 or None
+        Each face of a filling with every face found near it when the fillings were tested
+        (``p3d_cli.repairs.solidity.crossings_and_near``), in the numbering of the draft the step
+        returns (the faces after it are only turned round): a superset of the faces that touch a
+        filling face, for the output's self-intersection test (``nearby`` of
+        ``p3d_cli.mesh.intersections.self_intersections``). None when no filling was tested, or
+        when a face split for a filling refused is whole again (its pairs were found for its
+        part).
     """
 
     holes: tuple[tuple[Hole, np.ndarray], ...]
     stray: np.ndarray
+    nearby: np.ndarray | None = None
 
     @property
     def open_faces(self) -> np.ndarray:
@@ -96,8 +105,8 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
                 has_edge.add(hole.replaced[1].reshape(1, 3))
         found.append((hole, face[loop]))
     start = len(draft.faces)
-    found = _refuse_crossings(_applied(draft, found), found, start)
-    result = Holes(tuple(found), face[stray])
+    found, nearby = _refuse_crossings(_applied(draft, found), found, start)
+    result = Holes(tuple(found), face[stray], nearby)
     draft = _applied(draft, found)
     return draft, _report(draft, result, start), result
 
@@ -159,24 +168,46 @@ class _EdgeSet:
                 self.keys.add(min(x, y) * self.m + max(x, y))
 
 
-def _refuse_crossings(draft: Draft, found: list, start: int) -> list:
-    """The holes, with those whose filling crosses or overlaps another face left."""
+def _refuse_crossings(draft: Draft, found: list, start: int) -> tuple[list, np.ndarray | None]:
+    """The holes, with those whose filling crosses or overlaps another face left, and the
+    pairs of faces found near the fillings kept (``Holes.nearby``)."""
     if len(draft.faces) == start:
-        return found
+        return found, None
     fillings, projected, position = [], [], start
     for hole, _ in found:
         if hole.filled:
             fillings.append(np.arange(position, position + len(hole.triangles)))
             projected.append(hole.projected)
             position += len(hole.triangles)
-    crossing = iter(solidity.crossing_fillings(draft.points, draft.faces, fillings, projected).tolist())
+    refused, near = solidity.crossings_and_near(draft.points, draft.faces, fillings, projected)
+    crossing = iter(refused.tolist())
     out = []
     for hole, around in found:
         if hole.filled and next(crossing):
             hole = dataclasses.replace(hole, triangles=None, reason="its filling would cross other faces",
                                        replaced=None)
         out.append((hole, around))
-    return out
+    return out, _kept_pairs(near, start, fillings, refused, found)
+
+
+def _kept_pairs(near: np.ndarray, start: int, fillings: list, refused: np.ndarray, found: list) -> np.ndarray | None:
+    """The pairs ``near`` (faces of the draft with every filling) renumbered as the draft with
+    the fillings kept: the old faces keep their numbers, the kept fillings' follow them in
+    order, and the pairs with a refused filling's face are dropped. None when a refused hole
+    had split a face (the face is whole again: its pairs were found for its part)."""
+    filled = [hole for hole, _ in found if hole.filled]
+    if any(gone and hole.replaced is not None for hole, gone in zip(filled, refused.tolist())):
+        return None
+    number = np.arange(start + sum(len(f) for f in fillings), dtype=np.int64)
+    position = start
+    for filling, gone in zip(fillings, refused.tolist()):
+        if gone:
+            number[filling] = -1
+        else:
+            number[filling] = np.arange(position, position + len(filling))
+            position += len(filling)
+    pairs = number[near]
+    return pairs[(pairs >= 0).all(axis=1)]
 
 
 def _report(draft: Draft, result: Holes, start: int) -> StepReport:

@@ -155,23 +155,27 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         draft, reports["outward"], turned = outward_step(draft, out, found, open_patches)
         out[turned] = out[turned][:, [0, 2, 1]]
         shells_left = reports["outward"].notes
-    after = checked(out, required, fillings)
+    after = checked(out, required, fillings, filled.nearby if filled is not None else None)
     ordered = tuple(reports[name] for name in STEPS)
     return Outcome(draft, out, before, after, ordered, unfixed(after, steps, required, holes_left, shells_left),
                    draft.changed)
 
 
-def checked(triangles: np.ndarray, required: tuple[str, ...], fillings: np.ndarray | None = None) -> TopologyReport:
+def checked(triangles: np.ndarray, required: tuple[str, ...], fillings: np.ndarray | None = None,
+            nearby: np.ndarray | None = None) -> TopologyReport:
     """``p3d check``'s report of the output: its topology, and its self-intersections and
     shells' nesting when those are required (``p3d_cli.mesh.solidity``), in the blocks a file
     of it would be read in. ``fillings`` labels the faces of each hole filled on a coordinate
     plane (``Holes.fillings``): the pair test would find their pairs within one filling
-    ``NONE``, so they are left out (the report is the same)."""
+    ``NONE``, so they are left out (the report is the same). ``nearby`` (``Holes.nearby``, in
+    the output's numbering): every face near a filling face, found when the fillings were
+    tested; the fillings' faces are paired with those only, not by the broad phase, whose boxes
+    of slivers hold many faces they miss (the report is the same)."""
     blocks = array_source("array", triangles, str(triangles.dtype)).read_blocks
     # Nothing after reads the output's grouped edges: the fast path may take its boundary.
     report, layout = topology_and_layout(blocks, len(triangles), edges=False)
     if any(name in SOLIDITY for name in required) and layout is not None:
-        report = with_solidity(report, blocks, layout, fillings)
+        report = with_solidity(report, blocks, layout, fillings, nearby)
     return report
 
 

@@ -6,7 +6,8 @@
   others is a cavity);
 - ``crossing_fillings``: the fillings of holes with a face whose interior crosses or overlaps
   another face (``p3d_cli.mesh.intersections``, on the faces near the fillings only): a filled
-  hole must add no self-intersection.
+  hole must add no self-intersection; ``crossings_and_near`` gives as well the faces found near
+  each filling face, with which the output's own test pairs the fillings.
 
 The modules are imported where they are used: a repair that needs none of them does not load
 the self-intersection machinery.
@@ -78,6 +79,14 @@ PROBES = 8
 def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[np.ndarray],
                       projected: Sequence[bool] | None = None) -> np.ndarray:
     """Which fillings (each an array of face ids into ``faces``) have a face whose interior
+    crosses or overlaps another face: ``(len(fillings),)`` bool, decided exactly
+    (``crossings_and_near``, without the pairs)."""
+    return crossings_and_near(points, faces, fillings, projected)[0]
+
+
+def crossings_and_near(points: np.ndarray, faces: np.ndarray, fillings: Sequence[np.ndarray],
+                       projected: Sequence[bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Which fillings (each an array of face ids into ``faces``) have a face whose interior
     crosses or overlaps another face: ``(len(fillings),)`` bool, decided exactly.
 
     ``projected[k]`` says that filling ``k`` is a triangulation of its loop seen exactly on a
@@ -107,11 +116,19 @@ def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[
        self-intersection test (``self_intersections``). Every face that touches one of their
        faces is there, so the pairs with their faces, and the lines of contact along them, are
        those of the whole mesh.
+
+    Returns
+    -------
+    crossing : (len(fillings),) bool
+    near : (p, 2) int64
+        The pairs of step 1: each face of a filling with every face (of another filling, or
+        old) whose box meets its triangle, a superset of the faces that touch it (the
+        ``nearby`` of ``self_intersections``, for a later test of the same faces).
     """
     sizes = np.array([len(f) for f in fillings], dtype=np.int64)
     crossing = np.zeros(len(sizes), dtype=bool)
     if sizes.sum() == 0:
-        return crossing
+        return crossing, np.zeros((0, 2), dtype=np.int64)
     from p3d_cli.geometry.predicates import in_safe_range
     from p3d_cli.mesh.intersections import self_intersections, zero_area_faces
     from p3d_cli.mesh.triangle_pairs import CONTACT, CROSSING, OVERLAP, classify
@@ -148,7 +165,7 @@ def crossing_fillings(points: np.ndarray, faces: np.ndarray, fillings: Sequence[
         if len(found.pairs):
             hit = chosen[found.pairs.ravel()]
             crossing[group[hit[group[hit] >= 0]]] = True
-    return crossing
+    return crossing, np.stack([new[at], near], axis=1)
 
 
 def _probed(points: np.ndarray, faces: np.ndarray, new: np.ndarray, owner: np.ndarray, group: np.ndarray,
