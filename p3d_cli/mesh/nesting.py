@@ -60,7 +60,7 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
     else:
         # Signs and comparisons from volumes of the points scaled by a power of two (no
         # overflow for parts at 1e300, no underflow at 1e-300); what is reported is rescaled.
-        scaled, power = _shell_volumes(points, faces, labels, count)
+        scaled, power = _shell_volumes(points, faces, labels, count, closed)
         volume = np.ldexp(scaled, power)
     closed &= scaled != 0                       # a flat shell encloses nothing
     ids = np.flatnonzero(closed)
@@ -96,11 +96,13 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
                    {int(s): float(volume[s]) for s in ids})
 
 
-def _shell_volumes(points, faces, labels, count) -> tuple[np.ndarray, int]:
-    """Signed volume of every shell, as ``(v, k)`` with the volume ``v · 2**k``: signed
-    tetrahedra from the shell's own first vertex (the sums are local to each shell, so a part
-    far from the origin keeps its digits), the points scaled by a power of two to a span near
-    1 (exact, and no product over- or underflows)."""
+def _shell_volumes(points, faces, labels, count, closed) -> tuple[np.ndarray, int]:
+    """Signed volume of every closed shell (``closed``: ``(count,)`` bool; 0 for the others,
+    which nothing reads), as ``(v, k)`` with the volume ``v · 2**k``: signed tetrahedra from the
+    shell's own first vertex (the sums are local to each shell, so a part far from the origin
+    keeps its digits), the points scaled by a power of two to a span near 1 (exact, and no
+    product over- or underflows). The open shells' faces are left out of each block; a shell's
+    own terms are summed in the same order (one by one, block by block) either way."""
     span = float(np.abs(points).max()) if len(points) else 0.0
     shift = -int(np.frexp(span)[1]) if 0 < span < np.inf else 0
     points = np.ldexp(points, shift)
@@ -109,6 +111,9 @@ def _shell_volumes(points, faces, labels, count) -> tuple[np.ndarray, int]:
     volume = np.zeros(count)
     for start in range(0, len(faces), 1 << 16):
         f, lab = faces[start:start + (1 << 16)], labels[start:start + (1 << 16)]
+        wanted = closed[lab]
+        if not wanted.all():
+            f, lab = f[wanted], lab[wanted]
         o = first_vertex[lab]
         a, b, c = (points[f[:, k]] - o for k in range(3))
         det = np.einsum("ij,ij->i", a, np.cross(b, c))

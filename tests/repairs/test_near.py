@@ -4,6 +4,7 @@ the whole mesh's self-intersection test does."""
 
 from __future__ import annotations
 
+import dataclasses
 from fractions import Fraction
 
 import numpy as np
@@ -12,8 +13,10 @@ import pytest
 from helpers.kernels import needs_kernels
 from p3d_cli.mesh import kernels
 from p3d_cli.mesh.intersections import self_intersections
-from p3d_cli.repairs import near
+from p3d_cli.mesh.verdicts import CHECKS
+from p3d_cli.repairs import near, pipeline
 from p3d_cli.repairs.near import near_pairs
+from p3d_cli.repairs.pipeline import checked
 from p3d_cli.repairs.solidity import PROBES, SCREENED, crossing_fillings
 
 
@@ -237,3 +240,59 @@ def test_the_compiled_walk_grows_its_outputs(monkeypatch):
     at, face = near_pairs(points, faces, query)
     assert at.size > 32 * 4
     assert [a.tolist() for a in numpy_walk(monkeypatch, points, faces, query)] == [at.tolist(), face.tolist()]
+
+
+def same_reports(a, b) -> bool:
+    """Two output checks say the same: the topology, every self-intersecting pair with its
+    kind and the samples, and the shells' nesting."""
+    plain = dataclasses.replace(a, self_intersections=None, nesting=None)
+    return (plain == dataclasses.replace(b, self_intersections=None, nesting=None)
+            and a.self_intersections.to_dict(all_pairs=True) == b.self_intersections.to_dict(all_pairs=True)
+            and a.nesting.to_dict() == b.nesting.to_dict())
+
+
+def test_the_output_check_told_the_faces_near_the_fillings_reports_as_the_whole_check():
+    """Fans on coordinate planes through the tube (crossing it) and in the torus's hole
+    (crossing nothing): ``p3d check``'s report of the mesh is the same told which faces are near
+    the fans' (``near_pairs``), as patches or not."""
+    points, faces, fillings = holed_torus(40, 10, (0, 2, 4, 6, 8))
+    labels = np.full(len(faces), -1)
+    for k, filling in enumerate(fillings):
+        labels[filling] = k
+    new = np.concatenate(fillings)
+    at, face = near_pairs(points, faces, new, labels)
+    triangles = points[faces]
+    told = checked(triangles, tuple(CHECKS), labels, np.stack([new[at], face], axis=1))
+    assert told.self_intersections.count > 0
+    assert not np.isin(told.self_intersections.pairs, new).all(axis=1).any()   # fans meet only the tube
+    assert same_reports(told, checked(triangles, tuple(CHECKS), labels))
+    assert same_reports(told, checked(triangles, tuple(CHECKS)))
+
+
+def test_repair_carries_the_faces_near_the_kept_fillings_to_its_output_check(monkeypatch):
+    """The holes step's pairs, renumbered past the fillings it refused (those through the
+    tube, one of them before the kept ones), give the output check the report of the whole
+    test."""
+    points, faces, fillings = holed_torus(40, 10, (9, 3))
+    triangles = points[faces[:min(f[0] for f in fillings)]]
+    seen = []
+
+    def spy(out, required, labels=None, nearby=None):
+        seen.append((out, required, labels, nearby))
+        return checked(out, required, labels, nearby)
+
+    monkeypatch.setattr(pipeline, "checked", spy)
+    outcome = pipeline.repair_triangles(triangles, ("degenerate", "duplicate", "orient", "holes", "outward"))
+    filled = [p["filled"] for p in next(s.places for s in outcome.steps if s.name == "holes")]
+    assert filled == [False, True, True, False]
+    out, required, labels, nearby = seen[0]
+    assert nearby is not None and len(nearby) and (labels >= 0).any()
+    # The pairs are those found anew for the kept fillings in the output's numbering.
+    draft, group = outcome.draft, np.full(len(out), -1)
+    places = next(s.places for s in outcome.steps if s.name == "holes")
+    for k, place in enumerate(p for p in places if p["filled"]):
+        group[place["new_faces"]] = k
+    new = np.flatnonzero(group >= 0)
+    at, face = near_pairs(draft.points, draft.faces, new, group)
+    assert sorted(map(tuple, nearby.tolist())) == sorted(zip(new[at].tolist(), face.tolist()))
+    assert same_reports(outcome.after, checked(out, required))
