@@ -62,7 +62,7 @@ def junction_split(points: np.ndarray, faces: np.ndarray, loop_vertices: np.ndar
     s = len(loop_vertices)
     if s < 3 or not collinear(np.asarray(points)[loop_vertices]):
         return None
-    coords = np.asarray(points, dtype=np.float64)[loop_vertices]
+    coords = np.asarray(np.asarray(points)[loop_vertices], dtype=np.float64)
     axis = int(np.argmax(coords.max(axis=0) - coords.min(axis=0)))
     position = coords[:, axis]
     if np.unique(position).size != s:
