@@ -17,7 +17,7 @@ import numpy as np
 
 from p3d_cli.repairs import solidity
 from p3d_cli.repairs.draft import Draft, Grouping
-from p3d_cli.repairs.fill import NO_AREA, Hole, fill_hole
+from p3d_cli.repairs.fill import NO_AREA, Hole, fill_hole, fill_triangles
 from p3d_cli.repairs.junctions import junction_split
 from p3d_cli.repairs.loops import boundary_loops
 from p3d_cli.repairs.report import SHOWN, StepReport
@@ -89,14 +89,19 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
     loops.sort(key=lambda loop: int(face[loop].min()))     # the report lists holes in file order
     has_edge = _EdgeSet(grouping.faces, v, len(draft.points))
     found: list[tuple[Hole, np.ndarray]] = []
-    for loop in loops:
+    # A loop of three sides fills without asking for the edges (its one triangle's are the
+    # loop's): those are filled together, before the others (the same holes).
+    three = [i for i, loop in enumerate(loops) if loop.size == 3 and np.unique(face[loop]).size > 1]
+    early = dict(zip(three, fill_triangles(draft.points, np.array([v[loops[i]] for i in three], dtype=np.int64),
+                                           policy=policy, flatness=flatness, max_edges=max_edges)))
+    for i, loop in enumerate(loops):
         if loop.size == 3 and np.unique(face[loop]).size == 1:
             # All three sides are one face's: the "hole" is the back of a lone triangle, and
             # filling it would give that face's reverse, enclosing nothing.
             hole = lone_face(draft, v[loop], int(face[loop[0]]))
         else:
-            hole = fill_hole(draft.points, v[loop], policy=policy, flatness=flatness, max_edges=max_edges,
-                             has_edge=has_edge)
+            hole = early[i] if i in early else fill_hole(draft.points, v[loop], policy=policy, flatness=flatness,
+                                                         max_edges=max_edges, has_edge=has_edge)
             if not hole.filled and hole.reason == NO_AREA:
                 hole = _split_junction(draft, hole, face[loop], has_edge)
         if hole.filled:

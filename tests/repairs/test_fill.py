@@ -130,3 +130,48 @@ def test_ear_clipping_is_the_same_on_every_road(looped, monkeypatch):
                 assert compiled.tolist() == plain.tolist()
                 tried += 1
     assert tried > 100
+
+
+def _same_hole(a: fill.Hole, b: fill.Hole) -> None:
+    assert (a.vertices == b.vertices).all() and a.edges == b.edges and a.reason == b.reason
+    for x, y in zip(a.centre + (a.size, a.flatness), b.centre + (b.size, b.flatness)):
+        assert x == y or (x != x and y != y), (a, b)          # bit for bit, nan as nan
+    assert (a.triangles is None) == (b.triangles is None)
+    if a.triangles is not None:
+        assert a.triangles.dtype == b.triangles.dtype and (a.triangles == b.triangles).all()
+    assert a.projected == b.projected and a.replaced is None and b.replaced is None
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("policy,flatness,max_edges", [("flat", fill.FLATNESS, fill.MAX_EDGES), ("flat", 0.0, 1000),
+                                                       ("flat", 1e-3, 2), ("any", 1e-3, 2)])
+def test_three_corner_loops_together_are_each_alone(dtype, policy, flatness, max_edges):
+    """``fill_triangles`` gives every loop the ``Hole`` that ``fill_hole`` gives it alone: on
+    random triangles far from the origin and near it, slivers, collinear corners, repeated
+    corners and zero-area ones; with a zero flatness limit (rounding makes some loops "not
+    flat") and a size limit below three edges."""
+    rng = np.random.default_rng(7)
+    points = [rng.normal(size=(300, 3)), rng.normal(size=(300, 3)) * 1e-3 + 1e4,
+              np.outer(rng.normal(size=60), [1.0, 2.0, 3.0]),                  # all on one line
+              rng.integers(-2, 3, size=(60, 3)).astype(float)]                # coarse grid: repeats, lines
+    sliver = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1e-12, 0.0]])
+    p = np.concatenate(points + [sliver]).astype(dtype)
+    m = len(p)
+    loops = np.concatenate([rng.integers(0, m, size=(400, 3)),                # repeated ids too
+                            np.arange(600).reshape(-1, 3),
+                            rng.integers(600, 660, size=(40, 3)), rng.integers(660, 720, size=(80, 3)),
+                            [[m - 3, m - 2, m - 1], [5, 5, 5]]])
+    together = fill.fill_triangles(p, loops, policy=policy, flatness=flatness, max_edges=max_edges)
+    alone = [fill.fill_hole(p, loop, policy=policy, flatness=flatness, max_edges=max_edges) for loop in loops]
+    assert len(together) == len(loops)
+    for a, b in zip(together, alone):
+        _same_hole(a, b)
+    reasons = {h.reason for h in alone}
+    assert fill.NO_AREA in reasons                                  # the cases were met
+    if max_edges == 2 and policy == "flat":
+        assert any(r and r.startswith("larger than the limit") for r in reasons)
+    else:
+        assert None in reasons
+    if flatness == 0.0:
+        assert any(r and r.startswith("not flat") for r in reasons)
+    assert fill.fill_triangles(p, np.zeros((0, 3), dtype=np.int64)) == []
