@@ -91,11 +91,16 @@ def holes_step(draft: Draft, grouping: Grouping, *, policy: str, flatness: float
     found: list[tuple[Hole, np.ndarray]] = []
     # A loop of three sides fills without asking for the edges (its one triangle's are the
     # loop's): those are filled together, before the others (the same holes).
-    three = [i for i, loop in enumerate(loops) if loop.size == 3 and np.unique(face[loop]).size > 1]
-    early = dict(zip(three, fill_triangles(draft.points, np.array([v[loops[i]] for i in three], dtype=np.int64),
-                                           policy=policy, flatness=flatness, max_edges=max_edges)))
+    three = [i for i, loop in enumerate(loops) if loop.size == 3]
+    sides = np.array([loops[i] for i in three], dtype=np.int64).reshape(-1, 3)
+    owners = face[sides]
+    alike = (owners[:, 0] == owners[:, 1]) & (owners[:, 1] == owners[:, 2])
+    lone = set(np.array(three, dtype=np.int64)[alike].tolist())
+    filled = [i for i in three if i not in lone]
+    early = dict(zip(filled, fill_triangles(draft.points, v[np.array([loops[i] for i in filled], dtype=np.int64)],
+                                            policy=policy, flatness=flatness, max_edges=max_edges)))
     for i, loop in enumerate(loops):
-        if loop.size == 3 and np.unique(face[loop]).size == 1:
+        if i in lone:
             # All three sides are one face's: the "hole" is the back of a lone triangle, and
             # filling it would give that face's reverse, enclosing nothing.
             hole = lone_face(draft, v[loop], int(face[loop[0]]))
