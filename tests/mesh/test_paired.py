@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from helpers.kernels import needs_kernels, numpy_road
 from helpers.meshes import cube_triangles
+from helpers.topology import fast_path_refused, real_surface_meshes
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
 from p3d_cli.mesh.topology import _array_blocks, topology
@@ -39,12 +40,8 @@ def torus(u: int, v: int, shift=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 def general(t: np.ndarray):
     """The general path's report (the fast path refused)."""
-    saved = topo.paired_topology
-    topo.paired_topology = lambda *args, **kwargs: None
-    try:
+    with fast_path_refused():
         return topology(t)
-    finally:
-        topo.paired_topology = saved
 
 
 def fast(t: np.ndarray, hasher=None):
@@ -218,22 +215,11 @@ def test_a_shared_top_hash_of_distinct_points_is_not_a_vertex(monkeypatch):
 
 
 def test_real_meshes_fast_and_general_agree(real_meshes):
-    from p3d_cli.io import load_mesh
-
     taken = 0
-    for path in sorted(real_meshes.iterdir()):
-        if path.suffix.lower() not in (".stl", ".ply", ".obj", ".off"):
-            continue
-        mesh = load_mesh(str(path))
-        if mesh.face_count > 200_000:
-            continue
+    for mesh in real_surface_meshes(real_meshes):
         found = paired.paired_topology(mesh.read_blocks, mesh.face_count)
-        saved = topo.paired_topology
-        topo.paired_topology = lambda *args, **kwargs: None
-        try:
+        with fast_path_refused():
             expected = topo.topology_of_blocks(mesh.read_blocks, mesh.face_count)
-        finally:
-            topo.paired_topology = saved
         if found is None:
             assert not (expected.closed and expected.faces_with_repeated_vertex == 0)
             continue

@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 from helpers.kernels import needs_kernels, numpy_road
 from helpers.meshes import cube_triangles
+from helpers.topology import fast_path_refused, real_surface_meshes
 import p3d_cli.mesh.paired as paired
 import p3d_cli.mesh.topology as topo
 from p3d_cli.mesh.topology import _array_blocks
@@ -29,12 +30,8 @@ from test_topology_oracle import counts, oracle
 
 def general(t: np.ndarray):
     """The general path's report and layout (the fast path refused)."""
-    saved = topo.paired_topology
-    topo.paired_topology = lambda *args, **kwargs: None
-    try:
+    with fast_path_refused():
         return topo.topology_and_layout(_array_blocks(t), len(t))
-    finally:
-        topo.paired_topology = saved
 
 
 def fast(t: np.ndarray, hasher=None):
@@ -209,25 +206,14 @@ def test_fan_chains_number_chains_and_cycles_as_the_union_find(seed, size, dtype
 
 
 def test_real_open_meshes_fast_and_general_agree(real_meshes):
-    from p3d_cli.io import load_mesh
-
     taken = 0
-    for path in sorted(real_meshes.iterdir()):
-        if path.suffix.lower() not in (".stl", ".ply", ".obj", ".off"):
-            continue
-        mesh = load_mesh(str(path))
-        if mesh.face_count > 200_000:
-            continue
+    for mesh in real_surface_meshes(real_meshes):
         found = paired.paired_topology(mesh.read_blocks, mesh.face_count, boundary=True)
         if found is None or found.boundary.size == 0:
             continue
         taken += 1
         got = topo._open_report(mesh.read_blocks, mesh.face_count, found)
-        saved = topo.paired_topology
-        topo.paired_topology = lambda *args, **kwargs: None
-        try:
+        with fast_path_refused():
             expected = topo.topology_and_layout(mesh.read_blocks, mesh.face_count)
-        finally:
-            topo.paired_topology = saved
         same(got, expected)
     assert taken >= 1
