@@ -166,6 +166,13 @@ def crowded_edges(faces: np.ndarray) -> np.ndarray:
     a = faces.astype(np.int64)
     lo = np.minimum(a, np.roll(a, -1, axis=1)).ravel()
     hi = np.maximum(a, np.roll(a, -1, axis=1)).ravel()
+    m = int(a.max()) + 1
+    if int(a.min()) >= 0 and m <= 1 << 31:
+        # One integer per edge, ordered as the (lo, hi) rows: a sort of numbers instead of
+        # numpy's unique of rows (ten times slower), with the same edges in the same order.
+        key, counts = np.unique(lo * m + hi, return_counts=True)
+        key = key[counts > 2]
+        return np.stack([key // m, key % m], axis=1)
     keys = np.unique(np.stack([lo, hi], axis=1), axis=0, return_counts=True)
     return keys[0][keys[1] > 2]
 

@@ -312,3 +312,20 @@ def test_parts_far_apart_huge_or_tiny(far):
             warnings.simplefilter("error")             # nothing of the test over- or underflows
             result = self_intersections(points, faces, fans=fans)
         assert result.count == 6 and result.by_kind["crossing"] == 6
+
+
+@pytest.mark.parametrize("offset", [0, 1 << 33])          # vertex ids past 2**31 take the rows' road
+def test_crowded_edges_are_the_counted_edges_in_order(offset):
+    """``crowded_edges``: the edges of more than two faces, as sorted ``(lo, hi)`` rows in
+    ascending order, counted here one edge at a time."""
+    from collections import Counter
+
+    rng = np.random.default_rng(3)
+    for n, m in [(1, 3), (40, 6), (3000, 60), (5000, 4000)]:
+        faces = rng.integers(0, m, size=(n, 3)).astype(np.int64) + offset
+        counted = Counter(tuple(sorted((int(f[k]), int(f[(k + 1) % 3])))) for f in faces for k in range(3))
+        want = sorted(e for e, c in counted.items() if c > 2)
+        got = crowded_edges(faces.astype(np.int32) if offset == 0 else faces)
+        assert got.dtype == np.int64 and got.shape == (len(want), 2)
+        assert [tuple(e) for e in got.tolist()] == want
+    assert crowded_edges(np.zeros((0, 3), dtype=np.int64)).shape == (0, 2)
