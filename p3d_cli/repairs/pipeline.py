@@ -101,9 +101,8 @@ def repair_triangles(triangles: np.ndarray, steps: tuple[str, ...], *, where: st
         return _turned_out(triangles, before, steps, required)
     # check's exact vertex ids, shells, zero-area and duplicate faces and edges: the steps
     # start from what the topology found, and group again only faces it did not see.
-    points = np.empty((layout.vertex_count, 3), dtype=triangles.dtype)
-    points[layout.ids] = triangles.reshape(-1, 3)
-    draft = Draft.of(triangles, layout.faces, points)
+    ids, points = _vertices(layout, triangles)
+    draft = Draft.of(triangles, ids, points)
     reports = {name: StepReport(name, ran=False) for name in STEPS}
     if "weld" in steps:
         draft, reports["weld"] = weld_step(draft, float(weld or 0))
@@ -205,6 +204,23 @@ def _turned_out(triangles: np.ndarray, before: TopologyReport, steps: tuple[str,
                                          "cavity": False},))
     return Outcome(None, out, before, after, tuple(reports[name] for name in STEPS),
                    unfixed(after, steps, required, (), ()), True)
+
+
+def _vertices(layout: Layout, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The topology's vertex ids ``(3n,)`` numbered densely, and the coordinates of each.
+
+    The fast path's ids are not all used (a vertex of several fans takes its first fan's id):
+    the steps take every row of ``points`` for a vertex (the weld step merges them), so the
+    unused ids go; the order of the others is kept."""
+    ids = layout.ids
+    used = np.zeros(layout.vertex_count, dtype=bool)
+    used[ids] = True
+    if not used.all():
+        dense = np.cumsum(used) - 1
+        ids = dense[ids]
+    points = np.empty((int(ids.max()) + 1, 3), dtype=triangles.dtype)
+    points[ids] = triangles.reshape(-1, 3)
+    return ids, points
 
 
 def _as_patches(layout: Layout) -> Patches:

@@ -110,6 +110,18 @@ def test_a_vertex_split_by_1e9_is_welded_only_when_asked(cube):
     untouched_rows_equal(mesh.triangles[1:], cube[1:], range(11))
 
 
+def test_the_weld_step_merges_only_points_of_the_mesh(cube):
+    # Two cubes touching at one corner: a non-manifold vertex, whose two fans the topology's
+    # fast path numbers apart (one id left unused). The weld must find nothing to merge, not
+    # an unused row of the vertex table.
+    pair = np.concatenate([cube, cube - 1])
+    _, report = repair(pair, weld=1e-9)
+    assert report.failed_before == ("manifold",) and not report.fixed
+    weld = report.step("weld")
+    assert weld.counts["vertices_merged"] == 0 and weld.counts["largest_distance"] == 0.0
+    assert weld.places == () and report.after.faces == 24
+
+
 def test_a_hollow_part_stays_hollow(cube):
     inner = (cube[:, [0, 2, 1]] - 0.5) * 0.5 + 0.5       # a cavity, wound inward
     hollow = np.concatenate([cube, inner])
