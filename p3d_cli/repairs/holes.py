@@ -68,9 +68,11 @@ class Holes:
 
 
 def boundary_sides(grouping: Grouping, draft: Draft) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Faces, start and end vertices of every boundary side, in the faces' current winding."""
+    """Faces, start and end vertices of every boundary side, in the faces' current winding, in
+    file order (side ``3 f + k`` of face ``f``): the loops and their fillings are then the same
+    whatever numbering the vertex ids and edge groups had."""
     edges, faces = grouping.edges, grouping.faces
-    side = edges.side[edges.starts[edges.boundary]].astype(np.int64)
+    side = np.sort(edges.side[edges.starts[edges.boundary]].astype(np.int64))
     face = side // 3
     slot = side % 3
     u, v = faces[face, slot], faces[face, (slot + 1) % 3]

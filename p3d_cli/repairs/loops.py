@@ -68,13 +68,15 @@ def _single_ways(following: np.ndarray, b: int) -> tuple[list[np.ndarray], np.nd
 
 
 def _walks(starts, ends, order) -> tuple[list[np.ndarray], np.ndarray]:
-    """Closed walks over the sides (each used once), cut into simple loops."""
+    """Closed walks over the sides (each used once), cut into simple loops: each walk starts
+    at the first side not yet used, in the order given, and leaves a vertex by its first side
+    not yet used."""
     unused: dict[int, list[int]] = {}
     for s in order.tolist():
         unused.setdefault(int(starts[s]), []).append(s)
     loops: list[np.ndarray] = []
     stray: list[int] = []
-    for s0 in order.tolist():
+    for s0 in range(len(starts)):
         if s0 not in unused.get(int(starts[s0]), ()):
             continue
         unused[int(starts[s0])].remove(s0)
