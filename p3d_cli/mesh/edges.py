@@ -46,6 +46,18 @@ class Edges:
         return self.side // 3
 
 
+def lone_sides(sides: np.ndarray) -> Edges:
+    """The boundary sides ``sides`` (ascending side indices ``3 f + k``) as their own groups,
+    one side each: the problem groups of a mesh whose every other edge is used once each way
+    (as ``p3d_cli.mesh.paired``'s path finds it), which are all its readers look at. The edges
+    used twice are not listed (``count`` is the boundary's), and ``forward`` is None."""
+    b = int(sides.size)
+    index = np.int32 if b < 2**31 else np.int64
+    none = np.zeros(0, dtype=np.int64)
+    return Edges(np.asarray(sides, dtype=np.int64), None, np.arange(b, dtype=index), np.ones(b, dtype=index),
+                 boundary=np.arange(b, dtype=np.int64), nonmanifold=none, misoriented=none)
+
+
 #: Offsets from corner ``3 f + k`` to the next and previous corner of face ``f``, by ``k``.
 _NEXT = np.array([1, 1, -2], dtype=np.int64)
 _PREVIOUS = np.array([2, -1, -1], dtype=np.int64)

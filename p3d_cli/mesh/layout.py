@@ -30,10 +30,11 @@ class Layout:
         Shells with a boundary, non-manifold or misoriented edge (the others are closed).
     edges : Edges or None
         The sides grouped by edge (``p3d_cli.mesh.edges``; ``forward`` not kept: a side's
-        direction is ``ids[side] < ids[next side]``), or None when ``p3d_cli.mesh.paired``'s
-        path found the mesh, which groups no edges: every edge used once each way, or (when
-        the caller asked for no edges: ``topology_and_layout(edges=False)``) once each way or
-        once. For ``p3d repair``, which asks for them.
+        direction is ``ids[side] < ids[next side]``). When ``p3d_cli.mesh.paired``'s path found
+        the mesh, which groups no edges: None when every edge is used once each way, and when
+        some once (boundary edges) the boundary sides alone (``edges.lone_sides``), or None if
+        the caller asked for no edges (``topology_and_layout(edges=False)``). For ``p3d
+        repair``, which asks for them and reads only the problem groups.
     duplicates : (k, 2) int64 or None
         ``(first face, later duplicate)`` rows (``faces.duplicate_faces``), when ``edges`` is.
     """

@@ -29,8 +29,8 @@ keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
 5. **Shells** by union-find over the fans (each face joins its three: a fan's faces are
    joined across its edges), which numbers them by first face with no sort.
 
-**Boundary edges** (``boundary=True``: ``p3d check``, not ``p3d repair``, which needs the edges
-grouped). A mesh with holes does not balance, so pass 1 does not stop there. After the sort a
+**Boundary edges** (``boundary=True``: ``p3d check``, and ``p3d repair``, which reads the
+boundary sides found: ``edges.lone_sides``). A mesh with holes does not balance, so pass 1 does not stop there. After the sort a
 key group of one side is a *boundary side* (no other side has its exact edge: equal edges have
 equal keys), ``pi = -1`` there, and the fans round the boundary's vertices are open chains
 instead of cycles (``fan_chains`` walks each from its start; numpy joins ``c`` and ``pi[c]`` by

@@ -34,8 +34,8 @@ ends coincide bounds nothing and is skipped, as in ``closed``).
 
 Cost: a clean mesh (every edge used once each way) takes ``p3d_cli.mesh.paired``'s fast
 path: one ``numpy.sort`` of ``3n`` packed 64-bit side keys, fans by pointer doubling, one
-exact confirmation pass; so does a mesh whose other edges are all boundary edges, unless the
-caller needs its edges grouped (``topology_and_layout(edges=True)``, ``p3d repair``). Any other
+exact confirmation pass; so does a mesh whose other edges are all boundary edges (its layout
+then lists the boundary sides alone, for ``p3d repair``: ``edges.lone_sides``). Any other
 mesh takes the general path: one ``numpy.sort`` of ``3n``
 packed 64-bit corner keys; everything else is a linear pass, a stable sort of already nearly
 sorted keys, or a union-find of a few rounds. Both give the same report (the tests compare).
@@ -49,7 +49,7 @@ import numpy as np
 
 from p3d_cli.mesh.boundary import SIDE_BLOCK, boundary_volume, sides_volume, unbalanced_of
 from p3d_cli.mesh.closed import corner_hashes
-from p3d_cli.mesh.edges import Edges, group_edges, next_corner
+from p3d_cli.mesh.edges import Edges, group_edges, lone_sides, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
 from p3d_cli.mesh.fans import nonmanifold_vertices, vertex_sample_faces
 from p3d_cli.mesh.layout import Layout
@@ -138,10 +138,11 @@ def topology_and_layout(blocks, n: int, where: str | None = None,
     for the passes that follow (self-intersections, the shells' nesting, ``p3d repair``).
 
     ``edges``: whether the layout of a mesh with problem edges must hold them grouped
-    (``Layout.edges``, which ``p3d repair`` reads). Without, a mesh whose only problem edges
-    are boundary edges takes the fast path too, and its layout's ``edges`` is None."""
+    (``Layout.edges``, which ``p3d repair`` reads): the general path's groups, or the boundary
+    sides alone when the fast path took a mesh whose only problem edges are boundary edges
+    (``edges.lone_sides``). Without, that layout's ``edges`` is None."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
-        report, layout = _topology_of_blocks(blocks, n, where, not edges)
+        report, layout = _topology_of_blocks(blocks, n, where, edges)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
         from p3d_cli.errors import RangeError
 
@@ -151,12 +152,12 @@ def topology_and_layout(blocks, n: int, where: str | None = None,
 
 
 def _topology_of_blocks(blocks, n: int, where: str | None,
-                        boundary: bool = False) -> tuple[TopologyReport, Layout | None]:
+                        edges: bool = False) -> tuple[TopologyReport, Layout | None]:
     if n == 0:
         return _empty_report(), None
-    fast = paired_topology(blocks, n, where, boundary=boundary)
+    fast = paired_topology(blocks, n, where, boundary=True)
     if fast is not None and fast.boundary.size:
-        return _open_report(blocks, n, fast)
+        return _open_report(blocks, n, fast, edges)
     if fast is not None:
         layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area,
                         np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
@@ -264,10 +265,10 @@ def _paired_report(blocks, n: int, fast: Paired) -> TopologyReport:
     )
 
 
-def _open_report(blocks, n: int, fast: Paired) -> tuple[TopologyReport, Layout]:
+def _open_report(blocks, n: int, fast: Paired, edges: bool = False) -> tuple[TopologyReport, Layout]:
     """The report and layout of a soup whose every edge is used once each way or once (a
     boundary edge: ``fast.boundary``), no repeated vertex: the general path's, from the fast
-    path's findings (the layout without grouped edges)."""
+    path's findings (the layout's ``edges``: the boundary sides alone when asked, else None)."""
     ids = fast.ids
     faces = ids.reshape(n, 3)
     found = fast.shells
@@ -281,7 +282,8 @@ def _open_report(blocks, n: int, fast: Paired) -> tuple[TopologyReport, Layout]:
     points = _sample_points(blocks, ids, vertex_samples)
     zero = fast.zero_area
     open_shells = np.unique(found.labels[lone // 3]).astype(np.int64)
-    layout = Layout(ids, int(ids.max()) + 1, found, zero, np.zeros((0, 2), dtype=np.int64), open_shells)
+    layout = Layout(ids, int(ids.max()) + 1, found, zero, np.zeros((0, 2), dtype=np.int64), open_shells,
+                    lone_sides(lone) if edges else None)
     report = TopologyReport(
         faces=n, vertices=fast.vertices, edges=(3 * n + lone.size) // 2, boundary_edges=int(lone.size),
         nonmanifold_edges=0, misoriented_edges=0, nonmanifold_vertices=int(fast.nonmanifold.size),
