@@ -30,15 +30,15 @@ keys (as ``p3d props`` sorts, ``p3d_cli.mesh.closed``) gives everything at once:
    joined across its edges), which numbers them by first face with no sort.
 
 **Boundary edges** (``boundary=True``: ``p3d check``, and ``p3d repair``, which reads the
-boundary sides found: ``edges.lone_sides``). A mesh with holes does not balance, so pass 1 does not stop there. After the sort a
-key group of one side is a *boundary side* (no other side has its exact edge: equal edges have
-equal keys), ``pi = -1`` there, and the fans round the boundary's vertices are open chains
-instead of cycles (``fan_chains`` walks each from its start; numpy joins ``c`` and ``pi[c]`` by
-union-find). Groups that are neither one side nor one each way (colliding keys, or a misoriented
-or non-manifold edge) are sorted out by their sides' exact end points; any exact edge used
-otherwise than once each way or once sends the mesh to the general path, and pass 2 proves
-every twin as before. A vertex with several chains or cycles (two holes meeting at a point)
-is a non-manifold vertex, as the general path counts it.
+boundary sides found: ``edges.lone_sides``). A mesh with holes does not balance, so pass 1 does
+not stop there. After the sort a key group of one side is a *boundary side* (no other side has
+its exact edge: equal edges have equal keys), ``pi = -1`` there, and the fans round the
+boundary's vertices are open chains instead of cycles (``fan_chains`` walks each from its
+start; numpy joins ``c`` and ``pi[c]`` by union-find). Groups that are neither one side nor one
+each way (colliding keys, or a misoriented or non-manifold edge) are sorted out by their sides'
+exact end points; any exact edge used otherwise than once each way or once sends the mesh to
+the general path, and pass 2 proves every twin as before. A vertex with several chains or
+cycles (two holes meeting at a point) is a non-manifold vertex, as the general path counts it.
 
 The results are those of the general path (``topology``): the tests compare both.
 """

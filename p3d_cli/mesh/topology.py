@@ -142,7 +142,7 @@ def topology_and_layout(blocks, n: int, where: str | None = None,
     sides alone when the fast path took a mesh whose only problem edges are boundary edges
     (``edges.lone_sides``). Without, that layout's ``edges`` is None."""
     with np.errstate(over="ignore", invalid="ignore"):   # refused below, in one error
-        report, layout = _topology_of_blocks(blocks, n, where, edges)
+        report, layout = _topology_of_blocks(blocks, n, where, grouped=edges)
     if not all(math.isfinite(v) for v in [report.volume] + [s.volume for s in report.shell_list]):
         from p3d_cli.errors import RangeError
 
@@ -152,12 +152,12 @@ def topology_and_layout(blocks, n: int, where: str | None = None,
 
 
 def _topology_of_blocks(blocks, n: int, where: str | None,
-                        edges: bool = False) -> tuple[TopologyReport, Layout | None]:
+                        grouped: bool = False) -> tuple[TopologyReport, Layout | None]:
     if n == 0:
         return _empty_report(), None
     fast = paired_topology(blocks, n, where, boundary=True)
     if fast is not None and fast.boundary.size:
-        return _open_report(blocks, n, fast, edges)
+        return _open_report(blocks, n, fast, grouped)
     if fast is not None:
         layout = Layout(fast.ids, int(fast.ids.max()) + 1, fast.shells, fast.zero_area,
                         np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
