@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from helpers.kernels import numpy_road
 from helpers.tori import grid_torus
 from helpers.topology import fast_path_refused, real_surface_meshes
 import p3d_cli.mesh.paired as paired
@@ -68,6 +69,14 @@ def test_holed_tori_repair_alike_both_ways(every, seed, dtype):
     fast, general = both_ways(t)
     same_repair(fast, general)
     assert fast[1].step("holes").counts["holes_filled"] > 0
+
+
+def test_the_numpy_road_repairs_alike_both_ways():
+    # Without the compiled kernels the fast path's fans are numpy's union-find.
+    t = holed_torus(20, 16, 5, seed=4)
+    assert numpy_road(took_fast_path, t)
+    same_repair(*numpy_road(both_ways, t))
+    same_repair(numpy_road(repair, t), repair(t))
 
 
 def test_holes_meeting_at_a_corner_repair_alike_both_ways():
