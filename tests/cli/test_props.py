@@ -167,7 +167,7 @@ def test_stdin_and_module_entry_point(cube):
 
 
 def test_every_command_has_help_with_example():
-    for name, command in cli.commands.items():
+    for name in cli.commands:
         result = run(name, "--help")
         assert result.exit_code == 0, name
         assert "Example" in result.stdout, f"p3d {name} --help shows no example"

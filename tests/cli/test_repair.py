@@ -7,7 +7,6 @@ import io
 import json
 
 import numpy as np
-import pytest
 
 import p3d_cli as p3d
 from helpers.cli import run

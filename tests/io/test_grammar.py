@@ -6,7 +6,6 @@ suffixes, missing and extra fields, CR line ends, continuation lines."""
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 import pytest

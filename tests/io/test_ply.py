@@ -34,7 +34,7 @@ def ply_bytes(fmt: str, elements, header_counts=None, comment=True) -> bytes:
     lines.append("end_header")
     out = ("\n".join(lines) + "\n").encode()
     order = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
-    for name, props, records in elements:
+    for _name, props, records in elements:
         for record in records:
             if order is None:
                 words = []

@@ -112,6 +112,7 @@ def test_assembly_equals_the_parallel_axis_sum_of_exact_parts(files):
     assert result.units["mass"] == "kg" and not result.warnings
     for part, (rho, (volume, c, _)) in zip(result.parts, oracle_parts()):
         assert part.properties.volume == pytest.approx(volume, rel=1e-13) and volume > 0
+        assert part.properties.mass == pytest.approx(rho * volume, rel=1e-12)
         np.testing.assert_allclose(part.properties.center_of_mass, c, atol=1e-15)
     # Principal frame as quaternion reproduces the inertia.
     frame = p3d.quaternion_matrix(p.principal_quaternion) if hasattr(p3d, "quaternion_matrix") else None

@@ -122,7 +122,7 @@ def test_ear_clipping_is_the_same_on_every_road(looped, monkeypatch):
         if not fill._simple(corners, True):       # the oracle's answer (above), faster
             continue
         k = len(corners)
-        for has_edge in (lambda a, b: False, lambda a, b: {a, b} == {1, k - 1}):
+        for has_edge in (lambda a, b: False, lambda a, b, k=k: {a, b} == {1, k - 1}):
             compiled = fill._ear_clipping(corners, np.arange(k), True, has_edge)
             plain = numpy_road(fill._ear_clipping, corners, np.arange(k), True, has_edge)
             assert (compiled is None) == (plain is None)

@@ -129,7 +129,7 @@ def test_fillings_in_a_soup_are_refused_as_the_whole_test_does(seed):
     rng = np.random.default_rng(seed)
     points, faces = soup(seed, 200)
     start, fillings, extra = len(points), [], []
-    for k in range(6):
+    for _ in range(6):
         size = int(rng.choice([1, 2, SCREENED, 40]))
         centre = rng.random(3) * 10
         angle = np.linspace(0, 2 * np.pi, size + 2, endpoint=False)
@@ -189,7 +189,7 @@ def test_fillings_on_planes_in_a_soup_are_refused_as_the_whole_test_does(seed):
     rng = np.random.default_rng(seed + 10)
     points, faces = soup(seed + 10, 200)
     fillings, extra = [], []
-    for k in range(6):
+    for _ in range(6):
         size = int(rng.choice([1, SCREENED, 40]))
         angle = np.linspace(0, 2 * np.pi, size + 2, endpoint=False)
         centre = points[:200].mean(axis=0) + (rng.random(3) - 0.5) * 8       # in and beside the soup

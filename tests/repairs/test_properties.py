@@ -4,7 +4,6 @@ calls fixed passes ``p3d check``, and every face it did not touch is the input's
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 

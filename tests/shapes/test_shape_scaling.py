@@ -5,7 +5,6 @@ translations; the reference integrates the transformed triangles with triangle_m
 """
 
 import numpy as np
-import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
