@@ -77,10 +77,9 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
     lo, hi = _shell_boxes(points, faces, labels, count) if ids.size > 1 else (None, None)
     if ids.size > 1:
         _nest(points, faces, labels, ids, scaled, relations, parent, lo, hi)
-    winding = {}
-    for s in sorted(ids.tolist(), key=lambda s: -abs(scaled[s])):   # outer shells first
-        outer = parent[s]
-        winding[s] = int(np.sign(scaled[s])) + (winding[outer] if outer is not None else 0)
+        _cut_cycles(parent, scaled)
+    counts = _windings(parent, scaled)
+    winding = {s: counts[s] for s in sorted(ids.tolist(), key=lambda s: -abs(scaled[s]))}   # outer first
     twice, negative = _miscounted(volume, parent, winding)
     bound = 0.0
     for (a, b), kind in relations.items():
@@ -174,6 +173,43 @@ def _nest(points, faces, labels, ids, volume, relations, parent, lo, hi) -> None
                     if parent[inner] is None or abs(volume[outer]) < abs(volume[parent[inner]]):
                         parent[inner] = outer
                     break
+
+
+def _cut_cycles(parent: dict, volume: np.ndarray) -> None:
+    """Make ``parent`` a forest. Shells that cross may each hold a point of the other (the
+    crossing pairs, when known, keep such pairs from being tested), so the links can close a
+    cycle: in each, the shell of the largest volume keeps no parent (the smallest id on a tie)."""
+    done: set = set()
+    for s in parent:
+        path: list = []
+        on_path: set = set()
+        t = s
+        while t is not None and t not in done and t not in on_path:
+            path.append(t)
+            on_path.add(t)
+            t = parent[t]
+        if t is not None and t in on_path:
+            cycle = path[path.index(t):]
+            parent[max(cycle, key=lambda c: (abs(float(volume[c])), -c))] = None
+        done.update(path)
+
+
+def _windings(parent: dict, volume: np.ndarray) -> dict:
+    """The winding number of the region just inside each shell: its own volume's sign plus its
+    parent's winding. Walked up the parents (a shell around a crossing one can be the smaller:
+    the volumes do not order them)."""
+    winding: dict = {}
+    for s in parent:
+        chain = []
+        t = s
+        while t is not None and t not in winding:
+            chain.append(t)
+            t = parent[t]
+        base = winding[t] if t is not None else 0
+        for c in reversed(chain):
+            base += int(np.sign(volume[c]))
+            winding[c] = base
+    return winding
 
 
 def _inside(points, faces, order, starts, inner, outer_faces, safe) -> int | None:

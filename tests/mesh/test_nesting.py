@@ -118,3 +118,47 @@ def test_a_declared_unit_scales_the_crossings_points_and_the_nesting_volumes():
     assert metres.nesting.crossing_bound == report.nesting.crossing_bound * 1e-9
     assert [s.volume for s in metres.nesting.shells] == [s.volume * 1e-9 for s in report.nesting.shells]
     assert metres.nesting.relations == report.nesting.relations
+
+
+def big_cube_in_small_tetrahedron():
+    """A cube of volume 729 whose first corner lies inside a tetrahedron of volume 1000/6 that
+    crosses it, and whose box holds the cube's: the tetrahedron is the cube's only candidate
+    outer shell, though the smaller."""
+    tet = np.array([[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 10]], dtype=float)
+    return np.concatenate([box([0.5, 0.5, 0.5], [9.5, 9.5, 9.5]), tet[np.array([(0, 2, 1), (0, 1, 3), (0, 3, 2),
+                                                                                (1, 2, 3)])]])
+
+
+def test_a_parent_smaller_than_its_child_is_wound_first():
+    """Without the crossing pairs (p3d repair's question before it had them) the cube nests in
+    the smaller tetrahedron: the windings follow the parents, not the volumes (it raised a
+    KeyError), and the relation is the one found."""
+    from p3d_cli.mesh.layout import Layout
+    from p3d_cli.mesh.nesting import shell_nesting
+    from p3d_cli.mesh.shells import Components
+
+    t = big_cube_in_small_tetrahedron()
+    points, inverse = np.unique(t.reshape(-1, 3), axis=0, return_inverse=True)
+    faces = inverse.reshape(-1, 3)
+    labels = np.repeat([0, 1], [12, 4])
+    layout = Layout(faces.ravel(), len(points), Components(labels, 2), np.zeros(0, dtype=np.int64),
+                    np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64))
+    found = shell_nesting(points, faces, layout, np.zeros((0, 2), dtype=np.int64))
+    assert found.parent == {0: 1, 1: None}
+    assert {(s.shell, s.inside, s.winding) for s in found.shells} == {(0, 1, 2), (1, None, 1)}
+    # With the crossing pairs, as p3d check has them, neither is inside the other.
+    result = nesting(t)
+    assert result.relations == ((0, 1, "crossing"),) and all(s.inside is None for s in result.shells)
+
+
+def test_parent_links_that_close_a_cycle_are_cut_at_the_largest_shell():
+    from p3d_cli.mesh.nesting import _cut_cycles, _windings
+
+    volume = np.array([5.0, 3.0, 4.0, 1.0, -2.0])
+    parent = {0: 1, 1: 2, 2: 0, 3: 0, 4: 3}          # 0 -> 1 -> 2 -> 0, and 4 -> 3 -> 0
+    _cut_cycles(parent, volume)
+    assert parent == {0: None, 1: 2, 2: 0, 3: 0, 4: 3}
+    assert _windings(parent, volume) == {0: 1, 2: 2, 1: 3, 3: 2, 4: 1}
+    tie = {0: 1, 1: 0}
+    _cut_cycles(tie, np.array([2.0, -2.0]))
+    assert tie == {0: None, 1: 0}
