@@ -268,8 +268,15 @@ def unfixed(after: TopologyReport, steps: tuple[str, ...], required: tuple[str, 
         return f" ({'; '.join(reasons[:SHOWN])})" if reasons else ""
 
     for name in failed_checks(after, required):
-        if name == "closed":
+        if name == "closed" and after.boundary_edges:
             out.append(f"closed: {after.boundary_edges} boundary edges remain" + because(holes_left, "holes"))
+        elif name == "closed":
+            # Every edge has two faces or more: what keeps it from being closed is the other checks'.
+            kept = [(f"{n} {what} edges", check) for n, what, check in (
+                (after.nonmanifold_edges, "non-manifold", "manifold"),
+                (after.misoriented_edges, "misoriented", "oriented")) if n]
+            out.append(f"closed: no boundary edge remains, but {' and '.join(k for k, _ in kept) or 'some edges'} "
+                       f"do (see {' and '.join(c for _, c in kept) or 'manifold and oriented'})")
         elif name == "manifold":
             out.append(f"manifold: {after.nonmanifold_edges} non-manifold edges and {after.nonmanifold_vertices} "
                        "non-manifold vertices remain; repair does not cut or join surfaces (that would change "

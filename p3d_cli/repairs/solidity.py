@@ -30,7 +30,9 @@ def weld_points(points: np.ndarray, tolerance: float):
 
 def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, count: int,
                    closed: np.ndarray) -> dict[int, int]:
-    """How many closed shells lie around each closed shell, decided exactly.
+    """How many closed shells lie around each closed shell, decided exactly, as ``p3d check``
+    nests them: two closed shells whose faces cross (``p3d_cli.mesh.intersections``, run on
+    the closed shells' faces when there are two or more) are neither inside the other.
 
     Parameters
     ----------
@@ -54,11 +56,18 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     from p3d_cli.mesh.nesting import shell_nesting
     from p3d_cli.mesh.shells import Components
 
+    from p3d_cli.mesh.intersections import self_intersections
+
     faces = np.asarray(faces)
+    points = np.asarray(points, dtype=np.float64)
     others = np.setdiff1d(np.arange(count), closed)
     layout = Layout(faces.ravel(), len(points), Components(np.asarray(labels), count), np.zeros(0, dtype=np.int64),
                     np.zeros((0, 2), dtype=np.int64), others)
-    found = shell_nesting(np.asarray(points, dtype=np.float64), faces, layout, np.zeros((0, 2), dtype=np.int64))
+    # Without the crossings, a shell with one corner inside a crossing one would be nested in
+    # it (and turned as a cavity, or its parent found the smaller of the two).
+    members = np.flatnonzero(np.isin(labels, closed))
+    crossing = members[self_intersections(points, faces[members]).pairs]
+    found = shell_nesting(points, faces, layout, crossing)
     depth: dict[int, int] = {}
     for shell in closed.tolist():
         d, outer = 0, found.parent.get(shell)

@@ -141,6 +141,34 @@ def test_a_hollow_part_wound_inward_is_turned_with_its_cavity(cube):
     assert report.fixed and exact_volume(mesh.triangles) == Fraction(7, 8)
 
 
+def test_crossing_shells_are_not_nested_and_stay_as_they_are(cube):
+    """A cube with seven corners inside a tetrahedron and one outside: the shells cross, so
+    neither is inside the other and neither is turned as a cavity (repair turned the cube
+    inward, nested by the winding number of one corner)."""
+    tet = np.array([[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 10]], dtype=np.float64)
+    t = np.concatenate([cube * 4 + 0.5, tet[np.array([(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)])]])
+    mesh, report = repair(t)
+    assert report.failed_before == ("no-self-intersection", "nesting")
+    assert report.step("outward").counts == {"shells_flipped": 0, "faces_flipped": 0, "closed_shells": 2,
+                                             "cavities": 0}
+    assert report.failed_after == report.failed_before and not report.changed
+    assert mesh.triangles.tobytes() == t.tobytes()
+
+
+def test_closed_with_no_boundary_left_says_which_edges_keep_it_open(cube):
+    # A tetrahedron on one edge of the cube, outside it: that edge has four faces
+    # (non-manifold), no edge has one.
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0.5, -1, -1], [0.5, -1, -0.2]], dtype=np.float64)
+    tet = corners[np.array([(0, 1, 2), (0, 3, 1), (0, 2, 3), (1, 3, 2)])]
+    if exact_volume(tet) < 0:
+        tet = tet[:, [0, 2, 1]]
+    _, report = repair(np.concatenate([cube, tet]))
+    closed = [u for u in report.unfixed if u.startswith("closed:")]
+    assert report.after.boundary_edges == 0 and report.after.nonmanifold_edges > 0
+    assert closed == [f"closed: no boundary edge remains, but {report.after.nonmanifold_edges} non-manifold edges "
+                      "do (see manifold)"]
+
+
 def test_a_non_planar_hole_is_reported_and_left(cube):
     broken = np.delete(cube, [0, 4], axis=0)             # a triangle of z = 0 and one of y = 0: a bent loop
     mesh, report = repair(broken)
