@@ -2,7 +2,8 @@
 
 Inputs are the names given (files, directories, ``-`` for standard input) followed by the
 lines of a list file (``files_from``; ``p3d --files-from LIST``). A directory becomes the mesh files under it, sorted,
-found by extension (``p3d_cli.io.is_mesh_path``); an input that cannot be found or listed
+found by extension (``p3d_cli.io.is_mesh_file``: a ``.xml`` must be a DOLFIN mesh, not a robot
+model or a package manifest); an input that cannot be found or listed
 becomes an ``InputError`` in its place, so that the batch reports it at its turn.
 """
 
@@ -29,7 +30,7 @@ def expand_inputs(inputs: Iterable[str | InputError],
         Filled with the files a directory search passed over, by extension (lower case, with
         its dot; ``""`` for none): ``{".3mf": ["exports/a.3mf"]}``.
     """
-    from p3d_cli.io import is_mesh_path
+    from p3d_cli.io import is_mesh_file
 
     skipped = {} if skipped is None else skipped
     for item in inputs:
@@ -45,7 +46,7 @@ def expand_inputs(inputs: Iterable[str | InputError],
                 dirs.sort()
                 for name in sorted(files):
                     path = os.path.join(root, name)
-                    if is_mesh_path(name):
+                    if is_mesh_file(path):
                         found.append(path)
                     else:
                         passed.setdefault(os.path.splitext(name)[1].lower(), []).append(path)

@@ -11,12 +11,12 @@ from __future__ import annotations
 import dataclasses
 from typing import BinaryIO
 
-from p3d_cli.io.formats import FORMATS, NEVER_MESHES, detect_format, format_names, is_mesh_path, read
+from p3d_cli.io.formats import FORMATS, NEVER_MESHES, detect_format, format_names, is_mesh_file, is_mesh_path, read
 from p3d_cli.io.raw import RawInput, open_input
 from p3d_cli.io.source import MeshSource
 
 __all__ = ["FORMATS", "NEVER_MESHES", "MeshSource", "RawInput", "load_mesh", "detect_format", "format_names",
-           "is_mesh_path", "open_input"]
+           "is_mesh_file", "is_mesh_path", "open_input"]
 
 
 def load_mesh(source: str, format: str | None = None, stdin: BinaryIO | None = None) -> MeshSource:

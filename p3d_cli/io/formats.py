@@ -90,13 +90,22 @@ class Format:
 def _xml_head(raw: RawInput) -> bytes:
     """The start of an XML document past its declaration and comments (a licence comment can
     be long), lower-cased; b"" for content that is not XML."""
-    head = raw.head(HEAD)
-    if not head.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
+    return _xml_text(raw.head(XML_HEAD))
+
+
+def _xml_text(head: bytes) -> bytes:
+    """``_xml_head`` of the first ``XML_HEAD`` bytes of a file."""
+    if not head[:HEAD].lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
         return b""
-    text = raw.head(XML_HEAD)
-    text = re.sub(rb"<!--.*?(-->|$)", b"", text, flags=re.DOTALL)
+    text = re.sub(rb"<!--.*?(-->|$)", b"", head, flags=re.DOTALL)
     text = re.sub(rb"<[?!][^>]*>", b"", text)
     return text.lower()
+
+
+def _root(text: bytes) -> str:
+    """The first element's name in ``_xml_head``'s text (without a namespace prefix), or ""."""
+    found = re.match(rb"\s*<(?:[\w.-]+:)?([\w.-]+)", text)
+    return found.group(1).decode("ascii", "replace") if found else ""
 
 
 def _root_is(tag: bytes) -> Callable[[bytes], bool]:
@@ -206,6 +215,26 @@ def is_mesh_path(path: str) -> bool:
     return ext not in NEVER_MESHES and _meshio().knows_extension(ext)
 
 
+def is_mesh_file(path: str) -> bool:
+    """``is_mesh_path``, and for ``.xml`` (robot models, package manifests and launch files
+    share it with DOLFIN XML meshes) content that ``detect_format`` reads as a mesh: a root
+    element ``<dolfin>``, or a format's header (COLLADA, AMF, VTK PolyData). What a directory
+    search takes; a file that cannot be opened is taken (its error is reported at its turn)."""
+    if not is_mesh_path(path):
+        return False
+    if os.path.splitext(path)[1].lower() != ".xml":
+        return True
+    try:
+        with open(path, "rb") as f:
+            head = f.read(XML_HEAD)
+    except OSError:
+        return True
+    text = _xml_text(head)
+    if any(test(text) for test, _, _ in NOT_MESHES):
+        return False
+    return _root(text) == "dolfin" or any(f.header is not None and f.header(head[:HEAD]) for f in FORMATS.values())
+
+
 def _named(override: str) -> str:
     name = override.lower()
     for f in FORMATS.values():
@@ -239,6 +268,11 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
     ext = os.path.splitext(raw.path or "")[1].lower()
     if ext in EXTENSIONS:
         return EXTENSIONS[ext]
+    if ext == ".xml" and _root(_xml_head(raw)) != "dolfin":
+        # meshio's one .xml format; robot packages hold many other XML files.
+        raise UnknownFormatError(raw.where, f"is an XML file whose root element is <{_root(_xml_head(raw))}>, not a "
+                                 "mesh (the XML meshes read are DOLFIN XML, COLLADA, AMF and VTK PolyData)",
+                                 "pass the mesh files it names, or --format NAME for a mesh in another format")
     for f in FORMATS.values():
         found = f.sniff(raw, ext) if f.sniff is not None else None
         if found is not None:

@@ -67,3 +67,37 @@ def test_a_list_line_with_a_nul_byte_is_that_input_s_error_not_a_bug(tmp_path):
         assert errors == ["p3d: error: bad\\x00name.stl: the name holds a NUL byte, which no file name can; "
                           "a NUL-separated list (find -print0, git ls-files -z) needs -0"]
         assert "internal error" not in result.output and "\0" not in result.output
+
+
+def test_a_directory_search_takes_only_the_xml_files_that_are_meshes(tmp_path):
+    """``.xml`` is DOLFIN XML's extension, and a robot package's manifest's, MJCF models' and
+    launch files': the search reads each one's root element and takes the meshes only."""
+    import meshio
+    import numpy as np
+
+    t = cube_triangles()
+    points, inverse = np.unique(t.reshape(-1, 3), axis=0, return_inverse=True)
+    meshio.write(tmp_path / "cube.xml", meshio.Mesh(points, [("triangle", inverse.reshape(-1, 3))]),
+                 file_format="dolfin-xml")
+    (tmp_path / "package.xml").write_text('<?xml version="1.0"?>\n<!-- a manifest -->\n<package format="3">'
+                                          "<name>arm</name></package>\n")
+    (tmp_path / "arm.xml").write_text('<mujoco model="arm"><worldbody/></mujoco>\n')
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "view.xml").write_text("<launch><node/></launch>\n")
+    # COLLADA in a file named .xml is a mesh: its content says so.
+    import trimesh
+
+    (tmp_path / "sub" / "visual.xml").write_bytes(trimesh.creation.box().export(file_type="dae"))
+    result = run("props", tmp_path, "--json")
+    assert result.exit_code == 0, result.stderr
+    records = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [r["source"] for r in records] == [str(tmp_path / "cube.xml"), str(tmp_path / "sub" / "visual.xml")]
+    assert [r["volume"] for r in records] == [1.0, 1.0]
+    assert "skipped files p3d does not read: 3 .xml" in result.stderr
+    # Named, a manifest is refused in one line that says what it is.
+    result = run("check", tmp_path / "package.xml")
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (
+        f"p3d: error: {tmp_path / 'package.xml'}: is an XML file whose root element is <package>, not a mesh (the "
+        "XML meshes read are DOLFIN XML, COLLADA, AMF and VTK PolyData); pass the mesh files it names, or --format "
+        "NAME for a mesh in another format")

@@ -11,7 +11,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from p3d_cli.errors import FormatError, InputError, MissingExtraError
+from p3d_cli.errors import FormatError, InputError, MissingExtraError, UnknownFormatError
 from p3d_cli.io import detect_format, is_mesh_path, load_mesh, meshio_backend
 from p3d_cli.io.raw import open_input
 import p3d_cli as p3d
@@ -188,16 +188,22 @@ def test_tetrahedra_and_triangles_say_which_was_measured(tmp_path):
     assert p3d.props(path).properties.volume == pytest.approx(1.0, rel=1e-15)
 
 
-@pytest.mark.parametrize("name, data", [
-    ("config.xml", b'<?xml version="1.0"?>\n<config><a>1</a></config>\n'),
-    ("notes.dat", b"hello world\n1 2 3\n"),
-])
-def test_files_that_are_no_mesh_are_format_errors(tmp_path, name, data):
-    path = tmp_path / name
-    path.write_bytes(data)
+def test_files_that_are_no_mesh_are_format_errors(tmp_path):
+    path = tmp_path / "notes.dat"
+    path.write_bytes(b"hello world\n1 2 3\n")
     with pytest.raises(FormatError) as info:
         load_mesh(str(path))
     assert "meshio could not read it" in info.value.what and info.value.hint
+
+
+def test_an_xml_file_that_is_no_dolfin_mesh_says_what_it_is(tmp_path):
+    # meshio reads .xml as DOLFIN XML only: any other root element is refused before it.
+    path = tmp_path / "config.xml"
+    path.write_bytes(b'<?xml version="1.0"?>\n<cfg:config xmlns:cfg="x"><a>1</a></cfg:config>\n')
+    with pytest.raises(UnknownFormatError) as info:
+        load_mesh(str(path))
+    assert info.value.what.startswith("is an XML file whose root element is <config>, not a mesh")
+    assert "--format NAME" in info.value.hint
 
 
 @pytest.mark.parametrize("name, data, claim", [
