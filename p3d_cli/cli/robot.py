@@ -43,7 +43,8 @@ def _package_option(f):
     return click.option("--package-path", "package_paths", multiple=True, metavar="NAME=DIR",
                         help="Folder of the package that package://NAME/... (SDF: model://NAME/...) URIs "
                              "and xacro's $(find NAME) name (repeatable); then ROS_PACKAGE_PATH "
-                             "(GZ_SIM_RESOURCE_PATH) is searched.")(f)
+                             "(GZ_SIM_RESOURCE_PATH) is searched, then the folders above the description "
+                             "(a package.xml naming NAME, or a folder NAME).")(f)
 
 
 def _open_mesh_option(f):

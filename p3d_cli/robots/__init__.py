@@ -43,7 +43,8 @@ def load_robot(path, package_paths=None, xacro_args=None) -> Robot:
     package_paths : dict or list of "NAME=DIR", optional
         Folders of the packages ``package://NAME/...`` (``model://NAME/...``) URIs name, and
         xacro's ``$(find NAME)``; then the folders of ``ROS_PACKAGE_PATH``
-        (``GZ_SIM_RESOURCE_PATH``) are searched.
+        (``GZ_SIM_RESOURCE_PATH``) are searched, then the folders above the description
+        (``p3d_cli.robots.model.nearby_packages``).
     xacro_args : dict or list of "NAME:=VALUE", optional
         Arguments of a xacro file (``xacro:arg``).
 

@@ -153,7 +153,8 @@ def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str, folde
 
     Packages are looked up in ``packages`` (NAME -> folder) first, then in the folders of
     ``ROS_PACKAGE_PATH`` (``model://``: ``GZ_SIM_RESOURCE_PATH`` and its older names), where a
-    package is a sub-folder named NAME.
+    package is a sub-folder named NAME, then near the description (``nearby_packages``: the
+    package it sits in, and packages beside the folders above it).
 
     Parameters
     ----------
@@ -169,7 +170,7 @@ def resolve_uri(uri: str, base: str, packages: dict[str, str], where: str, folde
     for scheme, variables in (("package://", PACKAGE_VARIABLES), ("model://", MODEL_VARIABLES)):
         if uri.startswith(scheme):
             name, _, rest = uri[len(scheme):].partition("/")
-            path = _in_package(name, rest, packages, variables, folder)
+            path = _in_package(name, rest, packages, variables, folder, base)
             if path is None:
                 raise ReadError(where, f"{'model' if folder else 'mesh'} {uri}: no such file",
                                  f"give package_paths={name}=DIR (the folder of package {name})")
@@ -195,17 +196,59 @@ def _regular(path: str, uri: str, where: str, folder: bool) -> str:
     return path
 
 
-def _in_package(name: str, rest: str, packages: dict[str, str], variables, folder: bool = False) -> str | None:
+def _in_package(name: str, rest: str, packages: dict[str, str], variables, folder: bool = False,
+                base: str | None = None) -> str | None:
     folders = [packages[name]] if name in packages else []
     for variable in variables:
         for root in os.environ.get(variable, "").split(os.pathsep):
             if root:
                 folders.append(os.path.join(root, name))
+    if base is not None:
+        folders += nearby_packages(name, base)
     for place in folders:
         path = os.path.join(place, rest)
         if os.path.exists(path) and (folder or not os.path.isdir(path)):
             return path
     return None
+
+
+#: Folders above a description searched for its packages (a workspace's src/NAME/urdf/x.urdf
+#: is three below the folder that holds its packages).
+NEARBY_LEVELS = 6
+
+
+def nearby_packages(name: str, base: str) -> list[str]:
+    """Folders that may be package (or Gazebo model) ``name``, near a description in folder
+    ``base``, nearest first: walking up from ``base``, a folder whose ``package.xml`` names the
+    package (as ROS finds the package a file is in) or that is itself called ``name``, and a
+    folder ``name`` inside it (packages side by side in a workspace, models in a models folder).
+    ``NEARBY_LEVELS`` folders up at most. Only folders that exist are returned."""
+    out: list[str] = []
+    here = os.path.abspath(base)
+    for _ in range(NEARBY_LEVELS + 1):
+        if os.path.basename(here) == name or _names_package(os.path.join(here, "package.xml"), name):
+            out.append(here)
+        beside = os.path.join(here, name)
+        if os.path.isdir(beside) and beside not in out:
+            out.append(beside)
+        up = os.path.dirname(here)
+        if up == here:
+            break
+        here = up
+    return out
+
+
+def _names_package(manifest: str, name: str) -> bool:
+    """Whether the ROS manifest ``manifest`` (a package.xml) declares package ``name``."""
+    import re
+
+    try:
+        with open(manifest, "rb") as f:
+            text = f.read(1 << 16)
+    except OSError:
+        return False
+    found = re.search(rb"<name>\s*([^<\s]+)\s*</name>", text)
+    return found is not None and found.group(1).decode("utf-8", "replace") == name
 
 
 def parse_package_paths(items) -> dict[str, str]:

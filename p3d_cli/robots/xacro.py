@@ -16,7 +16,7 @@ import contextlib
 import os
 
 from p3d_cli.errors import InputError, MissingExtraError, install_hint
-from p3d_cli.robots.model import PACKAGE_VARIABLES
+from p3d_cli.robots.model import PACKAGE_VARIABLES, nearby_packages
 from p3d_cli.robots.xmltree import Node, parse_xml
 
 INSTALL = install_hint("robots", "'xacro>=2.0'")
@@ -41,15 +41,17 @@ def parse_xacro_args(items) -> dict[str, str]:
     return out
 
 
-def package_folder(name: str, packages: dict[str, str]) -> str | None:
-    """The folder of package ``name``: the map first, then ``ROS_PACKAGE_PATH``."""
+def package_folder(name: str, packages: dict[str, str], base: str | None = None) -> str | None:
+    """The folder of package ``name``: the map first, then ``ROS_PACKAGE_PATH``, then near the
+    xacro file's folder ``base`` (``model.nearby_packages``)."""
     if name in packages:
         return packages[name]
     for variable in PACKAGE_VARIABLES:
         for root in os.environ.get(variable, "").split(os.pathsep):
             if root and os.path.isdir(os.path.join(root, name)):
                 return os.path.join(root, name)
-    return None
+    nearby = nearby_packages(name, base) if base is not None else []
+    return nearby[0] if nearby else None
 
 
 def expand_xacro(path: str, root: Node, packages: dict[str, str], xacro_args=None) -> Node:
@@ -75,7 +77,7 @@ def expand_xacro(path: str, root: Node, packages: dict[str, str], xacro_args=Non
 
     def find(name: str) -> str:
         # xacro's own _eval_find(pkg) asks ament_index_python for the package's share folder.
-        folder = package_folder(name, packages)
+        folder = package_folder(name, packages, os.path.dirname(os.path.abspath(path)))
         if folder is None:
             missing.append(name)
             raise substitution.SubstitutionException(f"package {name} not found")

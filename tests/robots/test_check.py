@@ -77,7 +77,9 @@ def test_cli_json_one_record_per_link(arm):
 
 
 def test_cli_unreadable_description_exits_2(arm, tmp_path):
-    result = run("robot", "check", arm.urdf())   # no package path for the wedge
+    # No package path for the wedge, and no package arm_description near the description.
+    arm.package.rename(tmp_path / "moved")
+    result = run("robot", "check", arm.urdf())
     assert result.exit_code == 2
     assert ("link 'upper': collision[1]: mesh package://arm_description/meshes/wedge.obj: no such file; "
             "give --package-path arm_description=DIR") in result.stderr

@@ -87,7 +87,8 @@ def test_mjcf_inertial_quat_and_default_classes(arm):
     assert len(upper.collision) == 3 and len(upper.visual) == 1
 
 
-def test_errors_name_file_link_and_element(arm):
+def test_errors_name_file_link_and_element(arm, tmp_path):
+    arm.package.rename(tmp_path / "moved")          # arm_description is found nowhere then
     with pytest.raises(InputError) as info:
         load_robot(arm.urdf())
     message = info.value.message
@@ -240,3 +241,50 @@ def test_a_link_scaled_to_its_mass_scales_its_bounds_too(tmp_path):
     exact = ExactPart.of_triangles(triangles)
     exact = ExactPart(exact.volume, exact.center, exact.central, Fraction(mass) / exact.volume)
     assert max(error_ratios(heavy.result, whole_of(exact)).values()) <= 1.0
+
+
+def wedge_path(robot) -> str:
+    (upper,) = [link for link in robot.links if link.name == "upper"]
+    return [g.thing for g in upper.collision if g.thing.endswith(".obj")][-1]
+
+
+def test_a_package_beside_the_description_is_found_without_being_named(arm):
+    # The arm's folder holds arm_description/ (a workspace's packages side by side).
+    assert wedge_path(load_robot(arm.urdf())) == str(arm.package / "meshes" / "wedge.obj")
+
+
+def test_the_package_a_description_sits_in_is_found_by_its_manifest(arm, tmp_path):
+    # A ROS package whose folder is not named after it: its package.xml says its name, and the
+    # description inside it finds its own meshes.
+    folder = tmp_path / "src" / "arm_pkg-1.2"
+    folder.parent.mkdir()
+    arm.package.rename(folder)
+    (folder / "package.xml").write_text('<?xml version="1.0"?>\n<package format="3">\n  <name> arm_description '
+                                        "</name>\n  <version>1.2.0</version>\n</package>\n")
+    (folder / "urdf").mkdir()
+    for mesh in ("upper.stl", "meshes/upper.stl", "meshes/wedge.obj"):
+        (folder / "urdf" / mesh).parent.mkdir(exist_ok=True)
+        (folder / "urdf" / mesh).write_bytes((tmp_path / mesh).read_bytes())
+    path = folder / "urdf" / "arm.urdf"
+    path.write_text(arm.urdf().read_text())
+    assert wedge_path(load_robot(path)) == str(folder / "meshes" / "wedge.obj")
+    # A folder named in the map comes first.
+    other = tmp_path / "mapped"
+    (other / "meshes").mkdir(parents=True)
+    (other / "meshes" / "wedge.obj").write_bytes((folder / "meshes" / "wedge.obj").read_bytes())
+    mapped = load_robot(path, {"arm_description": str(other)})
+    assert wedge_path(mapped) == str(other / "meshes" / "wedge.obj")
+
+
+def test_nearby_packages_are_listed_nearest_first(tmp_path):
+    from p3d_cli.robots.model import nearby_packages
+
+    (tmp_path / "ws" / "src" / "robot" / "urdf").mkdir(parents=True)
+    (tmp_path / "ws" / "src" / "parts").mkdir()
+    (tmp_path / "ws" / "parts").mkdir()
+    (tmp_path / "ws" / "src" / "robot" / "package.xml").write_text("<package><name>robot_description</name></package>")
+    base = tmp_path / "ws" / "src" / "robot" / "urdf"
+    assert nearby_packages("parts", str(base)) == [str(tmp_path / "ws" / "src" / "parts"), str(tmp_path / "ws" / "parts")]
+    assert nearby_packages("robot_description", str(base)) == [str(tmp_path / "ws" / "src" / "robot")]
+    assert nearby_packages("robot", str(base)) == [str(tmp_path / "ws" / "src" / "robot")]
+    assert nearby_packages("nothing", str(base)) == []

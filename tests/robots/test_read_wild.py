@@ -64,7 +64,7 @@ def test_a_collada_mesh_in_millimetres_is_read_in_metres(tmp_path):
     np.testing.assert_allclose(filled.center, [0.05, 0.1, 0.15], rtol=1e-12)
 
 
-def test_xacro_with_arguments_and_find(tmp_path):
+def test_xacro_with_arguments_and_find(tmp_path, tmp_path_factory):
     pytest.importorskip("xacro")
     package = tmp_path / "my_description"
     (package / "urdf").mkdir(parents=True)
@@ -80,11 +80,16 @@ def test_xacro_with_arguments_and_find(tmp_path):
     (link,) = robot.links
     assert link.name == "left_cube"
     assert fill_robot(robot, density=1000.0).links[0].mass == pytest.approx(8.0)
+    # Not told of, the package is found beside the file (``model.nearby_packages``) ...
+    assert [link.name for link in load_robot(top, {}, ["prefix:=left_"]).links] == ["left_cube"]
+    # ... and nowhere near it, it is an error that says how to point p3d at it.
     from p3d_cli.errors import InputError
 
+    away = tmp_path_factory.mktemp("elsewhere") / "robot.urdf.xacro"
+    away.write_text(top.read_text())
     with pytest.raises(InputError, match=r"\$\(find my_description\) names a package p3d was not told of; give "
                                          "package_paths=my_description=DIR"):
-        load_robot(top, {}, ["prefix:=left_"])
+        load_robot(away, {}, ["prefix:=left_"])
 
 
 MAIN = """<mujoco model="wild">
