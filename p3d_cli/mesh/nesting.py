@@ -128,6 +128,22 @@ def _crossing_shells(labels, pairs, closed) -> set[tuple[int, int]]:
     return {(int(min(x, y)), int(max(x, y))) for x, y in zip(a[keep], b[keep])}
 
 
+def boxed_together(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, shells: np.ndarray) -> np.ndarray:
+    """Those of ``shells`` whose bounding box meets another's of them, ascending: the only ones
+    that can cross or lie inside one of the others."""
+    shells = np.asarray(shells, dtype=np.int64)
+    if shells.size < 2:
+        return np.zeros(0, dtype=np.int64)
+    count = int(labels.max()) + 1 if len(labels) else 0
+    lo, hi = _shell_boxes(points, faces, labels, count)
+    lo32, hi32 = outward_boxes(lo[shells], hi[shells])
+    met = np.zeros(shells.size, dtype=bool)
+    for i, j in box_pairs(lo32, hi32):
+        met[i] = True
+        met[j] = True
+    return shells[met]
+
+
 def _shell_boxes(points, faces, labels, count):
     """Bounding boxes ``(count, 3)`` of every shell."""
     lo = np.full((count, 3), np.inf)

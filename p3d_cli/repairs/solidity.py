@@ -53,7 +53,7 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     if closed.size <= 1:
         return {int(s): 0 for s in closed}
     from p3d_cli.mesh.layout import Layout
-    from p3d_cli.mesh.nesting import shell_nesting
+    from p3d_cli.mesh.nesting import boxed_together, shell_nesting
     from p3d_cli.mesh.shells import Components
 
     from p3d_cli.mesh.intersections import self_intersections
@@ -64,9 +64,11 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     layout = Layout(faces.ravel(), len(points), Components(np.asarray(labels), count), np.zeros(0, dtype=np.int64),
                     np.zeros((0, 2), dtype=np.int64), others)
     # Without the crossings, a shell with one corner inside a crossing one would be nested in
-    # it (and turned as a cavity, or its parent found the smaller of the two).
-    members = np.flatnonzero(np.isin(labels, closed))
-    crossing = members[self_intersections(points, faces[members]).pairs]
+    # it (and turned as a cavity, or its parent found the smaller of the two). Only shells whose
+    # boxes meet can cross: the test takes their faces alone (none, for parts side by side).
+    labels = np.asarray(labels)
+    members = np.flatnonzero(np.isin(labels, boxed_together(points, faces, labels, closed)))
+    crossing = members[self_intersections(points, faces[members]).pairs] if members.size else members.reshape(0, 2)
     found = shell_nesting(points, faces, layout, crossing)
     depth: dict[int, int] = {}
     for shell in closed.tolist():

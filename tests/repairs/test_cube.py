@@ -245,3 +245,27 @@ def test_require_picks_the_checks_that_decide(cube):
     assert report.fixed and report.after.self_intersections is None
     with pytest.raises(UsageError, match="no check named 'watertight'"):
         repair(cube, require=["watertight"])
+
+
+def test_parts_side_by_side_need_no_crossing_test(cube, monkeypatch):
+    # Two closed parts apart, one wound inward: turned out, and the nesting asks no
+    # self-intersection test (no two boxes meet); nested ones do.
+    import p3d_cli.mesh.intersections as intersections
+
+    calls = []
+    real = intersections.self_intersections
+    monkeypatch.setattr(intersections, "self_intersections", lambda *a, **k: calls.append(len(a[1])) or real(*a, **k))
+    from p3d_cli.repairs import solidity
+
+    points = np.unique(np.concatenate([cube, cube + 5]).reshape(-1, 3), axis=0)
+    index = {tuple(p): i for i, p in enumerate(points.tolist())}
+    faces = np.array([[index[tuple(p)] for p in tri] for tri in np.concatenate([cube, cube + 5]).tolist()])
+    labels = np.repeat([0, 1], 12)
+    assert solidity.nesting_depths(points, faces, labels, 2, np.array([0, 1])) == {0: 0, 1: 0}
+    assert calls == []
+    inner = (cube - 0.5) * 0.5 + 0.5
+    points = np.unique(np.concatenate([cube, inner]).reshape(-1, 3), axis=0)
+    index = {tuple(p): i for i, p in enumerate(points.tolist())}
+    faces = np.array([[index[tuple(p)] for p in tri] for tri in np.concatenate([cube, inner]).tolist()])
+    assert solidity.nesting_depths(points, faces, labels, 2, np.array([0, 1])) == {0: 0, 1: 1}
+    assert calls == [24]

@@ -282,9 +282,11 @@ def test_nearby_packages_are_listed_nearest_first(tmp_path):
     (tmp_path / "ws" / "src" / "robot" / "urdf").mkdir(parents=True)
     (tmp_path / "ws" / "src" / "parts").mkdir()
     (tmp_path / "ws" / "parts").mkdir()
-    (tmp_path / "ws" / "src" / "robot" / "package.xml").write_text("<package><name>robot_description</name></package>")
+    (tmp_path / "ws" / "src" / "robot" / "package.xml").write_text(
+        "<package><name>robot_description</name></package>")
     base = tmp_path / "ws" / "src" / "robot" / "urdf"
-    assert nearby_packages("parts", str(base)) == [str(tmp_path / "ws" / "src" / "parts"), str(tmp_path / "ws" / "parts")]
+    assert nearby_packages("parts", str(base)) == [str(tmp_path / "ws" / "src" / "parts"),
+                                                   str(tmp_path / "ws" / "parts")]
     assert nearby_packages("robot_description", str(base)) == [str(tmp_path / "ws" / "src" / "robot")]
     assert nearby_packages("robot", str(base)) == [str(tmp_path / "ws" / "src" / "robot")]
     assert nearby_packages("nothing", str(base)) == []
