@@ -145,14 +145,17 @@ def boxed_together(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, sh
 
 
 def _shell_boxes(points, faces, labels, count):
-    """Bounding boxes ``(count, 3)`` of every shell."""
+    """Bounding boxes ``(count, 3)`` of every shell. A shell's faces mostly come in runs (a
+    file lists a part's faces together): each run of one label is reduced at once, and only
+    the runs' boxes are scattered (``ufunc.at`` per face took 0.4 s a million faces)."""
     lo = np.full((count, 3), np.inf)
     hi = np.full((count, 3), -np.inf)
     for start in range(0, len(faces), 1 << 16):
         corners = points[faces[start:start + (1 << 16)]]
         lab = labels[start:start + (1 << 16)]
-        np.minimum.at(lo, lab, corners.min(axis=1))
-        np.maximum.at(hi, lab, corners.max(axis=1))
+        runs = np.flatnonzero(np.concatenate([[True], lab[1:] != lab[:-1]]))
+        np.minimum.at(lo, lab[runs], np.minimum.reduceat(corners.min(axis=1), runs, axis=0))
+        np.maximum.at(hi, lab[runs], np.maximum.reduceat(corners.max(axis=1), runs, axis=0))
     return lo, hi
 
 
