@@ -32,7 +32,7 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
                    closed: np.ndarray) -> dict[int, int]:
     """How many closed shells lie around each closed shell, decided exactly, as ``p3d check``
     nests them: two closed shells whose faces cross (``p3d_cli.mesh.intersections``, run on
-    the closed shells' faces when there are two or more) are neither inside the other.
+    the faces of the closed shells whose boxes meet another's) are neither inside the other.
 
     Parameters
     ----------
@@ -42,7 +42,8 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     labels : (k,) int
         Shell of every face, ``0..count-1``.
     closed : (s,) int
-        The closed shells (the others take no part).
+        The closed shells (the others take no part): no edge of theirs has more than two faces
+        (the repair steps' closed patches: a face on such an edge makes its patch open).
 
     Returns
     -------
@@ -68,7 +69,14 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     # boxes meet can cross: the test takes their faces alone (none, for parts side by side).
     labels = np.asarray(labels)
     members = np.flatnonzero(np.isin(labels, boxed_together(points, faces, labels, closed)))
-    crossing = members[self_intersections(points, faces[members]).pairs] if members.size else members.reshape(0, 2)
+    # Their faces' pairs within one shell are not asked (``patches``: a shell's own crossings
+    # nest nothing), and no edge of a closed shell has more than two faces (such a face makes
+    # its patch open), so there are no crowded edges to look for.
+    crossing = np.zeros((0, 2), dtype=np.int64)
+    if members.size:
+        among = self_intersections(points, faces[members], nonmanifold_edges=np.zeros((0, 2), dtype=np.int64),
+                                   patches=labels[members])
+        crossing = members[among.pairs]
     found = shell_nesting(points, faces, layout, crossing)
     depth: dict[int, int] = {}
     for shell in closed.tolist():
