@@ -219,10 +219,11 @@ def is_mesh_file(path: str) -> bool:
     """``is_mesh_path``, and for ``.xml`` (robot models, package manifests and launch files
     share it with DOLFIN XML meshes) content that ``detect_format`` reads as a mesh: a root
     element ``<dolfin>``, or a format's header (COLLADA, AMF, VTK PolyData). What a directory
-    search takes; a file that cannot be opened is taken (its error is reported at its turn)."""
+    search takes; a file that is not a regular file (a FIFO would block the read) or cannot be
+    opened is taken, and its error reported at its turn."""
     if not is_mesh_path(path):
         return False
-    if os.path.splitext(path)[1].lower() != ".xml":
+    if os.path.splitext(path)[1].lower() != ".xml" or not os.path.isfile(path):
         return True
     try:
         with open(path, "rb") as f:
@@ -268,10 +269,12 @@ def detect_format(raw: RawInput, override: str | None = None) -> str:
     ext = os.path.splitext(raw.path or "")[1].lower()
     if ext in EXTENSIONS:
         return EXTENSIONS[ext]
-    if ext == ".xml" and _root(_xml_head(raw)) != "dolfin":
+    root = _root(_xml_head(raw)) if ext == ".xml" else ""
+    if ext == ".xml" and root != "dolfin":
         # meshio's one .xml format; robot packages hold many other XML files.
-        raise UnknownFormatError(raw.where, f"is an XML file whose root element is <{_root(_xml_head(raw))}>, not a "
-                                 "mesh (the XML meshes read are DOLFIN XML, COLLADA, AMF and VTK PolyData)",
+        what = f"an XML file whose root element is <{root}>" if root else "not XML"
+        raise UnknownFormatError(raw.where, f"is {what}, not a mesh (the XML meshes read are DOLFIN XML, COLLADA, "
+                                 "AMF and VTK PolyData)",
                                  "pass the mesh files it names, or --format NAME for a mesh in another format")
     for f in FORMATS.values():
         found = f.sniff(raw, ext) if f.sniff is not None else None

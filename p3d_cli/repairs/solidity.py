@@ -53,11 +53,10 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     closed = np.asarray(closed, dtype=np.int64)
     if closed.size <= 1:
         return {int(s): 0 for s in closed}
+    from p3d_cli.mesh.intersections import self_intersections
     from p3d_cli.mesh.layout import Layout
     from p3d_cli.mesh.nesting import boxed_together, shell_nesting
     from p3d_cli.mesh.shells import Components
-
-    from p3d_cli.mesh.intersections import self_intersections
 
     faces = np.asarray(faces)
     points = np.asarray(points, dtype=np.float64)

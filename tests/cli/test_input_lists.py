@@ -101,3 +101,29 @@ def test_a_directory_search_takes_only_the_xml_files_that_are_meshes(tmp_path):
         f"p3d: error: {tmp_path / 'package.xml'}: is an XML file whose root element is <package>, not a mesh (the "
         "XML meshes read are DOLFIN XML, COLLADA, AMF and VTK PolyData); pass the mesh files it names, or --format "
         "NAME for a mesh in another format")
+
+
+def test_a_fifo_named_xml_in_a_directory_is_not_read_by_the_search(tmp_path):
+    """The search reads a .xml file's first bytes to tell a mesh; a FIFO would block there. It
+    is taken unread (and read at its turn like any FIFO, with the readers' time limit)."""
+    import os
+    import threading
+
+    from p3d_cli.io import is_mesh_file
+
+    os.mkfifo(tmp_path / "pipe.xml")
+    answer = []
+    search = threading.Thread(target=lambda: answer.append(is_mesh_file(str(tmp_path / "pipe.xml"))), daemon=True)
+    search.start()
+    search.join(timeout=5)
+    if not answer:                       # blocked: a writer lets the search's read end
+        with open(tmp_path / "pipe.xml", "wb"):
+            pass
+        search.join(timeout=5)
+    assert answer == [True]
+
+
+def test_a_named_xml_that_is_not_xml_says_so(tmp_path):
+    (tmp_path / "junk.xml").write_bytes(b"\x00\x01 not xml at all")
+    result = run("check", tmp_path / "junk.xml")
+    assert result.exit_code == 2 and "junk.xml: is not XML, not a mesh (the XML meshes read are" in result.stderr
