@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from types import ModuleType
 from typing import Callable
 
-from p3d_cli.errors import UnknownFormatError
-from p3d_cli.io.raw import RawInput
+from p3d_cli.errors import InputError, UnknownFormatError
+from p3d_cli.io.raw import RawInput, open_input
 
 #: Bytes read from the start of an input to recognise its format.
 HEAD = 512
@@ -90,14 +90,11 @@ class Format:
 def _xml_head(raw: RawInput) -> bytes:
     """The start of an XML document past its declaration and comments (a licence comment can
     be long), lower-cased; b"" for content that is not XML."""
-    return _xml_text(raw.head(XML_HEAD))
-
-
-def _xml_text(head: bytes) -> bytes:
-    """``_xml_head`` of the first ``XML_HEAD`` bytes of a file."""
-    if not head[:HEAD].lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
+    head = raw.head(HEAD)
+    if not head.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"<"):
         return b""
-    text = re.sub(rb"<!--.*?(-->|$)", b"", head, flags=re.DOTALL)
+    text = raw.head(XML_HEAD)
+    text = re.sub(rb"<!--.*?(-->|$)", b"", text, flags=re.DOTALL)
     text = re.sub(rb"<[?!][^>]*>", b"", text)
     return text.lower()
 
@@ -217,23 +214,21 @@ def is_mesh_path(path: str) -> bool:
 
 def is_mesh_file(path: str) -> bool:
     """``is_mesh_path``, and for ``.xml`` (robot models, package manifests and launch files
-    share it with DOLFIN XML meshes) content that ``detect_format`` reads as a mesh: a root
-    element ``<dolfin>``, or a format's header (COLLADA, AMF, VTK PolyData). What a directory
-    search takes; a file that is not a regular file (a FIFO would block the read) or cannot be
-    opened is taken, and its error reported at its turn."""
+    share it with DOLFIN XML meshes) content that ``detect_format`` reads as a mesh (DOLFIN XML,
+    COLLADA, AMF, VTK PolyData): what a directory search takes. A file that is not a regular
+    file (a FIFO would block the read) or cannot be read is taken, and its error reported at
+    its turn."""
     if not is_mesh_path(path):
         return False
     if os.path.splitext(path)[1].lower() != ".xml" or not os.path.isfile(path):
         return True
     try:
-        with open(path, "rb") as f:
-            head = f.read(XML_HEAD)
-    except OSError:
-        return True
-    text = _xml_text(head)
-    if any(test(text) for test, _, _ in NOT_MESHES):
+        detect_format(open_input(path))
+    except UnknownFormatError:
         return False
-    return _root(text) == "dolfin" or any(f.header is not None and f.header(head[:HEAD]) for f in FORMATS.values())
+    except InputError:
+        return True
+    return True
 
 
 def _named(override: str) -> str:
