@@ -196,8 +196,11 @@ def _regular(path: str, uri: str, where: str, folder: bool) -> str:
     return path
 
 
-def _in_package(name: str, rest: str, packages: dict[str, str], variables, folder: bool = False,
-                base: str | None = None) -> str | None:
+def package_folders(name: str, packages: dict[str, str], variables=PACKAGE_VARIABLES,
+                    base: str | None = None) -> list[str]:
+    """Where package ``name`` may be, in the order it is looked for: the map's folder, a
+    sub-folder NAME of each folder of the environment ``variables``, then near the description
+    in folder ``base`` (``nearby_packages``)."""
     folders = [packages[name]] if name in packages else []
     for variable in variables:
         for root in os.environ.get(variable, "").split(os.pathsep):
@@ -205,7 +208,12 @@ def _in_package(name: str, rest: str, packages: dict[str, str], variables, folde
                 folders.append(os.path.join(root, name))
     if base is not None:
         folders += nearby_packages(name, base)
-    for place in folders:
+    return folders
+
+
+def _in_package(name: str, rest: str, packages: dict[str, str], variables, folder: bool = False,
+                base: str | None = None) -> str | None:
+    for place in package_folders(name, packages, variables, base):
         path = os.path.join(place, rest)
         if os.path.exists(path) and (folder or not os.path.isdir(path)):
             return path

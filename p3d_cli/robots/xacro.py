@@ -16,7 +16,7 @@ import contextlib
 import os
 
 from p3d_cli.errors import InputError, MissingExtraError, install_hint
-from p3d_cli.robots.model import PACKAGE_VARIABLES, nearby_packages
+from p3d_cli.robots.model import package_folders
 from p3d_cli.robots.xmltree import Node, parse_xml
 
 INSTALL = install_hint("robots", "'xacro>=2.0'")
@@ -42,16 +42,12 @@ def parse_xacro_args(items) -> dict[str, str]:
 
 
 def package_folder(name: str, packages: dict[str, str], base: str | None = None) -> str | None:
-    """The folder of package ``name``: the map first, then ``ROS_PACKAGE_PATH``, then near the
-    xacro file's folder ``base`` (``model.nearby_packages``)."""
+    """The folder of package ``name``: the map's, else the first folder of
+    ``model.package_folders`` that exists (``ROS_PACKAGE_PATH``, then near the xacro file's
+    folder ``base``)."""
     if name in packages:
         return packages[name]
-    for variable in PACKAGE_VARIABLES:
-        for root in os.environ.get(variable, "").split(os.pathsep):
-            if root and os.path.isdir(os.path.join(root, name)):
-                return os.path.join(root, name)
-    nearby = nearby_packages(name, base) if base is not None else []
-    return nearby[0] if nearby else None
+    return next((f for f in package_folders(name, packages, base=base) if os.path.isdir(f)), None)
 
 
 def expand_xacro(path: str, root: Node, packages: dict[str, str], xacro_args=None) -> Node:
