@@ -34,7 +34,7 @@ _TRIES = 16
 
 
 def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossing_pairs: np.ndarray,
-                  volume_of_one: float | None = None) -> Nesting:
+                  volume_of_one: float | None = None, boxes: tuple | None = None) -> Nesting:
     """The nesting of the closed shells of a mesh.
 
     Parameters
@@ -49,6 +49,8 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
         Face pairs that cross or overlap (``SelfIntersections.pairs``).
     volume_of_one : float, optional
         The mesh's signed volume, used as its shell's when it has one (no sum over the faces).
+    boxes : (lo, hi), optional
+        ``shell_boxes`` of these shells, when the caller has them.
     """
     labels = layout.shells.labels
     count = layout.shells.count
@@ -74,7 +76,9 @@ def shell_nesting(points: np.ndarray, faces: np.ndarray, layout: Layout, crossin
     for a, b in _crossing_shells(labels, crossing_pairs, closed):
         relations[(a, b)] = "crossing"
     parent = {int(s): None for s in ids}
-    lo, hi = _shell_boxes(points, faces, labels, count) if ids.size > 1 else (None, None)
+    if boxes is None and ids.size > 1:
+        boxes = shell_boxes(points, faces, labels, count)
+    lo, hi = boxes if ids.size > 1 else (None, None)
     if ids.size > 1:
         _nest(points, faces, labels, ids, scaled, relations, parent, lo, hi)
         _cut_cycles(parent, scaled)
@@ -128,14 +132,12 @@ def _crossing_shells(labels, pairs, closed) -> set[tuple[int, int]]:
     return {(int(min(x, y)), int(max(x, y))) for x, y in zip(a[keep], b[keep])}
 
 
-def boxed_together(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, shells: np.ndarray) -> np.ndarray:
-    """Those of ``shells`` whose bounding box meets another's of them, ascending: the only ones
-    that can cross or lie inside one of the others."""
+def boxed_together(lo: np.ndarray, hi: np.ndarray, shells: np.ndarray) -> np.ndarray:
+    """Those of ``shells`` whose bounding box (``shell_boxes``) meets another's of them,
+    ascending: the only ones that can cross or lie inside one of the others."""
     shells = np.asarray(shells, dtype=np.int64)
     if shells.size < 2:
         return np.zeros(0, dtype=np.int64)
-    count = int(labels.max()) + 1 if len(labels) else 0
-    lo, hi = _shell_boxes(points, faces, labels, count)
     lo32, hi32 = outward_boxes(lo[shells], hi[shells])
     met = np.zeros(shells.size, dtype=bool)
     for i, j in box_pairs(lo32, hi32):
@@ -144,7 +146,7 @@ def boxed_together(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, sh
     return shells[met]
 
 
-def _shell_boxes(points, faces, labels, count):
+def shell_boxes(points, faces, labels, count):
     """Bounding boxes ``(count, 3)`` of every shell. A shell's faces mostly come in runs (a
     file lists a part's faces together): each run of one label is reduced at once, and only
     the runs' boxes are scattered (``ufunc.at`` per face took 0.4 s a million faces)."""

@@ -55,7 +55,7 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
         return {int(s): 0 for s in closed}
     from p3d_cli.mesh.intersections import self_intersections
     from p3d_cli.mesh.layout import Layout
-    from p3d_cli.mesh.nesting import boxed_together, shell_nesting
+    from p3d_cli.mesh.nesting import boxed_together, shell_boxes, shell_nesting
     from p3d_cli.mesh.shells import Components
 
     faces = np.asarray(faces)
@@ -67,7 +67,8 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
     # it (and turned as a cavity, or its parent found the smaller of the two). Only shells whose
     # boxes meet can cross: the test takes their faces alone (none, for parts side by side).
     labels = np.asarray(labels)
-    members = np.flatnonzero(np.isin(labels, boxed_together(points, faces, labels, closed)))
+    lo, hi = shell_boxes(points, faces, labels, count)
+    members = np.flatnonzero(np.isin(labels, boxed_together(lo, hi, closed)))
     # Their faces' pairs within one shell are not asked (``patches``: a shell's own crossings
     # nest nothing), and no edge of a closed shell has more than two faces (such a face makes
     # its patch open), so there are no crowded edges to look for.
@@ -76,7 +77,7 @@ def nesting_depths(points: np.ndarray, faces: np.ndarray, labels: np.ndarray, co
         among = self_intersections(points, faces[members], nonmanifold_edges=np.zeros((0, 2), dtype=np.int64),
                                    patches=labels[members])
         crossing = members[among.pairs]
-    found = shell_nesting(points, faces, layout, crossing)
+    found = shell_nesting(points, faces, layout, crossing, boxes=(lo, hi))
     depth: dict[int, int] = {}
     for shell in closed.tolist():
         d, outer = 0, found.parent.get(shell)

@@ -165,13 +165,16 @@ def test_parent_links_that_close_a_cycle_are_cut_at_the_largest_shell():
 
 
 def test_shells_boxed_together_are_those_whose_boxes_meet():
-    from p3d_cli.mesh.nesting import boxed_together
+    from p3d_cli.mesh.nesting import boxed_together, shell_boxes
 
     t = np.concatenate([box([0, 0, 0], [3, 3, 3]), box([1, 1, 1], [2, 2, 2]), box([5, 0, 0], [6, 1, 1]),
                         box([3, 0, 0], [4, 1, 1])])          # nested pair, one apart, one touching the first
     points, inverse = np.unique(t.reshape(-1, 3), axis=0, return_inverse=True)
     faces = inverse.reshape(-1, 3)
     labels = np.repeat([0, 1, 2, 3], 12)
-    assert boxed_together(points, faces, labels, np.array([0, 1, 2, 3])).tolist() == [0, 1, 3]
-    assert boxed_together(points, faces, labels, np.array([1, 2])).tolist() == []
-    assert boxed_together(points, faces, labels, np.array([2])).tolist() == []
+    lo, hi = shell_boxes(points, faces, labels, 4)
+    np.testing.assert_array_equal(lo, [[0, 0, 0], [1, 1, 1], [5, 0, 0], [3, 0, 0]])
+    np.testing.assert_array_equal(hi, [[3, 3, 3], [2, 2, 2], [6, 1, 1], [4, 1, 1]])
+    assert boxed_together(lo, hi, np.array([0, 1, 2, 3])).tolist() == [0, 1, 3]
+    assert boxed_together(lo, hi, np.array([1, 2])).tolist() == []
+    assert boxed_together(lo, hi, np.array([2])).tolist() == []
