@@ -88,17 +88,20 @@ def cascaded_sums(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     x = values
     k, n = x.shape
     low = np.zeros(k)
-    levels = 0
     while x.shape[1] > 1:
         if x.shape[1] % 2:
             x = np.concatenate([x, np.zeros((k, 1))], axis=1)
         half = x.shape[1] // 2
         x, error = two_sum(x[:, :half], x[:, half:])
         low += error.sum(axis=1)
-        levels += 1
     high = x[:, 0] if n else np.zeros(k)
-    factor = 1.02 * levels * (math.log2(max(n, 1)) + 12 + levels)
-    return high, low, factor
+    return high, low, cascade_factor(n)
+
+
+def cascade_factor(n: int) -> float:
+    """``cascaded_sums``' error factor for rows of ``n`` values: ``L = ceil(log2 n)`` levels."""
+    levels = max(n - 1, 0).bit_length()
+    return 1.02 * levels * (math.log2(max(n, 1)) + 12 + levels)
 
 
 def product_of_splits(a: np.ndarray, a_split: tuple, b: np.ndarray, b_split: tuple) -> tuple[np.ndarray, np.ndarray]:

@@ -1175,6 +1175,7 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args);
 static PyObject *py_pick_sides(PyObject *self, PyObject *args);
 static PyObject *py_populate(PyObject *self, PyObject *args);
 static PyObject *py_ear_holds(PyObject *self, PyObject *args);
+static PyObject *py_local_terms(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1982,6 +1983,9 @@ static PyMethodDef methods[] = {
     {"ear_holds", py_ear_holds, METH_VARARGS,
      "ear_holds(plane, order, alive, sign, bound, u, v, w, first, last) -> 1, 0 or -1 (undecided): whether a "
      "corner lies in the ear"},
+    {"local_terms", py_local_terms, METH_VARARGS,
+     "local_terms(a, b, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> sides that may have lost bits to "
+     "underflow: Locals.add's terms of one batch of sides"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -3072,4 +3076,183 @@ static PyObject *py_ear_holds(PyObject *self, PyObject *args) {
         return NULL;
     }
     return PyLong_FromLong(found ? 1 : (open ? -1 : 0));
+}
+
+/* ---- an open mesh's boundary terms (p3d_cli.mesh.boundary_terms.Locals.add) -------------- */
+
+static inline void two_sum_d(double a, double b, double *s, double *e) {
+    double x = a + b, bb = x - a;
+    *s = x;
+    *e = (a - (x - bb)) + (b - bb);
+}
+
+static inline void split_d(double a, double *hi, double *lo) {
+    double c = 134217729.0 * a; /* Veltkamp: 2**27 + 1 */
+    double h = c - (c - a);
+    *hi = h;
+    *lo = a - h;
+}
+
+/* expansions.product_of_splits: p = fl(a b), p + e = a b exactly (barring underflow) */
+static inline void product_d(double a, double ah, double al, double b, double bh, double bl, double *p, double *e) {
+    double x = a * b;
+    *p = x;
+    *e = ((ah * bh - x) + ah * bl + al * bh) + al * bl;
+}
+
+/* numpy's sum of a contiguous row: 0.0 + its pairwise sum (leaves of 128, halves rounded down
+ * to a multiple of 8). */
+static double pairwise_row(const double *a, Py_ssize_t n) {
+    if (n <= LEAF)
+        return leaf_sum(a, n);
+    Py_ssize_t n2 = n / 2;
+    n2 -= n2 % 8;
+    return pairwise_row(a, n2) + pairwise_row(a + n2, n - n2);
+}
+
+static inline double numpy_sum(const double *a, Py_ssize_t n) { return 0.0 + pairwise_row(a, n); }
+
+/* local_terms(a, b, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> underflow count
+ * Locals.add's numbers for the sides with scaled local end points a, b ((3, n) float64, rows
+ * x, y, z), by the same IEEE operations in the same order as the numpy code of
+ * p3d_cli.mesh.boundary_terms (_cross, _dd_product, _w, expansions.cascaded_sums, numpy's
+ * pairwise row sums): parts (12, n) the cross products' exact parts (row 4k + part), q_high
+ * (9, n) Q's exact high parts (row 3k + i), low_sums (27) Q's and R's low parts summed per row
+ * (R's with the cascade's errors added), r_sum (18) the cascade's high sums, and the bound's
+ * inputs mag = |X_k| (3, n), big_t = |a| + |b| (3, n), big_w (6, n). Returns the sides whose
+ * cross products may have lost bits to underflow. */
+static const int CROSS_I[3] = {1, 2, 0}, CROSS_J[3] = {2, 0, 1};
+static const int PAIR_I[6] = {0, 1, 2, 0, 0, 1}, PAIR_J[6] = {0, 1, 2, 1, 2, 2};
+
+static PyObject *py_local_terms(PyObject *self, PyObject *args) {
+    PyObject *obj[9];
+    if (!PyArg_ParseTuple(args, "OOOOOOOOO", &obj[0], &obj[1], &obj[2], &obj[3], &obj[4], &obj[5], &obj[6], &obj[7],
+                          &obj[8]))
+        return NULL;
+    Py_buffer v[9];
+    int got[9] = {0};
+    for (int i = 0; i < 9; i++) {
+        if (get_array(obj[i], &v[i], 'd', i >= 2, "local_terms") < 0) {
+            release_all(v, got, 9);
+            return NULL;
+        }
+        got[i] = 1;
+    }
+    Py_ssize_t n = v[0].len / 24;
+    static const Py_ssize_t rows[9] = {3, 3, 12, 9, 3, 3, 6, 27, 18};
+    for (int i = 0; i < 9; i++)
+        if (v[i].len != rows[i] * (i >= 7 ? 1 : n) * 8 || v[0].len != 24 * n) {
+            release_all(v, got, 9);
+            PyErr_SetString(PyExc_ValueError, "local_terms: the arrays' shapes do not fit");
+            return NULL;
+        }
+    const double *a = v[0].buf, *b = v[1].buf;
+    double *parts = v[2].buf, *q_high = v[3].buf, *mag = v[4].buf, *big_t = v[5].buf, *big_w = v[6].buf;
+    double *low_sums = v[7].buf, *r_sum = v[8].buf;
+    /* q_low (9 n), r_low (18 n), r_high (18 (n + 1)), the cascade's errors (n / 2 + 1) */
+    double *work = n ? malloc((9 * n + 18 * n + 18 * (n + 1) + n / 2 + 1) * sizeof(double)) : NULL;
+    if (n && !work) {
+        release_all(v, got, 9);
+        return PyErr_NoMemory();
+    }
+    Py_ssize_t underflow = 0;
+    Py_BEGIN_ALLOW_THREADS
+    double *q_low = work, *r_low = q_low + 9 * n, *r_high = r_low + 18 * n, *error = r_high + 18 * (n + 1);
+    for (Py_ssize_t s = 0; s < n; s++) {
+        double A[3], B[3], ah[3], al[3], bh[3], bl[3], xh[3], xl[3], th[3], tl[3], thh[3], thl[3];
+        double xhh[3], xhl[3], wh[6], wl[6], whh[6], whl[6];
+        int small = 0;
+        for (int i = 0; i < 3; i++) {
+            A[i] = a[i * n + s];
+            B[i] = b[i * n + s];
+            split_d(A[i], &ah[i], &al[i]);
+            split_d(B[i], &bh[i], &bl[i]);
+        }
+        for (int k = 0; k < 3; k++) { /* _cross */
+            int i = CROSS_I[k], j = CROSS_J[k];
+            double p1, e1, p2, e2, S, T, F, G, H, C, D;
+            product_d(A[i], ah[i], al[i], B[j], bh[j], bl[j], &p1, &e1);
+            product_d(A[j], ah[j], al[j], B[i], bh[i], bl[i], &p2, &e2);
+            small |= (p1 != 0.0 && fabs(p1) < 0x1p-968) || (p2 != 0.0 && fabs(p2) < 0x1p-968);
+            two_sum_d(p1, -p2, &S, &T);
+            two_sum_d(e1, -e2, &F, &G);
+            two_sum_d(T, F, &H, &C);
+            two_sum_d(S, H, &xh[k], &D);
+            xl[k] = D + (C + G);
+            parts[(4 * k) * n + s] = xh[k];
+            parts[(4 * k + 1) * n + s] = D;
+            parts[(4 * k + 2) * n + s] = C;
+            parts[(4 * k + 3) * n + s] = G;
+        }
+        underflow += small;
+        for (int i = 0; i < 3; i++) {
+            two_sum_d(A[i], B[i], &th[i], &tl[i]);
+            split_d(th[i], &thh[i], &thl[i]);
+            split_d(xh[i], &xhh[i], &xhl[i]);
+        }
+        for (int k = 0; k < 3; k++) /* Q: _dd_product */
+            for (int i = 0; i < 3; i++) {
+                double p, e;
+                product_d(xh[k], xhh[k], xhl[k], th[i], thh[i], thl[i], &p, &e);
+                e = e + (xh[k] * tl[i] + xl[k] * th[i]);
+                q_high[(3 * k + i) * n + s] = p;
+                q_low[(3 * k + i) * n + s] = e;
+            }
+        for (int r = 0; r < 6; r++) { /* _w */
+            int i = PAIR_I[r], j = PAIR_J[r];
+            double x1, y1, x2, y2, x3, y3, h, l2, l3;
+            product_d(A[i], ah[i], al[i], A[j], ah[j], al[j], &x1, &y1);
+            product_d(B[i], bh[i], bl[i], B[j], bh[j], bl[j], &x2, &y2);
+            product_d(th[i], thh[i], thl[i], th[j], thh[j], thl[j], &x3, &y3);
+            y3 = y3 + (th[i] * tl[j] + tl[i] * th[j]);
+            two_sum_d(x1, x2, &h, &l2);
+            two_sum_d(h, x3, &h, &l3);
+            two_sum_d(h, ((y1 + y2) + y3) + (l2 + l3), &wh[r], &wl[r]);
+            split_d(wh[r], &whh[r], &whl[r]);
+        }
+        for (int k = 0; k < 3; k++) /* R: _dd_product */
+            for (int r = 0; r < 6; r++) {
+                double p, e;
+                product_d(xh[k], xhh[k], xhl[k], wh[r], whh[r], whl[r], &p, &e);
+                e = e + (xh[k] * wl[r] + xl[k] * wh[r]);
+                r_high[(6 * k + r) * (n + 1) + s] = p;
+                r_low[(6 * k + r) * n + s] = e;
+            }
+        /* the bound's inputs (Locals._bound) */
+        double aa[3], bb[3], tt[3];
+        for (int i = 0; i < 3; i++) {
+            aa[i] = fabs(A[i]);
+            bb[i] = fabs(B[i]);
+            tt[i] = aa[i] + bb[i];
+            mag[i * n + s] = fabs(xh[i]);
+            big_t[i * n + s] = tt[i];
+        }
+        for (int r = 0; r < 6; r++) {
+            int i = PAIR_I[r], j = PAIR_J[r];
+            big_w[r * n + s] = aa[i] * aa[j] + bb[i] * bb[j] + tt[i] * tt[j];
+        }
+    }
+    for (int r = 0; r < 9; r++)
+        low_sums[r] = numpy_sum(q_low + r * n, n);
+    for (int r = 0; r < 18; r++) {
+        /* cascaded_sums: halves added by two_sum level by level (a zero pads an odd row), each
+         * level's errors summed as numpy sums a row and added to low */
+        double *x = r_high + r * (n + 1), low = 0.0;
+        Py_ssize_t m = n;
+        while (m > 1) {
+            if (m % 2)
+                x[m++] = 0.0;
+            Py_ssize_t half = m / 2;
+            for (Py_ssize_t i = 0; i < half; i++)
+                two_sum_d(x[i], x[i + half], &x[i], &error[i]);
+            low = low + numpy_sum(error, half);
+            m = half;
+        }
+        r_sum[r] = x[0];
+        low_sums[9 + r] = numpy_sum(r_low + r * n, n) + low;
+    }
+    Py_END_ALLOW_THREADS
+    free(work);
+    release_all(v, got, 9);
+    return PyLong_FromSsize_t(underflow);
 }

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,12 +41,14 @@ from p3d_cli.geometry.expansions import (
     TINY,
     UNIT,
     ExactSum,
+    cascade_factor,
     cascaded_sums,
     product_of_splits,
     split,
     two_product,
     two_sum,
 )
+from p3d_cli.mesh.kernels import compiled
 
 PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 _CYCLE = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
@@ -166,34 +169,19 @@ class Locals:
         n = a.shape[1]
         if n == 0:
             return
-        # Every product of the same quantities in one numpy call, each value split once
-        # (Veltkamp) for all its products: rows (k, i) of Q are 3k + i, rows (k, pair) of R 6k + pair.
-        sa, sb = split(a), split(b)
-        p1, e1 = product_of_splits(a[_I], _rows(sa, _I), b[_J], _rows(sb, _J))
-        p2, e2 = product_of_splits(a[_J], _rows(sa, _J), b[_I], _rows(sb, _I))
-        xh, xl, parts = _cross(p1, e1, p2, e2)
-        small = ((p1 != 0.0) & (np.abs(p1) < _UNDERFLOW)) | ((p2 != 0.0) & (np.abs(p2) < _UNDERFLOW))
-        self.underflow += int(small.any(axis=0).sum())
-        th, tl = two_sum(a, b)
-        sth, sxh = split(th), split(xh)
-        q_high, q_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
-                                    th[None], _rows(sth, None), tl[None])
-        wh, wl = _w(a, sa, b, sb, th, sth, tl)
-        r_high, r_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
-                                    wh[None], _rows(split(wh), None), wl[None])
+        kernels = compiled()
+        terms = _compiled_terms(kernels, a, b) if kernels is not None else local_terms(a, b)
+        self.underflow += terms.underflow
         # Q is multiplied by |o|² in the end, R by |o| only: Q's high parts are summed exactly,
         # R's by a cascade of error-free sums (``cascaded_sums``: ~2^-100 of their magnitude,
         # far more than R needs, at a fifth of the cost).
-        self._waiting.append((parts.transpose(1, 0, 2).reshape(12, n), q_high.reshape(9, n)))
+        self._waiting.append((terms.parts, terms.q_high))
         self._waiting_sides += n
         if self._waiting_sides >= _BATCH:
             self._add_waiting()
-        r_sum, r_sum_low, cascade = cascaded_sums(r_high.reshape(18, n))
-        low_sums = np.concatenate([q_low.reshape(9, n).sum(axis=1), r_low.reshape(18, n).sum(axis=1)])
-        low_sums[9:] += r_sum_low
-        self._low = [x + _units(s) for x, s in zip(self._low, low_sums.tolist())]
-        self._r_high = [x + _units(s) for x, s in zip(self._r_high, r_sum.tolist())]
-        self._bound(np.abs(a), np.abs(b), np.abs(xh), n, cascade)
+        self._low = [x + _units(s) for x, s in zip(self._low, terms.low_sums.tolist())]
+        self._r_high = [x + _units(s) for x, s in zip(self._r_high, terms.r_sum.tolist())]
+        self._bound(terms.mag, terms.big_t, terms.big_w, n, cascade_factor(n))
 
     def _add_waiting(self) -> None:
         """Add the parts set aside to the exact sums."""
@@ -202,12 +190,8 @@ class Locals:
             self._high.add(np.concatenate([q for _, q in self._waiting], axis=1), _Q_ROWS)
         self._waiting, self._waiting_sides = [], 0
 
-    def _bound(self, a: np.ndarray, b: np.ndarray, mag: np.ndarray, n: int, cascade: float) -> None:
+    def _bound(self, mag: np.ndarray, big_t: np.ndarray, big_w: np.ndarray, n: int, cascade: float) -> None:
         """Accumulate ``Σ |X_k| T_i``, ``Σ |X_k| W_ij`` and the block's rounding factors."""
-        big_t = a + b
-        big_w = np.empty((6, n))
-        for row, (i, j) in enumerate(PAIRS):
-            big_w[row] = a[i] * a[j] + b[i] * b[j] + big_t[i] * big_t[j]
         # Sums of non-negative products: float rounding is far inside the final 1.01 margin.
         q_mag = (mag @ big_t.T).reshape(-1)              # [k, i] -> 3k + i
         r_mag = (mag @ big_w.T).reshape(-1)              # [k, row] -> 6k + row
@@ -231,6 +215,59 @@ class Locals:
         cubic = 6.3 * UNIT ** 3 * 12.0 * self.count
         error = 1.01 * (self._rounding * UNIT * UNIT + cubic + 256.0 * self.count * TINY)
         return [h + Fraction(lo, _UNITS) for h, lo in zip(high, self._low)], error
+
+
+class Terms(NamedTuple):
+    """One batch of sides' numbers for ``Locals`` (``local_terms``)."""
+
+    parts: np.ndarray       # (12, n) the cross products' exact parts, row 4k + part
+    q_high: np.ndarray      # (9, n) Q's exact high parts, row 3k + i
+    low_sums: np.ndarray    # (27,) Q's and R's low parts summed per row (R's with the cascade's errors)
+    r_sum: np.ndarray       # (18,) the cascade's high sums of R
+    mag: np.ndarray         # (3, n) |X_k|
+    big_t: np.ndarray       # (3, n) T_i = |a_i| + |b_i|
+    big_w: np.ndarray       # (6, n) W_ij
+    underflow: int          # sides whose cross products may have lost bits to underflow
+
+
+def local_terms(a: np.ndarray, b: np.ndarray) -> Terms:
+    """``Locals.add``'s numbers for sides with scaled local end points ``a``, ``b`` ``(3, n)``,
+    ``n >= 1``, in numpy (the compiled ``local_terms`` replays the same operations)."""
+    n = a.shape[1]
+    # Every product of the same quantities in one numpy call, each value split once
+    # (Veltkamp) for all its products: rows (k, i) of Q are 3k + i, rows (k, pair) of R 6k + pair.
+    sa, sb = split(a), split(b)
+    p1, e1 = product_of_splits(a[_I], _rows(sa, _I), b[_J], _rows(sb, _J))
+    p2, e2 = product_of_splits(a[_J], _rows(sa, _J), b[_I], _rows(sb, _I))
+    xh, xl, parts = _cross(p1, e1, p2, e2)
+    small = ((p1 != 0.0) & (np.abs(p1) < _UNDERFLOW)) | ((p2 != 0.0) & (np.abs(p2) < _UNDERFLOW))
+    th, tl = two_sum(a, b)
+    sth, sxh = split(th), split(xh)
+    q_high, q_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
+                                th[None], _rows(sth, None), tl[None])
+    wh, wl = _w(a, sa, b, sb, th, sth, tl)
+    r_high, r_low = _dd_product(xh[:, None], _rows(sxh, slice(None), None), xl[:, None],
+                                wh[None], _rows(split(wh), None), wl[None])
+    r_sum, r_sum_low, _ = cascaded_sums(r_high.reshape(18, n))
+    low_sums = np.concatenate([q_low.reshape(9, n).sum(axis=1), r_low.reshape(18, n).sum(axis=1)])
+    low_sums[9:] += r_sum_low
+    abs_a, abs_b = np.abs(a), np.abs(b)
+    big_t = abs_a + abs_b
+    big_w = np.empty((6, n))
+    for row, (i, j) in enumerate(PAIRS):
+        big_w[row] = abs_a[i] * abs_a[j] + abs_b[i] * abs_b[j] + big_t[i] * big_t[j]
+    return Terms(parts.transpose(1, 0, 2).reshape(12, n), q_high.reshape(9, n), low_sums, r_sum,
+                 np.abs(xh), big_t, big_w, int(small.any(axis=0).sum()))
+
+
+def _compiled_terms(kernels, a: np.ndarray, b: np.ndarray) -> Terms:
+    """``local_terms`` by the compiled kernel: the same bits."""
+    n = a.shape[1]
+    out = Terms(np.empty((12, n)), np.empty((9, n)), np.empty(27), np.empty(18), np.empty((3, n)),
+                np.empty((3, n)), np.empty((6, n)), 0)
+    a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
+    underflow = kernels.local_terms(a, b, out.parts, out.q_high, out.mag, out.big_t, out.big_w, out.low_sums, out.r_sum)
+    return out._replace(underflow=underflow)
 
 
 def _units(x: float) -> int:

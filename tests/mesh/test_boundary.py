@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from helpers.kernels import bits, needs_kernels
+from helpers.kernels import SAME_BITS, bits, needs_kernels, numpy_road
 from helpers.meshes import write_ascii_stl
 from helpers.exact import exact_moments
 import p3d_cli as p3d
@@ -318,3 +318,68 @@ def test_coordinates_spanning_beyond_the_scaling_fall_back_to_exact_integers():
     t[1, 1] = [1e100, 0.5, 0.25]
     found, o = terms_of(t)
     assert found.sums == oracle_terms(t, o)
+
+
+def _local_sides(rng, n: int, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """Scaled local end points ``(3, n)`` in [-1, 1] of a few kinds: uniform; on a grid of
+    2**-20 with sides sharing ends (cancelling products); spread over 600 binary orders, with
+    ±0.0 and products that underflow."""
+    if kind == "uniform":
+        return rng.uniform(-1, 1, (3, n)), rng.uniform(-1, 1, (3, n))
+    if kind == "grid":
+        a = np.ldexp(rng.integers(-2 ** 20, 2 ** 20, (3, n)).astype(np.float64), -20)
+        b = a[:, ::-1].copy()
+        b[:, :n // 2] = rng.uniform(-1, 1, (3, n // 2))
+        return a, b
+    a = rng.uniform(-1, 1, (3, n)) * np.ldexp(1.0, -rng.integers(0, 600, (3, n)))
+    b = rng.uniform(-1, 1, (3, n)) * np.ldexp(1.0, -rng.integers(0, 600, (3, n)))
+    a[0, ::7], b[1, ::5] = -0.0, 0.0
+    return a, b
+
+
+@needs_kernels
+@pytest.mark.parametrize("kind", ["uniform", "grid", "spread"])
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 8, 9, 127, 128, 129, 255, 257, 1000, 1025, 4097, 16384, 20001])
+def test_compiled_local_terms_are_the_numpy_ones_bit_for_bit(n, kind):
+    """The compiled ``local_terms`` replays ``Locals``' numpy code: every product, error-free
+    sum, cascade level and numpy row sum, so the same bits (rows of one to 20,001 sides: the
+    pairwise sums' leaves and halves, odd cascade levels, underflow, signed zeros)."""
+    a, b = _local_sides(np.random.default_rng(n), n, kind)
+    fast = terms_module._compiled_terms(kernels.KERNELS, a, b)
+    slow = terms_module.local_terms(a, b)
+    assert fast.underflow == slow.underflow
+    if kind == "spread" and n >= 100:
+        assert slow.underflow > 0
+    for name in ("parts", "q_high", "r_sum", "mag", "big_t", "big_w", "low_sums"):
+        x, y = getattr(fast, name), getattr(slow, name)
+        assert x.shape == y.shape, name
+        if name == "low_sums" and not SAME_BITS:
+            # Before numpy 2.3 numpy cuts long row sums elsewhere: the low parts' sums (about
+            # 2**-53 of the high parts) then agree far inside their rounding bound.
+            scale = max(np.abs(fast.q_high).max(), np.abs(fast.r_sum).max(), 1e-300)
+            np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-25 * scale)
+        else:
+            assert np.array_equal(bits(x), bits(y)), name
+
+
+@needs_kernels
+def test_locals_totals_are_the_same_with_and_without_the_kernel():
+    """Whole ``Locals`` runs over batches of several sizes: the same exact sums and bound."""
+    rng = np.random.default_rng(3)
+    batches = [_local_sides(rng, n, kind) for n, kind in [(500, "uniform"), (1, "grid"), (3000, "spread"),
+                                                         (9000, "uniform")]]
+
+    def run():
+        local = terms_module.Locals()
+        for a, b in batches:
+            local.add(a, b)
+        return local.cross_totals(), local.totals(), local.underflow
+
+    (p, p_error), (qr, qr_error), underflow = run()
+    (p2, p2_error), (qr2, qr2_error), underflow2 = numpy_road(run)
+    assert p == p2 and p_error == p2_error and underflow == underflow2
+    if SAME_BITS:
+        assert qr == qr2 and np.array_equal(bits(qr_error), bits(qr2_error))
+    else:
+        np.testing.assert_allclose(qr_error, qr2_error, rtol=1e-12)
+        assert all(abs(float(x - y)) <= e for x, y, e in zip(qr, qr2, qr_error))
