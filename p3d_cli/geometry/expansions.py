@@ -118,11 +118,15 @@ class ExactSum:
     """Exact running sums of ``count`` quantities, fed float64 arrays.
 
     ``add(values, rows)`` adds each row of ``values`` (``(k, m)``, finite) to the quantity
-    ``rows[r]``; ``totals()`` returns the exact sums as ``Fraction``.
+    ``rows[r]``; ``totals()`` returns the exact sums as ``Fraction``. ``binner``, when given, is
+    a compiled ``binner(values, offsets, high, low)`` that adds each value's two parts to the
+    float bins as ``add`` does (row ``r``'s bins from ``offsets[r]``, by exponent): the same
+    bins, since each bin's sum is exact in any order.
     """
 
-    def __init__(self, count: int) -> None:
+    def __init__(self, count: int, binner=None) -> None:
         self.count = count
+        self._binner = binner
         self._high = np.zeros(count * _E_SPAN, dtype=object)
         self._low = np.zeros(count * _E_SPAN, dtype=object)
         self._pending_high = np.zeros(count * _E_SPAN)
@@ -140,6 +144,12 @@ class ExactSum:
             # Worst case every value since the last flush landed in one bin.
             if self._pending + part.size > _MAX_PENDING:
                 self._flush()
+            if self._binner is not None:
+                offsets = np.asarray(rows, dtype=np.int64) * _E_SPAN - _E_MIN
+                self._binner(np.ascontiguousarray(part, dtype=np.float64), offsets, self._pending_high,
+                             self._pending_low)
+                self._pending += part.size
+                continue
             # f = fraction · 2**27 has 27 integer and 26 fraction bits: its floor and the rest
             # (a multiple of 2**-26 in [0, 1)) are exact, all in float64 (no integer casts).
             fraction, exponent = np.frexp(part)

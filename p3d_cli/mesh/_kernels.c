@@ -1176,6 +1176,7 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args);
 static PyObject *py_populate(PyObject *self, PyObject *args);
 static PyObject *py_ear_holds(PyObject *self, PyObject *args);
 static PyObject *py_local_terms(PyObject *self, PyObject *args);
+static PyObject *py_exact_bins(PyObject *self, PyObject *args);
 /* ---- p3d check's self-intersection test (issue 29): the fans' certificate and the broad phase
  * (p3d_cli.mesh.stars, p3d_cli.mesh.broadphase through p3d_cli.mesh.kernels). ---- */
 
@@ -1986,6 +1987,8 @@ static PyMethodDef methods[] = {
     {"local_terms", py_local_terms, METH_VARARGS,
      "local_terms(a, b, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> sides that may have lost bits to "
      "underflow: Locals.add's terms of one batch of sides"},
+    {"exact_bins", py_exact_bins, METH_VARARGS,
+     "exact_bins(values, offsets, high, low): ExactSum.add's binning of values (k, m) into the float bins"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
@@ -3255,4 +3258,54 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
     free(work);
     release_all(v, got, 9);
     return PyLong_FromSsize_t(underflow);
+}
+
+/* exact_bins(values, offsets, high, low): p3d_cli.geometry.expansions.ExactSum.add's binning.
+ * Each value of row r of values ((k, m) float64, finite) is f 2**e (frexp), f 2**27 split into
+ * its floor, added to high[offsets[r] + e], and the rest, added to low[offsets[r] + e]
+ * (offsets: k int64). Every bin's sum is exact (the caller moves the bins into integers before
+ * any can leave float64's integers), so the order of the additions does not matter: the same
+ * bins as numpy's bincount. */
+static PyObject *py_exact_bins(PyObject *self, PyObject *args) {
+    PyObject *obj[4];
+    if (!PyArg_ParseTuple(args, "OOOO", &obj[0], &obj[1], &obj[2], &obj[3]))
+        return NULL;
+    Py_buffer v[4];
+    int got[4] = {0};
+    static const char kinds[4] = {'d', 'q', 'd', 'd'};
+    for (int i = 0; i < 4; i++) {
+        if (get_array(obj[i], &v[i], kinds[i], i >= 2, "exact_bins") < 0) {
+            release_all(v, got, 4);
+            return NULL;
+        }
+        got[i] = 1;
+    }
+    Py_ssize_t k = v[1].len / 8, m = k ? v[0].len / 8 / k : 0, size = v[2].len / 8;
+    const int64_t *offsets = v[1].buf;
+    int bad = (k ? v[0].len != 8 * k * m : v[0].len != 0) || v[3].len != v[2].len;
+    for (Py_ssize_t r = 0; r < k && !bad; r++)
+        bad = offsets[r] - 1073 < 0 || offsets[r] + 1024 >= size;
+    if (bad) {
+        release_all(v, got, 4);
+        PyErr_SetString(PyExc_ValueError, "exact_bins: the arrays do not fit");
+        return NULL;
+    }
+    const double *values = v[0].buf;
+    double *high = v[2].buf, *low = v[3].buf;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t r = 0; r < k; r++) {
+        const double *row = values + r * m;
+        const int64_t offset = offsets[r];
+        for (Py_ssize_t i = 0; i < m; i++) {
+            int e;
+            double f = frexp(row[i], &e) * 134217728.0; /* 2**27 */
+            double h = floor(f);
+            Py_ssize_t bin = offset + e;
+            high[bin] += h;
+            low[bin] += f - h;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    release_all(v, got, 4);
+    Py_RETURN_NONE;
 }

@@ -60,9 +60,9 @@ _PI, _PJ = np.array([i for i, _ in PAIRS]), np.array([j for _, j in PAIRS])
 _CROSS_ROWS = np.repeat(np.arange(3), 4)
 #: The rows of Q (``ExactSum`` rows), and the sides whose exact parts are added at once.
 _Q_ROWS = np.arange(9)
+#: The rows of each batch's 27 low sums and 18 high sums of R (``ExactSum`` rows).
+_SUM_ROWS = np.arange(45)
 _BATCH = 1 << 13
-#: ``2**1074``: ``_units`` counts multiples of the smallest float.
-_UNITS = 1 << 1074
 #: World coordinates up to this magnitude keep ``two_product`` exact (products below 2**960).
 WORLD_LIMIT = 2.0 ** 480
 #: Products below this may lose bits to underflow (``two_product``'s error term is subnormal).
@@ -149,12 +149,13 @@ class Locals:
     """
 
     def __init__(self) -> None:
-        self._high = ExactSum(9)
-        self._cross = ExactSum(3)
-        # Exact sums of floats, as integers in units of 2**-1074 (every finite float is one):
-        # the same numbers as running Fraction sums, without a gcd per addition.
-        self._low = [0] * 27
-        self._r_high = [0] * 18
+        kernels = compiled()
+        binner = kernels.exact_bins if kernels is not None else None
+        self._high = ExactSum(9, binner)
+        self._cross = ExactSum(3, binner)
+        # Each batch's 27 low sums and 18 high sums of R, summed exactly at the end.
+        self._batch_sums: list[np.ndarray] = []
+        self._sums = ExactSum(45, binner)
         self._rounding = np.zeros(27)
         # Parts for the exact sums, added to them in batches (an exact sum is the same in any
         # order and grouping; one ``ExactSum.add`` of a few hundred sides costs as much as of
@@ -179,8 +180,7 @@ class Locals:
         self._waiting_sides += n
         if self._waiting_sides >= _BATCH:
             self._add_waiting()
-        self._low = [x + _units(s) for x, s in zip(self._low, terms.low_sums.tolist())]
-        self._r_high = [x + _units(s) for x, s in zip(self._r_high, terms.r_sum.tolist())]
+        self._batch_sums.append(np.concatenate([terms.low_sums, terms.r_sum]))
         self._bound(terms.mag, terms.big_t, terms.big_w, n, cascade_factor(n))
 
     def _add_waiting(self) -> None:
@@ -189,6 +189,9 @@ class Locals:
             self._cross.add(np.concatenate([x for x, _ in self._waiting], axis=1), _CROSS_ROWS)
             self._high.add(np.concatenate([q for _, q in self._waiting], axis=1), _Q_ROWS)
         self._waiting, self._waiting_sides = [], 0
+        if self._batch_sums:
+            self._sums.add(np.stack(self._batch_sums, axis=1), _SUM_ROWS)
+            self._batch_sums = []
 
     def _bound(self, mag: np.ndarray, big_t: np.ndarray, big_w: np.ndarray, n: int, cascade: float) -> None:
         """Accumulate ``Σ |X_k| T_i``, ``Σ |X_k| W_ij`` and the block's rounding factors."""
@@ -210,11 +213,13 @@ class Locals:
     def totals(self) -> tuple[list[Fraction], np.ndarray]:
         """``Q`` (9, ``[3k + i]``) and ``R`` (18, ``[6k + pair]``) and their error bounds."""
         self._add_waiting()
-        high = self._high.totals() + [Fraction(x, _UNITS) for x in self._r_high]
+        sums = self._sums.totals()
+        low, r_high = sums[:27], sums[27:]
+        high = self._high.totals() + r_high
         # X's own u³ term: 6.3 ε³ m_k with m_k <= 2, times T_i <= 2 or W_ij <= 6 (|a|, |b| <= 1).
         cubic = 6.3 * UNIT ** 3 * 12.0 * self.count
         error = 1.01 * (self._rounding * UNIT * UNIT + cubic + 256.0 * self.count * TINY)
-        return [h + Fraction(lo, _UNITS) for h, lo in zip(high, self._low)], error
+        return [h + lo for h, lo in zip(high, low)], error
 
 
 class Terms(NamedTuple):
@@ -268,12 +273,6 @@ def _compiled_terms(kernels, a: np.ndarray, b: np.ndarray) -> Terms:
     a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
     underflow = kernels.local_terms(a, b, out.parts, out.q_high, out.mag, out.big_t, out.big_w, out.low_sums, out.r_sum)
     return out._replace(underflow=underflow)
-
-
-def _units(x: float) -> int:
-    """The finite float ``x`` as an integer count of ``2**-1074`` (exact)."""
-    num, den = x.as_integer_ratio()
-    return num << (1075 - den.bit_length())
 
 
 def _rows(pair: tuple, *index) -> tuple:

@@ -254,16 +254,38 @@ def test_large_far_soup_end_to_end(tmp_path):
     assert json.dumps(report.report.volume) == json.dumps(p.volume)
 
 
-def test_exact_sum_against_fractions():
+@pytest.mark.parametrize("compiled", [False, pytest.param(True, marks=needs_kernels)])
+def test_exact_sum_against_fractions(compiled):
+    """``ExactSum`` with numpy's binning and with the compiled one (``exact_bins``): the exact
+    sums, and the same float bins bit for bit (each bin's sum is exact in any order)."""
     rng = np.random.default_rng(0)
     x = rng.standard_normal((4, 500)) * np.exp2(rng.integers(-80, 80, (4, 500)))
     x[0, :6] = [1e-310, -3e-320, 5e307, -5e307, 0.0, -0.0]
-    total = ExactSum(2)
+    x[3, :3] = [np.finfo(np.float64).max, -np.finfo(np.float64).max, 5e-324]
+    total = ExactSum(2, kernels.KERNELS.exact_bins if compiled else None)
     total.add(x, np.array([0, 1, 0, 1]))
     total.add(x[:1], np.array([1]))
+    if compiled:
+        plain = ExactSum(2)
+        plain.add(x, np.array([0, 1, 0, 1]))
+        plain.add(x[:1], np.array([1]))
+        assert np.array_equal(bits(total._pending_high), bits(plain._pending_high))
+        assert np.array_equal(bits(total._pending_low), bits(plain._pending_low))
     want = [sum(map(Fraction, x[0].tolist() + x[2].tolist())),
             sum(map(Fraction, x[1].tolist() + x[3].tolist() + x[0].tolist()))]
     assert total.totals() == want
+
+
+@needs_kernels
+def test_exact_bins_refuses_arrays_that_do_not_fit():
+    high, low = np.zeros(2 * 2098), np.zeros(2 * 2098)
+    with pytest.raises(ValueError, match="exact_bins"):
+        kernels.KERNELS.exact_bins(np.ones((2, 3)), np.array([2 * 2098 + 1073], dtype=np.int64), high, low)
+    with pytest.raises(ValueError, match="exact_bins"):
+        kernels.KERNELS.exact_bins(np.ones((2, 3)), np.array([1073, 2098 + 1073], dtype=np.int64), high, low[:5])
+    with pytest.raises(TypeError, match="exact_bins"):
+        kernels.KERNELS.exact_bins(np.ones((2, 3), dtype=np.float32), np.array([1073, 3171]), high, low)
+    assert not high.any() and not low.any()
 
 
 def test_cascaded_sums_are_within_their_bound():
