@@ -2552,9 +2552,84 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args) {
 /* split_groups(fkeys, ffill, bkeys, bfill, cap, shift) ->
  *   (unbalanced ids, net boundary edges, their sides, doubtful ids or None)
  * groups() of every key, given as forward_block's buckets (bit 0 set) and backward_block's
- * (bit 0 clear) of the same shift: each bucket of both is sorted in place and the two are
- * merged by edge (key >> 1) as they are scanned, bucket by bucket, so that the keys are never
- * moved together. The same answers as groups() over all the keys sorted. */
+ * (bit 0 clear) of the same shift: each bucket of both is sorted and the two are merged by
+ * edge (key >> 1) as they are scanned, bucket by bucket, so that the keys are never moved
+ * together. The same answers as groups() over all the keys sorted.
+ *
+ * Most edges of an open mesh are used once each way, and only the groups of the others are
+ * answers (unless no group is unbalanced: then the balanced groups of four or more sides are,
+ * the doubtful ids). So each bucket is first cut by its next bits into sub-buckets of a few
+ * keys, each given the sum of g = mix(key | 1), the same for both directions of an edge, over
+ * its forward keys less that over its backward ones, mod 2^64, and its count of forward less
+ * backward keys: a sub-bucket whose two are zero has every edge used as often each way (else
+ * the nonzero differences would cancel by a 64-bit coincidence, the closed test's argument,
+ * ForwardBuckets), and only the keys of the other sub-buckets are sorted and scanned. If no
+ * group then proves the mesh open (no unbalanced edge), the doubtful ids in the skipped
+ * sub-buckets are wanted too: every bucket is then sorted whole, as before. */
+static void group_bucket(GroupScan *scan, uint64_t *f, Py_ssize_t nf, uint64_t *g, Py_ssize_t ng, int shift,
+                         uint64_t *tmp) {
+    Py_ssize_t i = 0, j = 0;
+    msd(f, nf, shift, tmp);
+    msd(g, ng, shift, tmp);
+    while ((i < nf || j < ng) && !scan->failed) {
+        uint64_t ef = i < nf ? f[i] >> 1 : UINT64_MAX, eg = j < ng ? g[j] >> 1 : UINT64_MAX;
+        uint64_t edge = ef < eg ? ef : eg;
+        Py_ssize_t forward = 0, count = 0;
+        while (i < nf && (f[i] >> 1) == edge)
+            i++, forward++;
+        count = forward;
+        while (j < ng && (g[j] >> 1) == edge)
+            j++, count++;
+        scan_edge(scan, edge, forward, count);
+    }
+}
+
+#define SUB_MAX_BITS 14
+
+/* The keys of f[0..nf) and g[0..ng) in sub-buckets whose uses are not balanced (see
+ * split_groups), copied to kf and kg; returns 0 when more than half the keys are there (then
+ * the caller sorts the whole bucket). sig, cnt: 2^SUB_MAX_BITS entries of scratch. */
+static int unbalanced_part(const uint64_t *f, Py_ssize_t nf, const uint64_t *g, Py_ssize_t ng, int shift,
+                           uint64_t *sig, int64_t *cnt, uint64_t *kf, Py_ssize_t *mf, uint64_t *kg, Py_ssize_t *mg) {
+    int bits = 4;
+    while (bits < SUB_MAX_BITS && ((Py_ssize_t)8 << bits) < nf + ng)
+        bits++;
+    if (bits > shift - 1)
+        bits = shift - 1;
+    if (bits < 1)
+        return 0;
+    const int s = shift - bits;
+    const uint64_t mask = ((uint64_t)1 << bits) - 1;
+    memset(sig, 0, (mask + 1) * sizeof *sig);
+    memset(cnt, 0, (mask + 1) * sizeof *cnt);
+    for (Py_ssize_t i = 0; i < nf; i++) {
+        uint64_t x = f[i], at = (x >> s) & mask;
+        sig[at] += mix(x | 1);
+        cnt[at]++;
+    }
+    for (Py_ssize_t j = 0; j < ng; j++) {
+        uint64_t x = g[j], at = (x >> s) & mask;
+        sig[at] -= mix(x | 1);
+        cnt[at]--;
+    }
+    for (uint64_t at = 0; at <= mask; at++)
+        cnt[at] = sig[at] != 0 || cnt[at] != 0; /* 1: sort this sub-bucket's keys */
+    Py_ssize_t a = 0, b = 0;
+    for (Py_ssize_t i = 0; i < nf; i++) {
+        uint64_t x = f[i];
+        kf[a] = x;
+        a += cnt[(x >> s) & mask];
+    }
+    for (Py_ssize_t j = 0; j < ng; j++) {
+        uint64_t x = g[j];
+        kg[b] = x;
+        b += cnt[(x >> s) & mask];
+    }
+    *mf = a;
+    *mg = b;
+    return 2 * (a + b) <= nf + ng;
+}
+
 static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     PyObject *fobj, *ffobj, *bobj, *bfobj;
     Py_ssize_t cap;
@@ -2575,27 +2650,35 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     GroupScan scan;
     scan_start(&scan);
     uint64_t *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
-    scan.failed |= !tmp;
+    /* the filter's scratch and the kept keys of one bucket, both directions */
+    uint64_t *sig = malloc(((Py_ssize_t)1 << SUB_MAX_BITS) * sizeof(uint64_t));
+    int64_t *cnt = malloc(((Py_ssize_t)1 << SUB_MAX_BITS) * sizeof(int64_t));
+    uint64_t *kept = malloc((2 * cap + 2) * sizeof(uint64_t));
+    scan.failed |= !tmp || !sig || !cnt || !kept;
     Py_BEGIN_ALLOW_THREADS
-    for (Py_ssize_t bucket = 0; bucket < buckets && !scan.failed; bucket++) {
-        uint64_t *f = fa + bucket * cap, *g = ba + bucket * cap;
-        Py_ssize_t nf = ffill[bucket], ng = bfill[bucket], i = 0, j = 0;
-        msd(f, nf, shift, tmp);
-        msd(g, ng, shift, tmp);
-        while ((i < nf || j < ng) && !scan.failed) {
-            uint64_t ef = i < nf ? f[i] >> 1 : UINT64_MAX, eg = j < ng ? g[j] >> 1 : UINT64_MAX;
-            uint64_t edge = ef < eg ? ef : eg;
-            Py_ssize_t forward = 0, count = 0;
-            while (i < nf && (f[i] >> 1) == edge)
-                i++, forward++;
-            count = forward;
-            while (j < ng && (g[j] >> 1) == edge)
-                j++, count++;
-            scan_edge(&scan, edge, forward, count);
+    int whole = 0; /* every bucket sorted whole: the filtered scan proved nothing */
+    for (int round = 0; round < 2 && !scan.failed; round++) {
+        for (Py_ssize_t bucket = 0; bucket < buckets && !scan.failed; bucket++) {
+            uint64_t *f = fa + bucket * cap, *g = ba + bucket * cap, *kf = kept, *kg = kept + cap + 1;
+            Py_ssize_t nf = ffill[bucket], ng = bfill[bucket], mf, mg;
+            if (!whole && unbalanced_part(f, nf, g, ng, shift, sig, cnt, kf, &mf, kg, &mg))
+                group_bucket(&scan, kf, mf, kg, mg, shift, tmp);
+            else
+                group_bucket(&scan, f, nf, g, ng, shift, tmp);
         }
+        if (whole || scan.proven_open || scan.failed)
+            break;
+        /* no unbalanced edge: the doubtful ids of the skipped sub-buckets are wanted too */
+        free(scan.unbalanced);
+        free(scan.doubtful);
+        scan_start(&scan);
+        whole = 1;
     }
     Py_END_ALLOW_THREADS
     free(tmp);
+    free(sig);
+    free(cnt);
+    free(kept);
     PyBuffer_Release(&fk);
     PyBuffer_Release(&ff);
     PyBuffer_Release(&bk);

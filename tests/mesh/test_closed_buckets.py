@@ -197,6 +197,46 @@ def test_split_groups_are_the_groups_of_every_key(keys):
     assert split == KERNELS.groups(np.sort(keys))
 
 
+@pytest.mark.parametrize("case", ["holes", "doubtful only", "closed", "holes and doubtful", "soup", "misoriented"])
+def test_split_groups_of_many_keys_are_the_groups_of_every_key(case):
+    """Buckets of tens of thousands of keys, where ``split_groups`` sorts only the sub-buckets
+    whose two directions' uses differ: the same answers as ``groups`` of every key sorted when
+    a few edges are used once (holes), when no edge is unbalanced but some are used twice each
+    way (the doubtful ids, from every bucket sorted whole), when every edge pairs up, when both,
+    when most edges are used once (a soup: buckets sorted whole) and when edges are used twice
+    the same way."""
+    rng = np.random.default_rng(len(case))
+    edges = np.unique(rng.integers(0, 2**63, 300_000, dtype=np.uint64))
+    forward = np.ones(edges.size, dtype=np.int64)
+    backward = np.ones(edges.size, dtype=np.int64)
+    some = rng.choice(edges.size, 3000, replace=False)
+    if case in ("holes", "holes and doubtful"):
+        forward[some[:1000]], backward[some[1000:2000]] = 0, 0
+    if case in ("doubtful only", "holes and doubtful"):
+        forward[some[2000:2010]] = backward[some[2000:2010]] = 2
+    if case == "soup":
+        forward = rng.integers(0, 2, edges.size)
+        backward = 1 - forward
+    if case == "misoriented":
+        forward[some[:500]], backward[some[:500]] = 2, 0
+    keys = np.concatenate([np.repeat((edges << np.uint64(1)) | np.uint64(1), forward),
+                           np.repeat(edges << np.uint64(1), backward)])
+    rng.shuffle(keys)
+    forward_buckets = dealt(keys)
+    backward_buckets = kernels.Buckets.like(forward_buckets)
+    backward_buckets.add(keys[(keys & np.uint64(1)) == 0])
+    assert not backward_buckets.overflow
+    split = KERNELS.split_groups(forward_buckets.keys, forward_buckets.fill, backward_buckets.keys,
+                                 backward_buckets.fill, forward_buckets.cap, forward_buckets.shift)
+    expected = KERNELS.groups(np.sort(keys))
+    assert split == expected
+    ids, _, _, doubtful = expected
+    assert (len(ids) > 0) is (case not in ("doubtful only", "closed"))
+    assert (doubtful is None) is (case not in ("doubtful only", "closed"))
+    if case == "doubtful only":
+        assert len(doubtful) == 8 * 10
+
+
 @pytest.mark.parametrize("n", [1, 5, 128, 129, 5000, 20_000])
 def test_compiled_backward_keys_are_numpys(n):
     """``backward_block`` deals exactly the keys with bit 0 clear of ``column_edge_keys``, to
