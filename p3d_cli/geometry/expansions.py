@@ -132,6 +132,7 @@ class ExactSum:
         self._pending_high = np.zeros(count * _E_SPAN)
         self._pending_low = np.zeros(count * _E_SPAN)
         self._pending = 0          # values per bin at most, since the last flush
+        self._touched = np.zeros(count * _E_SPAN, dtype=bool)
 
     def add(self, values: np.ndarray, rows: np.ndarray) -> None:
         """Add ``values`` ``(k, m)`` row by row to the quantities ``rows`` ``(k,)`` (int)."""
@@ -172,6 +173,7 @@ class ExactSum:
                 # High sums are integers, low sums multiples of 2**-26: both exact as scaled.
                 scale = 1 if pending is self._pending_high else 1 << _LOW_BITS
                 exact[hit] += np.array([int(x * scale) for x in pending[hit].tolist()], dtype=object)
+                self._touched[hit] = True
                 pending[:] = 0.0
         self._pending = 0
 
@@ -182,7 +184,9 @@ class ExactSum:
         for q in range(self.count):
             at = slice(q * _E_SPAN, (q + 1) * _E_SPAN)
             high, low = self._high[at], self._low[at]
-            hit = [int(b) for b in np.flatnonzero((high != 0) | (low != 0))]
+            # The bins ever given a nonzero value (comparing every object bin with 0 cost more
+            # than the sums; a bin that came back to 0 adds nothing).
+            hit = [int(b) for b in np.flatnonzero(self._touched[at])]
             if not hit:
                 out.append(Fraction(0))
                 continue

@@ -1985,8 +1985,8 @@ static PyMethodDef methods[] = {
      "ear_holds(plane, order, alive, sign, bound, u, v, w, first, last) -> 1, 0 or -1 (undecided): whether a "
      "corner lies in the ear"},
     {"local_terms", py_local_terms, METH_VARARGS,
-     "local_terms(a, b, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> sides that may have lost bits to "
-     "underflow: Locals.add's terms of one batch of sides"},
+     "local_terms(u, v, frame, scale, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> sides that may have "
+     "lost bits to underflow (-1: u - frame inexact): Locals.add's terms of one batch of sides"},
     {"exact_bins", py_exact_bins, METH_VARARGS,
      "exact_bins(values, offsets, high, low): ExactSum.add's binning of values (k, m) into the float bins"},
     {NULL, NULL, 0, NULL}};
@@ -3198,9 +3198,11 @@ static double pairwise_row(const double *a, Py_ssize_t n) {
 
 static inline double numpy_sum(const double *a, Py_ssize_t n) { return 0.0 + pairwise_row(a, n); }
 
-/* local_terms(a, b, parts, q_high, mag, big_t, big_w, low_sums, r_sum) -> underflow count
- * Locals.add's numbers for the sides with scaled local end points a, b ((3, n) float64, rows
- * x, y, z), by the same IEEE operations in the same order as the numpy code of
+/* local_terms(u, v, frame, scale, parts, q_high, mag, big_t, big_w, low_sums, r_sum) ->
+ *   underflow count, or -1 when some u - frame is not exact (InexactLocal)
+ * Locals.add's numbers for the sides u -> v ((3, n) float64 world coordinates, rows x, y, z)
+ * with scaled local end points a = (u - frame) 2**-scale, b likewise (boundary._local), by the
+ * same IEEE operations in the same order as the numpy code of
  * p3d_cli.mesh.boundary_terms (_cross, _dd_product, _w, expansions.cascaded_sums, numpy's
  * pairwise row sums): parts (12, n) the cross products' exact parts (row 4k + part), q_high
  * (9, n) Q's exact high parts (row 3k + i), low_sums (27) Q's and R's low parts summed per row
@@ -3212,8 +3214,10 @@ static const int PAIR_I[6] = {0, 1, 2, 0, 0, 1}, PAIR_J[6] = {0, 1, 2, 1, 2, 2};
 
 static PyObject *py_local_terms(PyObject *self, PyObject *args) {
     PyObject *obj[9];
-    if (!PyArg_ParseTuple(args, "OOOOOOOOO", &obj[0], &obj[1], &obj[2], &obj[3], &obj[4], &obj[5], &obj[6], &obj[7],
-                          &obj[8]))
+    double frame[3];
+    int scale;
+    if (!PyArg_ParseTuple(args, "OO(ddd)iOOOOOOO", &obj[0], &obj[1], &frame[0], &frame[1], &frame[2], &scale, &obj[2],
+                          &obj[3], &obj[4], &obj[5], &obj[6], &obj[7], &obj[8]))
         return NULL;
     Py_buffer v[9];
     int got[9] = {0};
@@ -3232,19 +3236,32 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
             PyErr_SetString(PyExc_ValueError, "local_terms: the arrays' shapes do not fit");
             return NULL;
         }
-    const double *a = v[0].buf, *b = v[1].buf;
+    const double *u = v[0].buf, *w = v[1].buf;
     double *parts = v[2].buf, *q_high = v[3].buf, *mag = v[4].buf, *big_t = v[5].buf, *big_w = v[6].buf;
     double *low_sums = v[7].buf, *r_sum = v[8].buf;
-    /* q_low (9 n), r_low (18 n), r_high (18 (n + 1)), the cascade's errors (n / 2 + 1) */
-    double *work = n ? malloc((9 * n + 18 * n + 18 * (n + 1) + n / 2 + 1) * sizeof(double)) : NULL;
+    /* a, b (3 n each), q_low (9 n), r_low (18 n), r_high (18 (n + 1)), the cascade's errors (n / 2 + 1) */
+    double *work = n ? malloc((6 * n + 9 * n + 18 * n + 18 * (n + 1) + n / 2 + 1) * sizeof(double)) : NULL;
     if (n && !work) {
         release_all(v, got, 9);
         return PyErr_NoMemory();
     }
     Py_ssize_t underflow = 0;
+    int inexact = 0;
     Py_BEGIN_ALLOW_THREADS
-    double *q_low = work, *r_low = q_low + 9 * n, *r_high = r_low + 18 * n, *error = r_high + 18 * (n + 1);
-    for (Py_ssize_t s = 0; s < n; s++) {
+    double *a = work, *b = a + 3 * n, *q_low = b + 3 * n, *r_low = q_low + 9 * n, *r_high = r_low + 18 * n,
+           *error = r_high + 18 * (n + 1);
+    /* boundary._local: a = (u - o') 2**-scale, checked exact (two_sum's error zero, the scaling
+     * undone gives the difference back) */
+    for (int i = 0; i < 3 && n; i++)
+        for (Py_ssize_t s = 0; s < n; s++) {
+            double d, e, x, y;
+            two_sum_d(u[i * n + s], -frame[i], &d, &e);
+            two_sum_d(w[i * n + s], -frame[i], &x, &y);
+            a[i * n + s] = ldexp(d, -scale);
+            b[i * n + s] = ldexp(x, -scale);
+            inexact |= e != 0.0 || y != 0.0 || ldexp(a[i * n + s], scale) != d || ldexp(b[i * n + s], scale) != x;
+        }
+    for (Py_ssize_t s = 0; s < n && !inexact; s++) {
         double A[3], B[3], ah[3], al[3], bh[3], bl[3], xh[3], xl[3], th[3], tl[3], thh[3], thl[3];
         double xhh[3], xhl[3], wh[6], wl[6], whh[6], whl[6];
         int small = 0;
@@ -3318,9 +3335,9 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
             big_w[r * n + s] = aa[i] * aa[j] + bb[i] * bb[j] + tt[i] * tt[j];
         }
     }
-    for (int r = 0; r < 9; r++)
+    for (int r = 0; r < 9 && !inexact; r++)
         low_sums[r] = numpy_sum(q_low + r * n, n);
-    for (int r = 0; r < 18; r++) {
+    for (int r = 0; r < 18 && !inexact; r++) {
         /* cascaded_sums: halves added by two_sum level by level (a zero pads an odd row), each
          * level's errors summed as numpy sums a row and added to low */
         double *x = r_high + r * (n + 1), low = 0.0;
@@ -3340,7 +3357,7 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     free(work);
     release_all(v, got, 9);
-    return PyLong_FromSsize_t(underflow);
+    return PyLong_FromSsize_t(inexact ? -1 : underflow);
 }
 
 /* exact_bins(values, offsets, high, low): p3d_cli.geometry.expansions.ExactSum.add's binning.

@@ -31,7 +31,6 @@ import numpy as np
 from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combine, combine_bound, frame_origin
 from p3d_cli.mesh.closed import (_lex_less, column_edge_keys, key_groups, side_keys, sides_of_edges)
 from p3d_cli.mesh.columns import columns
-from p3d_cli.geometry.expansions import two_sum
 from p3d_cli.mesh.kernels import compiled, sort, takes
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
@@ -339,7 +338,7 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
     local = Locals()
     try:
         for u, v in unbalanced_sides(source_blocks(), unbalanced.ids, unbalanced.most):
-            local.add(_local(u, frame, scale), _local(v, frame, scale))
+            local.add(u, v, frame, scale)
     except InexactLocal:
         sums = _exact_terms(source_blocks, unbalanced, origin)
         return BoundaryTerms(sums, np.zeros(10), unbalanced.edges)
@@ -358,16 +357,6 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
     sums = combine(p, q, r, origin, frame)
     error = combine_bound([p_error] * 3, q_error, r_error, origin, frame)
     return BoundaryTerms(sums, error, unbalanced.edges)
-
-
-def _local(u: np.ndarray, frame: np.ndarray, scale: int) -> np.ndarray:
-    """``(u - o') · 2**-scale``, checked exact: ``two_sum``'s error term is zero, and the
-    scaling lost nothing to underflow (coordinates spanning more than 2**1000)."""
-    a, error = two_sum(u, -frame[:, None])
-    scaled = np.ldexp(a, -scale)
-    if error.any() or not np.array_equal(np.ldexp(scaled, scale), a):
-        raise InexactLocal
-    return scaled
 
 
 def _exact_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> list:

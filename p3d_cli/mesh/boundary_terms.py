@@ -165,13 +165,23 @@ class Locals:
         self.count = 0
         self.underflow = 0            # sides whose cross products may have lost bits to underflow
 
-    def add(self, a: np.ndarray, b: np.ndarray) -> None:
-        """Add sides with scaled local end points ``a``, ``b`` ``(3, m)`` (exact floats)."""
-        n = a.shape[1]
+    def add(self, u: np.ndarray, v: np.ndarray, frame: np.ndarray, scale: int) -> None:
+        """Add sides ``u→v`` given as ``(3, m)`` world coordinates, in the local coordinates
+        ``a = (u - frame) · 2**-scale`` (``|a| <= 1``; ``local_coordinates``).
+
+        Raises
+        ------
+        InexactLocal
+            Some ``u - frame`` is not an exact float (``frame_origin`` rules it out).
+        """
+        n = u.shape[1]
         if n == 0:
             return
         kernels = compiled()
-        terms = _compiled_terms(kernels, a, b) if kernels is not None else local_terms(a, b)
+        if kernels is not None:
+            terms = _compiled_terms(kernels, u, v, frame, scale)
+        else:
+            terms = local_terms(local_coordinates(u, frame, scale), local_coordinates(v, frame, scale))
         self.underflow += terms.underflow
         # Q is multiplied by |o|² in the end, R by |o| only: Q's high parts are summed exactly,
         # R's by a cascade of error-free sums (``cascaded_sums``: ~2^-100 of their magnitude,
@@ -265,13 +275,27 @@ def local_terms(a: np.ndarray, b: np.ndarray) -> Terms:
                  np.abs(xh), big_t, big_w, int(small.any(axis=0).sum()))
 
 
-def _compiled_terms(kernels, a: np.ndarray, b: np.ndarray) -> Terms:
-    """``local_terms`` by the compiled kernel: the same bits."""
-    n = a.shape[1]
+def local_coordinates(u: np.ndarray, frame: np.ndarray, scale: int) -> np.ndarray:
+    """``(u - frame) · 2**-scale`` for world coordinates ``u`` ``(3, m)``, checked exact:
+    ``two_sum``'s error term is zero, and the scaling lost nothing to underflow (coordinates
+    spanning more than 2**1000); else ``InexactLocal``."""
+    a, error = two_sum(u, -np.asarray(frame, dtype=np.float64)[:, None])
+    scaled = np.ldexp(a, -scale)
+    if error.any() or not np.array_equal(np.ldexp(scaled, scale), a):
+        raise InexactLocal
+    return scaled
+
+
+def _compiled_terms(kernels, u: np.ndarray, v: np.ndarray, frame: np.ndarray, scale: int) -> Terms:
+    """``local_terms`` of ``local_coordinates`` by the compiled kernel: the same bits."""
+    n = u.shape[1]
     out = Terms(np.empty((12, n)), np.empty((9, n)), np.empty(27), np.empty(18), np.empty((3, n)),
                 np.empty((3, n)), np.empty((6, n)), 0)
-    a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
-    underflow = kernels.local_terms(a, b, out.parts, out.q_high, out.mag, out.big_t, out.big_w, out.low_sums, out.r_sum)
+    u, v = np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64)
+    underflow = kernels.local_terms(u, v, tuple(float(x) for x in frame), int(scale), out.parts, out.q_high,
+                                    out.mag, out.big_t, out.big_w, out.low_sums, out.r_sum)
+    if underflow < 0:
+        raise InexactLocal
     return out._replace(underflow=underflow)
 
 

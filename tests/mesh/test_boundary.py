@@ -367,7 +367,12 @@ def test_compiled_local_terms_are_the_numpy_ones_bit_for_bit(n, kind):
     sum, cascade level and numpy row sum, so the same bits (rows of one to 20,001 sides: the
     pairwise sums' leaves and halves, odd cascade levels, underflow, signed zeros)."""
     a, b = _local_sides(np.random.default_rng(n), n, kind)
-    fast = terms_module._compiled_terms(kernels.KERNELS, a, b)
+    # World coordinates near a frame far off (u - frame exact by Sterbenz's lemma, scaled by
+    # 2**-7 into [-1, 1]); the spread's tiny ones as they are, about the origin.
+    frame, scale = (np.zeros(3), 0) if kind == "spread" else (np.array([3.0 * 2 ** 30, -5.0 * 2 ** 10, 0.0]), 7)
+    u, v = np.ldexp(a, scale) + frame[:, None], np.ldexp(b, scale) + frame[:, None]
+    a, b = terms_module.local_coordinates(u, frame, scale), terms_module.local_coordinates(v, frame, scale)
+    fast = terms_module._compiled_terms(kernels.KERNELS, u, v, frame, scale)
     slow = terms_module.local_terms(a, b)
     assert fast.underflow == slow.underflow
     if kind == "spread" and n >= 100:
@@ -394,7 +399,7 @@ def test_locals_totals_are_the_same_with_and_without_the_kernel():
     def run():
         local = terms_module.Locals()
         for a, b in batches:
-            local.add(a, b)
+            local.add(a, b, np.zeros(3), 0)
         return local.cross_totals(), local.totals(), local.underflow
 
     (p, p_error), (qr, qr_error), underflow = run()
@@ -405,3 +410,18 @@ def test_locals_totals_are_the_same_with_and_without_the_kernel():
     else:
         np.testing.assert_allclose(qr_error, qr2_error, rtol=1e-12)
         assert all(abs(float(x - y)) <= e for x, y, e in zip(qr, qr2, qr_error))
+
+
+@pytest.mark.parametrize("compiled", [False, pytest.param(True, marks=needs_kernels)])
+def test_locals_refuse_inexact_local_coordinates(compiled):
+    """``Locals.add`` in world coordinates: a side whose ``u - frame`` is not an exact float,
+    or whose scaling loses bits, raises ``InexactLocal``, with and without the kernel."""
+    u = np.array([[0.1, 0.5], [0.25, 0.75], [0.0, 1.0]])
+    v = u[:, ::-1].copy()
+    local = terms_module.Locals()
+    add = local.add if compiled else (lambda *args: numpy_road(local.add, *args))
+    add(u, v, np.zeros(3), 1)                                   # exact: halves
+    for frame, scale in [(np.array([1e8 / 3, 0.0, 0.0]), 0),   # 0.1 - 1e8/3 is not
+                         (np.zeros(3), 1074)]:                  # 0.1 · 2**-1074 underflows
+        with pytest.raises(terms_module.InexactLocal):
+            add(u, v, frame, scale)
