@@ -3198,6 +3198,14 @@ static double pairwise_row(const double *a, Py_ssize_t n) {
 
 static inline double numpy_sum(const double *a, Py_ssize_t n) { return 0.0 + pairwise_row(a, n); }
 
+/* boundary_terms._dd_product: (xh + xl)(yh + yl) as an exact high part p and a rounded low
+ * part e (xl yl dropped), given the splits of xh and yh */
+static inline void dd_product_d(double xh, double xhh, double xhl, double xl, double yh, double yhh, double yhl,
+                                double yl, double *p, double *e) {
+    product_d(xh, xhh, xhl, yh, yhh, yhl, p, e);
+    *e = *e + (xh * yl + xl * yh);
+}
+
 /* local_terms(u, v, frame, scale, parts, q_high, mag, big_t, big_w, low_sums, r_sum) ->
  *   underflow count, or -1 when some u - frame is not exact (InexactLocal)
  * Locals.add's numbers for the sides u -> v ((3, n) float64 world coordinates, rows x, y, z)
@@ -3294,13 +3302,9 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
             split_d(xh[i], &xhh[i], &xhl[i]);
         }
         for (int k = 0; k < 3; k++) /* Q: _dd_product */
-            for (int i = 0; i < 3; i++) {
-                double p, e;
-                product_d(xh[k], xhh[k], xhl[k], th[i], thh[i], thl[i], &p, &e);
-                e = e + (xh[k] * tl[i] + xl[k] * th[i]);
-                q_high[(3 * k + i) * n + s] = p;
-                q_low[(3 * k + i) * n + s] = e;
-            }
+            for (int i = 0; i < 3; i++)
+                dd_product_d(xh[k], xhh[k], xhl[k], xl[k], th[i], thh[i], thl[i], tl[i], &q_high[(3 * k + i) * n + s],
+                             &q_low[(3 * k + i) * n + s]);
         for (int r = 0; r < 6; r++) { /* _w */
             int i = PAIR_I[r], j = PAIR_J[r];
             double x1, y1, x2, y2, x3, y3, h, l2, l3;
@@ -3314,13 +3318,9 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
             split_d(wh[r], &whh[r], &whl[r]);
         }
         for (int k = 0; k < 3; k++) /* R: _dd_product */
-            for (int r = 0; r < 6; r++) {
-                double p, e;
-                product_d(xh[k], xhh[k], xhl[k], wh[r], whh[r], whl[r], &p, &e);
-                e = e + (xh[k] * wl[r] + xl[k] * wh[r]);
-                r_high[(6 * k + r) * (n + 1) + s] = p;
-                r_low[(6 * k + r) * n + s] = e;
-            }
+            for (int r = 0; r < 6; r++)
+                dd_product_d(xh[k], xhh[k], xhl[k], xl[k], wh[r], whh[r], whl[r], wl[r],
+                             &r_high[(6 * k + r) * (n + 1) + s], &r_low[(6 * k + r) * n + s]);
         /* the bound's inputs (Locals._bound) */
         double aa[3], bb[3], tt[3];
         for (int i = 0; i < 3; i++) {
