@@ -3209,7 +3209,7 @@ static inline void dd_product_d(double xh, double xhh, double xhl, double xl, do
 /* local_terms(u, v, frame, scale, parts, q_high, mag, big_t, big_w, low_sums, r_sum) ->
  *   underflow count, or -1 when some u - frame is not exact (InexactLocal)
  * Locals.add's numbers for the sides u -> v ((3, n) float64 world coordinates, rows x, y, z)
- * with scaled local end points a = (u - frame) 2**-scale, b likewise (boundary._local), by the
+ * with scaled local end points a = (u - frame) 2**-scale, b likewise (local_coordinates), by the
  * same IEEE operations in the same order as the numpy code of
  * p3d_cli.mesh.boundary_terms (_cross, _dd_product, _w, expansions.cascaded_sums, numpy's
  * pairwise row sums): parts (12, n) the cross products' exact parts (row 4k + part), q_high
@@ -3238,12 +3238,14 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
     }
     Py_ssize_t n = v[0].len / 24;
     static const Py_ssize_t rows[9] = {3, 3, 12, 9, 3, 3, 6, 27, 18};
+    int fits = v[0].len == 24 * n;
     for (int i = 0; i < 9; i++)
-        if (v[i].len != rows[i] * (i >= 7 ? 1 : n) * 8 || v[0].len != 24 * n) {
-            release_all(v, got, 9);
-            PyErr_SetString(PyExc_ValueError, "local_terms: the arrays' shapes do not fit");
-            return NULL;
-        }
+        fits &= v[i].len == rows[i] * (i >= 7 ? 1 : n) * 8;
+    if (!fits) {
+        release_all(v, got, 9);
+        PyErr_SetString(PyExc_ValueError, "local_terms: the arrays' shapes do not fit");
+        return NULL;
+    }
     const double *u = v[0].buf, *w = v[1].buf;
     double *parts = v[2].buf, *q_high = v[3].buf, *mag = v[4].buf, *big_t = v[5].buf, *big_w = v[6].buf;
     double *low_sums = v[7].buf, *r_sum = v[8].buf;
@@ -3258,9 +3260,9 @@ static PyObject *py_local_terms(PyObject *self, PyObject *args) {
     Py_BEGIN_ALLOW_THREADS
     double *a = work, *b = a + 3 * n, *q_low = b + 3 * n, *r_low = q_low + 9 * n, *r_high = r_low + 18 * n,
            *error = r_high + 18 * (n + 1);
-    /* boundary._local: a = (u - o') 2**-scale, checked exact (two_sum's error zero, the scaling
-     * undone gives the difference back) */
-    for (int i = 0; i < 3 && n; i++)
+    /* boundary_terms.local_coordinates: a = (u - frame) 2**-scale, checked exact (two_sum's
+     * error zero, the scaling undone gives the difference back) */
+    for (int i = 0; i < 3; i++)
         for (Py_ssize_t s = 0; s < n; s++) {
             double d, e, x, y;
             two_sum_d(u[i * n + s], -frame[i], &d, &e);

@@ -425,3 +425,19 @@ def test_locals_refuse_inexact_local_coordinates(compiled):
                          (np.zeros(3), 1074)]:                  # 0.1 · 2**-1074 underflows
         with pytest.raises(terms_module.InexactLocal):
             add(u, v, frame, scale)
+
+
+@needs_kernels
+def test_local_terms_refuses_arrays_that_do_not_fit():
+    """The kernel checks its arrays' sizes against the sides' count before writing any."""
+    u = np.ones((3, 4))
+    out = [np.zeros((12, 4)), np.zeros((9, 4)), np.zeros((3, 4)), np.zeros((3, 4)), np.zeros((6, 4)),
+           np.zeros(27), np.zeros(18)]
+    assert kernels.KERNELS.local_terms(u, u, (0.0, 0.0, 0.0), 0, *out) == 0
+    for bad in (1, 5, 6):
+        wrong = list(out)
+        wrong[bad] = np.zeros(wrong[bad].size + 1)
+        with pytest.raises(ValueError, match="local_terms"):
+            kernels.KERNELS.local_terms(u, u, (0.0, 0.0, 0.0), 0, *wrong)
+    with pytest.raises(ValueError, match="local_terms"):
+        kernels.KERNELS.local_terms(u, np.ones((3, 5)), (0.0, 0.0, 0.0), 0, *out)
