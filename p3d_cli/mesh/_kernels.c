@@ -12,11 +12,13 @@
  *   (p3d_cli.mesh.closed, boundary);
  * - paired_keys, pairs, confirm: `p3d check`'s fast path (p3d_cli.mesh.paired).
  * - forward_block, distinct, keys_block (at the end): `p3d props`' closed test on half the
- *   keys (p3d_cli.mesh.kernels.ForwardBuckets), and every key for the open road.
+ *   keys (p3d_cli.mesh.kernels.ForwardBuckets), with the other half's 32-bit prints, and every
+ *   key for the open road.
  * - near_walk (at the end): `p3d repair`'s faces near new faces, the walk of its box tree
  *   (p3d_cli.repairs.near).
- * - backward_block, split_groups, pick_sides (at the end): `p3d props`' open road, the other
- *   half of the keys beside the forward ones, their groups, and the boundary's sides.
+ * - print_groups, backward_block, split_groups, pick_sides (at the end): `p3d props`' open
+ *   road, the groups of the forward keys and the prints (or of the other half of the keys
+ *   beside the forward ones), and the boundary's sides.
  *
  * Bit for bit the numpy code's results:
  * - the same IEEE double operations in the same order (build with -ffp-contract=off, never
@@ -231,6 +233,12 @@ typedef struct {
     int forward_only;
     uint64_t balance;
     Py_ssize_t backward;
+    /* forward_block with prints: each backward side's print, the 32 key bits below its
+     * bucket's (key >> (shift - 32)), dealt to buckets of the same shift and room;
+     * print_overflow is set when one is full (its print is dropped). */
+    uint32_t *prints;
+    int64_t *print_fill;
+    int print_overflow;
 } Pass;
 
 /* Corners of triangles [t0, t0 + n) widened to float64: p[k][3 v + a]. */
@@ -1172,6 +1180,7 @@ static PyObject *py_fan_chains(PyObject *self, PyObject *args);
 static PyObject *py_area_filter(PyObject *self, PyObject *args);
 static PyObject *py_backward_block(PyObject *self, PyObject *args);
 static PyObject *py_split_groups(PyObject *self, PyObject *args);
+static PyObject *py_print_groups(PyObject *self, PyObject *args);
 static PyObject *py_pick_sides(PyObject *self, PyObject *args);
 static PyObject *py_populate(PyObject *self, PyObject *args);
 static PyObject *py_ear_holds(PyObject *self, PyObject *args);
@@ -1951,7 +1960,8 @@ static PyMethodDef methods[] = {
     {"sort", py_sort, METH_VARARGS, "sort(keys): in-place ascending sort of uint64 keys"},
     {"distinct", py_distinct, METH_VARARGS, "distinct(keys, fill, cap, shift) -> whether no bucketed key is there twice"},
     {"forward_block", py_forward_block, METH_VARARGS,
-     "forward_block(block, ox, oy, oz, keys, fill, cap, shift) -> block()'s results, balance, backward sides"},
+     "forward_block(block, ox, oy, oz, keys, fill, cap, shift[, prints, pfill]) -> block()'s results, balance, "
+     "backward sides, prints whole"},
     {"keys_block", py_keys_block, METH_VARARGS, "keys_block(block, keys, fill, cap, shift) -> keys written (-1: overflow)"},
     {"unite", py_unite, METH_VARARGS, "unite(parent, a, b): join nodes a[i] and b[i] (int64), smallest node the root"},
     {"flatten", py_flatten, METH_VARARGS, "flatten(parent): every node pointed at its root"},
@@ -1977,6 +1987,8 @@ static PyMethodDef methods[] = {
      "backward_block(block, keys, fill, cap, shift) -> keys written (-1: overflow): the other half of the keys"},
     {"split_groups", py_split_groups, METH_VARARGS,
      "split_groups(fkeys, ffill, bkeys, bfill, cap, shift) -> groups(...) of both halves' keys together"},
+    {"print_groups", py_print_groups, METH_VARARGS,
+     "print_groups(fkeys, ffill, prints, pfill, cap, shift) -> groups(...) by print id of forward keys and backward prints"},
     {"populate", py_populate, METH_VARARGS,
      "populate(keys, fill, cap, shift, sure) -> whether each bucket's first `sure` slots' pages were made at once"},
     {"pick_sides", py_pick_sides, METH_VARARGS,
@@ -2024,6 +2036,31 @@ static int get_buckets(PyObject *keyobj, PyObject *fillobj, Py_ssize_t cap, int 
 }
 
 
+/* The print buckets (forward_block's prints, print_groups'): prints uint32 writable and
+ * contiguous with room for `buckets` buckets of `cap`, fill int64 of `buckets` counts within
+ * [0, cap], and a shift that leaves 32 bits of key below the buckets' bits and above bit 0. */
+static int get_prints(PyObject *printobj, PyObject *fillobj, Py_ssize_t buckets, Py_ssize_t cap, int shift,
+                      Py_buffer *pview, Py_buffer *fview) {
+    if (PyObject_GetBuffer(printobj, pview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (PyObject_GetBuffer(fillobj, fview, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        PyBuffer_Release(pview);
+        return -1;
+    }
+    const int64_t *fill = (const int64_t *)fview->buf;
+    int bad = pview->itemsize != 4 || fview->itemsize != 8 || shift < 33 || fview->len / 8 != buckets ||
+              pview->len / 4 < buckets * cap;
+    for (Py_ssize_t b = 0; !bad && b < buckets; b++)
+        bad = fill[b] < 0 || fill[b] > cap;
+    if (bad) {
+        PyBuffer_Release(pview);
+        PyBuffer_Release(fview);
+        PyErr_SetString(PyExc_ValueError, "the print buckets do not fit the key buckets");
+        return -1;
+    }
+    return 0;
+}
+
 /* distinct(keys, fill, cap, shift) -> whether no key is there twice among bucketed keys
  * (forward_block's), and there is at least one. Each bucket is sorted in place and checked
  * while it is in cache; the buckets are never moved together (that would touch every key's
@@ -2068,9 +2105,9 @@ static PyObject *py_distinct(PyObject *self, PyObject *args) {
     Py_RETURN_FALSE;
 }
 
-/* forward_block(block, ox, oy, oz, keys, fill, cap, shift) ->
+/* forward_block(block, ox, oy, oz, keys, fill, cap, shift[, prints, pfill]) ->
  *   ((lo0, lo1, lo2, hi0, hi1, hi2), finite, (10 sums), magnitude sum, (3 weighted), keys written,
- *    balance, backward sides)
+ *    balance, backward sides, prints whole)
  * block(..., keys, 0, fill, cap, shift) keeping only the keys with bit 0 set (the sides that
  * run from the smaller corner hash to the larger: half the sides), dealt to buckets; balance is
  * the sum mod 2^64 of g = mix(key | 1) over those sides minus g over the others, backward the
@@ -2078,35 +2115,55 @@ static PyObject *py_distinct(PyObject *self, PyObject *args) {
  * kept key is there twice (distinct), the two counts agree and the balance is
  * zero, barring a 64-bit coincidence of the balance: with no forward key twice, an edge used
  * other than once each way is used unequally often in the two directions, and weighs g(edge)
- * times a nonzero count in the balance (p3d_cli.mesh.analysis). */
+ * times a nonzero count in the balance (p3d_cli.mesh.analysis).
+ * With prints (uint32) and pfill (int64, one count a bucket): each backward side's print, the
+ * 32 key bits below its bucket's (key >> (shift - 32), truncated), dealt to buckets of the same
+ * shift and room, for print_groups; prints whole is False when one did not fit (or none were
+ * asked for). */
 static PyObject *py_forward_block(PyObject *self, PyObject *args) {
-    PyObject *obj, *keyobj, *fillobj;
+    PyObject *obj, *keyobj, *fillobj, *printobj = Py_None, *pfillobj = Py_None;
     double o[3];
     Py_ssize_t cap;
     int shift;
-    if (!PyArg_ParseTuple(args, "OdddOOni", &obj, &o[0], &o[1], &o[2], &keyobj, &fillobj, &cap, &shift))
+    if (!PyArg_ParseTuple(args, "OdddOOni|OO", &obj, &o[0], &o[1], &o[2], &keyobj, &fillobj, &cap, &shift,
+                          &printobj, &pfillobj))
         return NULL;
-    Py_buffer view, kview, fview;
+    Py_buffer view, kview, fview, pview, pfview;
     Block b;
+    int prints = printobj != Py_None;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
     if (get_buckets(keyobj, fillobj, cap, shift, 1, &kview, &fview) < 0) {
         release_block(&view, &b);
         return NULL;
     }
+    if (prints && get_prints(printobj, pfillobj, fview.len / 8, cap, shift, &pview, &pfview) < 0) {
+        release_block(&view, &b);
+        PyBuffer_Release(&kview);
+        PyBuffer_Release(&fview);
+        return NULL;
+    }
     double sums[NSUMS];
     Pass c = {&b, {o[0], o[1], o[2]}, (uint64_t *)kview.buf, 0, (int64_t *)fview.buf, cap, shift, 0};
     c.forward_only = 1;
+    if (prints) {
+        c.prints = (uint32_t *)pview.buf;
+        c.print_fill = (int64_t *)pfview.buf;
+    }
     integrate(&c, sums);
     release_block(&view, &b);
     PyBuffer_Release(&kview);
     PyBuffer_Release(&fview);
+    if (prints) {
+        PyBuffer_Release(&pview);
+        PyBuffer_Release(&pfview);
+    }
     if (c.overflow)
         c.written = -1;
-    return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)nKn", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
+    return Py_BuildValue("(dddddd)O(dddddddddd)d(ddd)nKnO", c.lo[0], c.lo[1], c.lo[2], c.hi[0], c.hi[1], c.hi[2],
                          c.finite ? Py_True : Py_False, sums[0], sums[1], sums[2], sums[3], sums[4], sums[5],
                          sums[6], sums[7], sums[8], sums[9], sums[10], sums[11], sums[12], sums[13], c.written,
-                         (unsigned long long)c.balance, c.backward);
+                         (unsigned long long)c.balance, c.backward, prints && !c.print_overflow ? Py_True : Py_False);
 }
 
 
@@ -2567,18 +2624,18 @@ static PyObject *py_backward_block(PyObject *self, PyObject *args) {
  * group then proves the mesh open (no unbalanced edge), the doubtful ids in the skipped
  * sub-buckets are wanted too: every bucket is then sorted whole, as before. */
 static void group_bucket(GroupScan *scan, uint64_t *f, Py_ssize_t nf, uint64_t *g, Py_ssize_t ng, int shift,
-                         uint64_t *tmp) {
+                         uint64_t *tmp, int low) {
     Py_ssize_t i = 0, j = 0;
     msd(f, nf, shift, tmp);
     msd(g, ng, shift, tmp);
     while ((i < nf || j < ng) && !scan->failed) {
-        uint64_t ef = i < nf ? f[i] >> 1 : UINT64_MAX, eg = j < ng ? g[j] >> 1 : UINT64_MAX;
+        uint64_t ef = i < nf ? f[i] >> low : UINT64_MAX, eg = j < ng ? g[j] >> low : UINT64_MAX;
         uint64_t edge = ef < eg ? ef : eg;
         Py_ssize_t forward = 0, count = 0;
-        while (i < nf && (f[i] >> 1) == edge)
+        while (i < nf && (f[i] >> low) == edge)
             i++, forward++;
         count = forward;
-        while (j < ng && (g[j] >> 1) == edge)
+        while (j < ng && (g[j] >> low) == edge)
             j++, count++;
         scan_edge(scan, edge, forward, count);
     }
@@ -2588,9 +2645,12 @@ static void group_bucket(GroupScan *scan, uint64_t *f, Py_ssize_t nf, uint64_t *
 
 /* The keys of f[0..nf) and g[0..ng) in sub-buckets whose uses are not balanced (see
  * split_groups), copied to kf and kg; returns 0 when more than half the keys are there (then
- * the caller sorts the whole bucket). sig, cnt: 2^SUB_MAX_BITS entries of scratch. */
+ * the caller sorts the whole bucket). sig, cnt: 2^SUB_MAX_BITS entries of scratch. Keys are
+ * compared above bit `low` (1: the edge ids; print_groups: the prints). */
 static int unbalanced_part(const uint64_t *f, Py_ssize_t nf, const uint64_t *g, Py_ssize_t ng, int shift,
-                           uint64_t *sig, int64_t *cnt, uint64_t *kf, Py_ssize_t *mf, uint64_t *kg, Py_ssize_t *mg) {
+                           uint64_t *sig, int64_t *cnt, uint64_t *kf, Py_ssize_t *mf, uint64_t *kg, Py_ssize_t *mg,
+                           int low) {
+    const uint64_t above = ~(((uint64_t)1 << low) - 1); /* the compared bits */
     int bits = 4;
     while (bits < SUB_MAX_BITS && ((Py_ssize_t)8 << bits) < nf + ng)
         bits++;
@@ -2604,12 +2664,12 @@ static int unbalanced_part(const uint64_t *f, Py_ssize_t nf, const uint64_t *g, 
     memset(cnt, 0, (mask + 1) * sizeof *cnt);
     for (Py_ssize_t i = 0; i < nf; i++) {
         uint64_t x = f[i], at = (x >> s) & mask;
-        sig[at] += mix(x | 1);
+        sig[at] += mix((x & above) | 1);
         cnt[at]++;
     }
     for (Py_ssize_t j = 0; j < ng; j++) {
         uint64_t x = g[j], at = (x >> s) & mask;
-        sig[at] -= mix(x | 1);
+        sig[at] -= mix((x & above) | 1);
         cnt[at]--;
     }
     for (uint64_t at = 0; at <= mask; at++)
@@ -2630,23 +2690,11 @@ static int unbalanced_part(const uint64_t *f, Py_ssize_t nf, const uint64_t *g, 
     return 2 * (a + b) <= nf + ng;
 }
 
-static PyObject *py_split_groups(PyObject *self, PyObject *args) {
-    PyObject *fobj, *ffobj, *bobj, *bfobj;
-    Py_ssize_t cap;
-    int shift;
-    if (!PyArg_ParseTuple(args, "OOOOni", &fobj, &ffobj, &bobj, &bfobj, &cap, &shift))
-        return NULL;
-    Py_buffer fk, ff, bk, bf;
-    if (get_buckets(fobj, ffobj, cap, shift, 1, &fk, &ff) < 0)
-        return NULL;
-    if (get_buckets(bobj, bfobj, cap, shift, 1, &bk, &bf) < 0) {
-        PyBuffer_Release(&fk);
-        PyBuffer_Release(&ff);
-        return NULL;
-    }
-    Py_ssize_t buckets = ff.len / 8;
-    const int64_t *ffill = ff.buf, *bfill = bf.buf;
-    uint64_t *fa = fk.buf, *ba = bk.buf;
+/* split_groups' scan of forward keys fa (buckets of cap) and the other direction's, given as
+ * keys ba (uint64) or, when prints is not NULL, as forward_block's prints (uint32, each bucket's
+ * made into keys of the bucket in a buffer): groups of the keys compared above bit `low`. */
+static PyObject *scan_buckets(uint64_t *fa, const int64_t *ffill, uint64_t *ba, const uint32_t *prints,
+                              const int64_t *bfill, Py_ssize_t buckets, Py_ssize_t cap, int shift, int low) {
     GroupScan scan;
     scan_start(&scan);
     uint64_t *tmp = malloc((cap < SMALL ? cap : SMALL) * sizeof(uint64_t) + 8);
@@ -2654,17 +2702,26 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     uint64_t *sig = malloc(((Py_ssize_t)1 << SUB_MAX_BITS) * sizeof(uint64_t));
     int64_t *cnt = malloc(((Py_ssize_t)1 << SUB_MAX_BITS) * sizeof(int64_t));
     uint64_t *kept = malloc((2 * cap + 2) * sizeof(uint64_t));
-    scan.failed |= !tmp || !sig || !cnt || !kept;
+    uint64_t *made = prints ? malloc((cap + 1) * sizeof(uint64_t)) : NULL;
+    scan.failed |= !tmp || !sig || !cnt || !kept || (prints && !made);
     Py_BEGIN_ALLOW_THREADS
     int whole = 0; /* every bucket sorted whole: the filtered scan proved nothing */
     for (int round = 0; round < 2 && !scan.failed; round++) {
         for (Py_ssize_t bucket = 0; bucket < buckets && !scan.failed; bucket++) {
-            uint64_t *f = fa + bucket * cap, *g = ba + bucket * cap, *kf = kept, *kg = kept + cap + 1;
+            uint64_t *f = fa + bucket * cap, *g, *kf = kept, *kg = kept + cap + 1;
             Py_ssize_t nf = ffill[bucket], ng = bfill[bucket], mf, mg;
-            if (!whole && unbalanced_part(f, nf, g, ng, shift, sig, cnt, kf, &mf, kg, &mg))
-                group_bucket(&scan, kf, mf, kg, mg, shift, tmp);
+            if (prints) {
+                const uint32_t *p = prints + bucket * cap;
+                const uint64_t top = (uint64_t)bucket << shift;
+                for (Py_ssize_t k = 0; k < ng; k++)
+                    made[k] = top | (uint64_t)p[k] << low;
+                g = made;
+            } else
+                g = ba + bucket * cap;
+            if (!whole && unbalanced_part(f, nf, g, ng, shift, sig, cnt, kf, &mf, kg, &mg, low))
+                group_bucket(&scan, kf, mf, kg, mg, shift, tmp, low);
             else
-                group_bucket(&scan, f, nf, g, ng, shift, tmp);
+                group_bucket(&scan, f, nf, g, ng, shift, tmp, low);
         }
         if (whole || scan.proven_open || scan.failed)
             break;
@@ -2679,11 +2736,65 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
     free(sig);
     free(cnt);
     free(kept);
+    free(made);
+    return scan_result(&scan);
+}
+
+static PyObject *py_split_groups(PyObject *self, PyObject *args) {
+    PyObject *fobj, *ffobj, *bobj, *bfobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOOni", &fobj, &ffobj, &bobj, &bfobj, &cap, &shift))
+        return NULL;
+    Py_buffer fk, ff, bk, bf;
+    if (get_buckets(fobj, ffobj, cap, shift, 1, &fk, &ff) < 0)
+        return NULL;
+    if (get_buckets(bobj, bfobj, cap, shift, 1, &bk, &bf) < 0) {
+        PyBuffer_Release(&fk);
+        PyBuffer_Release(&ff);
+        return NULL;
+    }
+    PyObject *result = NULL;
+    if (bf.len != ff.len)
+        PyErr_SetString(PyExc_ValueError, "split_groups: the two buckets differ in number");
+    else
+        result = scan_buckets(fk.buf, ff.buf, bk.buf, NULL, bf.buf, ff.len / 8, cap, shift, 1);
     PyBuffer_Release(&fk);
     PyBuffer_Release(&ff);
     PyBuffer_Release(&bk);
     PyBuffer_Release(&bf);
-    return scan_result(&scan);
+    return result;
+}
+
+/* print_groups(fkeys, ffill, prints, pfill, cap, shift) ->
+ *   (unbalanced prints, net boundary edges, their sides, doubtful prints or None)
+ * split_groups with the backward sides given by forward_block's prints (the 32 key bits below
+ * a bucket's: four bytes a side, made in the first pass) instead of their keys: the groups of
+ * every side by its print id, key >> (shift - 32), the bucket's bits and the print. An edge's
+ * sides share a print id, so every unbalanced edge is in an unbalanced print group unless
+ * another unbalanced edge shares its print id and cancels it (a 32-bit coincidence, which the
+ * caller rules out by the balance: p3d_cli.mesh.analysis); two edges sharing one add sides,
+ * never lose any. The ids come ascending, as uint64 bytes. */
+static PyObject *py_print_groups(PyObject *self, PyObject *args) {
+    PyObject *fobj, *ffobj, *pobj, *pfobj;
+    Py_ssize_t cap;
+    int shift;
+    if (!PyArg_ParseTuple(args, "OOOOni", &fobj, &ffobj, &pobj, &pfobj, &cap, &shift))
+        return NULL;
+    Py_buffer fk, ff, pk, pf;
+    if (get_buckets(fobj, ffobj, cap, shift, 1, &fk, &ff) < 0)
+        return NULL;
+    if (get_prints(pobj, pfobj, ff.len / 8, cap, shift, &pk, &pf) < 0) {
+        PyBuffer_Release(&fk);
+        PyBuffer_Release(&ff);
+        return NULL;
+    }
+    PyObject *result = scan_buckets(fk.buf, ff.buf, NULL, pk.buf, pf.buf, ff.len / 8, cap, shift, shift - 32);
+    PyBuffer_Release(&fk);
+    PyBuffer_Release(&ff);
+    PyBuffer_Release(&pk);
+    PyBuffer_Release(&pf);
+    return result;
 }
 
 /* pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written.
@@ -2695,34 +2806,46 @@ static PyObject *py_split_groups(PyObject *self, PyObject *args) {
  * turns most sides away; starts (int64) indexes the ids by their top bits,
  * starts[j] = the first id >= j << start_shift, so that an id that passes the table is looked
  * for among the few ids of its slot, not by a binary search of all of them (a cache miss a
- * step). out holds 3 k rows. */
+ * step). out holds 3 k rows.
+ * With `low` (default 1) the ids are key >> low instead (print_groups' print ids: low =
+ * shift - 32); with `keys` (uint64, 3 k long, or None) each written side's key goes to keys[i]. */
 static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
-    PyObject *obj, *idobj, *tabobj, *startobj, *outobj;
-    int tshift, sshift;
-    if (!PyArg_ParseTuple(args, "OOOiOiO", &obj, &idobj, &tabobj, &tshift, &startobj, &sshift, &outobj))
+    PyObject *obj, *idobj, *tabobj, *startobj, *outobj, *keyobj = Py_None;
+    int tshift, sshift, low = 1;
+    if (!PyArg_ParseTuple(args, "OOOiOiO|iO", &obj, &idobj, &tabobj, &tshift, &startobj, &sshift, &outobj, &low,
+                          &keyobj))
         return NULL;
+    if (low < 1 || low > 62) {
+        PyErr_SetString(PyExc_ValueError, "pick_sides: low outside [1, 62]");
+        return NULL;
+    }
     Py_buffer view, iv, tv, sv, ov;
     Block b;
     if (get_block(obj, &view, &b) < 0)
         return NULL;
-    int got[4] = {0, 0, 0, 0};
-    Py_buffer *vs[4] = {&iv, &tv, &sv, &ov};
+    int got[5] = {0, 0, 0, 0, 0};
+    Py_buffer kv;
+    Py_buffer *vs[5] = {&iv, &tv, &sv, &ov, &kv};
+    const uint64_t width = UINT64_MAX >> low; /* the largest id */
     int ok = PyObject_GetBuffer(idobj, &iv, PyBUF_C_CONTIGUOUS) == 0 && (got[0] = 1) &&
              PyObject_GetBuffer(tabobj, &tv, PyBUF_C_CONTIGUOUS) == 0 && (got[1] = 1) &&
              PyObject_GetBuffer(startobj, &sv, PyBUF_C_CONTIGUOUS) == 0 && (got[2] = 1) &&
-             PyObject_GetBuffer(outobj, &ov, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 && (got[3] = 1);
+             PyObject_GetBuffer(outobj, &ov, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 && (got[3] = 1) &&
+             (keyobj == Py_None || (PyObject_GetBuffer(keyobj, &kv, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) == 0 &&
+                                    (got[4] = 1)));
     if (ok && (iv.itemsize != 8 || tv.itemsize != 1 || sv.itemsize != 8 || ov.itemsize != 8 ||
                ov.len / 48 < 3 * b.n || tshift < 0 || tshift > 60 ||
-               tv.len < (Py_ssize_t)(((UINT64_MAX >> 1) >> tshift) >> 3) + 1 || sshift < 0 || sshift > 62 ||
-               sv.len / 8 != (Py_ssize_t)((UINT64_MAX >> 1) >> sshift) + 2)) {
-        PyErr_SetString(PyExc_ValueError, "pick_sides: the ids, table, starts or output do not fit");
+               tv.len < (Py_ssize_t)((width >> tshift) >> 3) + 1 || sshift < 0 || sshift > 62 ||
+               sv.len / 8 != (Py_ssize_t)(width >> sshift) + 2 ||
+               (got[4] && (kv.itemsize != 8 || kv.len / 8 < 3 * b.n)))) {
+        PyErr_SetString(PyExc_ValueError, "pick_sides: the ids, table, starts, output or keys do not fit");
         ok = 0;
     }
     const uint64_t *ids = ok ? iv.buf : NULL;
     const int64_t *starts = ok ? sv.buf : NULL;
     Py_ssize_t nid = ok ? iv.len / 8 : 0;
     if (!ok) {
-        for (int i = 0; i < 4; i++)
+        for (int i = 0; i < 5; i++)
             if (got[i])
                 PyBuffer_Release(vs[i]);
         release_block(&view, &b);
@@ -2730,6 +2853,7 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
     }
     const uint8_t *table = tv.buf;
     double *out = ov.buf;
+    uint64_t *keys_out = got[4] ? kv.buf : NULL;
     Py_ssize_t k = b.n, written = 0, n[3] = {0, 0, 0}, room[3] = {64, 64, 64};
     /* The faces of the hit sides, one list a slot (each in face order as found). */
     Py_ssize_t *hit[3] = {malloc(64 * sizeof(Py_ssize_t)), malloc(64 * sizeof(Py_ssize_t)),
@@ -2746,7 +2870,7 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
             for (int v = 0; v < 3; v++) {
                 if (h[v][j] == h[v == 2 ? 0 : v + 1][j])
                     continue; /* a side whose ends hash alike bounds nothing */
-                uint64_t e = all[v][j] >> 1, top = e >> tshift;
+                uint64_t e = all[v][j] >> low, top = e >> tshift;
                 if (!(table[top >> 3] >> (top & 7) & 1))
                     continue;
                 Py_ssize_t at = starts[e >> sshift], stop = starts[(e >> sshift) + 1];
@@ -2770,7 +2894,7 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
             }
         }
     }
-    /* The hit sides' end points, slot by slot. */
+    /* The hit sides' end points, slot by slot (and their keys, made again from them). */
     for (int v = 0; v < 3 && !failed; v++)
         for (Py_ssize_t i = 0; i < n[v]; i++) {
             double p[1][9];
@@ -2780,13 +2904,19 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
                 out[6 * written + a] = p[0][3 * v + a] + 0.0;
                 out[6 * written + 3 + a] = p[0][3 * w + a] + 0.0;
             }
+            if (keys_out) {
+                uint64_t hc[3];
+                corner_hashes(p[0], hc);
+                keys_out[written] = (edge_hash(hc[v], hc[w]) & ~(uint64_t)1) | (uint64_t)(hc[v] < hc[w]);
+            }
             written++;
         }
     Py_END_ALLOW_THREADS
     for (int v = 0; v < 3; v++)
         free(hit[v]);
-    for (int i = 0; i < 4; i++)
-        PyBuffer_Release(vs[i]);
+    for (int i = 0; i < 5; i++)
+        if (got[i])
+            PyBuffer_Release(vs[i]);
     release_block(&view, &b);
     if (failed)
         return PyErr_NoMemory();
@@ -2994,17 +3124,20 @@ static void leaf_keys(const double p[][9], Py_ssize_t n, uint64_t h[3][LEAF], ui
 }
 
 /* edge_keys' deal for forward_block (forward_only, bucketed) from leaf_keys' arrays: the same
- * keys dealt to the same buckets in the same order, the same balance and backward count.
- * Whether a side runs forward is a coin toss for hashed corners, so a branch on it would be
- * mispredicted half the time: here the direction picks the sign of g and the address of the
- * store (a backward side's key goes to a scratch word) by arithmetic. */
+ * keys dealt to the same buckets in the same order, the same balance and backward count, and
+ * the backward sides' prints when asked. Whether a side runs forward is a coin toss for hashed
+ * corners, so a branch on it would be mispredicted half the time: here the direction picks the
+ * sign of g and which of two lists of the leaf's keys grows by arithmetic, and each list is then
+ * dealt by a loop of its own. */
 static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys[3][LEAF],
                          const uint64_t g[3][LEAF], Py_ssize_t n) {
-    uint64_t *out = c->keys, scratch = 0, balance = c->balance;
+    uint64_t *out = c->keys, balance = c->balance, fk[3 * LEAF], bk[3 * LEAF];
     int64_t *fill = c->fill;
     const Py_ssize_t cap = c->cap;
     const int shift = c->shift;
-    Py_ssize_t backward = 0, w = 0;
+    Py_ssize_t backward = 0, nf = 0, nb = 0;
+    /* The leaf's forward keys and backward keys, each in file order, apart: both written,
+     * each count moved by the direction (arithmetic, not a branch). */
     for (Py_ssize_t k = 0; k < n; k++) {
         for (int v = 0; v < 3; v++) {
             uint64_t start = h[v][k], end = h[v == 2 ? 0 : v + 1][k];
@@ -3013,18 +3146,39 @@ static void forward_keys(Pass *c, const uint64_t h[3][LEAF], const uint64_t keys
             uint64_t key = keys[v][k], fwd = key & 1, back = fwd ^ 1;
             uint64_t sign = (uint64_t)0 - back;             /* all ones for a backward side */
             balance += (g[v][k] ^ sign) + back;             /* +g or -g, mod 2^64 */
-            backward += (Py_ssize_t)back;
-            uint64_t b = key >> shift;
-            int64_t f = fill[b];
-            if (f == cap) {                                 /* rare: predicted */
-                c->overflow |= (int)fwd;
+            fk[nf] = key;
+            bk[nb] = key;
+            nf += (Py_ssize_t)fwd;
+            nb += (Py_ssize_t)back;
+        }
+    }
+    backward = nb;
+    Py_ssize_t w = 0;
+    for (Py_ssize_t i = 0; i < nf; i++) {
+        uint64_t key = fk[i], b = key >> shift;
+        int64_t f = fill[b];
+        if (f == cap) { /* rare: predicted */
+            c->overflow = 1;
+            continue;
+        }
+        out[b * cap + f] = key;
+        fill[b] = f + 1;
+        w++;
+    }
+    if (c->prints) {
+        /* the backward sides' prints: the 32 key bits below the bucket's */
+        uint32_t *prints = c->prints;
+        int64_t *pfill = c->print_fill;
+        const int low = shift - 32;
+        for (Py_ssize_t i = 0; i < nb; i++) {
+            uint64_t key = bk[i], b = key >> shift;
+            int64_t q = pfill[b];
+            if (q == cap) { /* rare: predicted */
+                c->print_overflow = 1;
                 continue;
             }
-            uintptr_t keep = (uintptr_t)0 - (uintptr_t)fwd; /* a mask, not a branch */
-            uint64_t *slot = (uint64_t *)(((uintptr_t)(out + b * cap + f) & keep) | ((uintptr_t)&scratch & ~keep));
-            *slot = key;
-            fill[b] = f + (int64_t)fwd;
-            w += (Py_ssize_t)fwd;
+            prints[b * cap + q] = (uint32_t)(key >> low);
+            pfill[b] = q + 1;
         }
     }
     c->balance = balance;

@@ -14,7 +14,7 @@ import numpy as np
 
 from p3d_cli.errors import FormatError, InputError, RangeError
 from p3d_cli.io.source import MeshSource
-from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, unbalanced_groups
+from p3d_cli.mesh.boundary import Unbalanced, boundary_terms, sides_of_prints, unbalanced_groups
 from p3d_cli.mesh.closed import column_edge_keys, doubtful_edges, keys_pair_up, sides_pair_up_exactly
 from p3d_cli.mesh.columns import columns, local_origin, origin_from_bounds
 from p3d_cli.mesh.integrals import MomentSums, tetrahedron_sums
@@ -193,10 +193,10 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
             # A 64-bit hash collision can only make a closed mesh look open: most failures
             # prove openness from the sorted keys alone; the few doubtful edges are compared
             # exactly in one more pass.
-            found = unbalanced_groups(keys), doubtful_edges(keys), False
+            found = unbalanced_groups(keys), doubtful_edges(keys), False, None
         del keys
     if found is not None:
-        unbalanced, doubtful, pair_up = found
+        unbalanced, doubtful, pair_up, picked = found
         is_closed = bounding = pair_up
         if not is_closed:
             is_closed = bool(doubtful.size) and sides_pair_up_exactly(source.read_blocks(), doubtful)
@@ -206,7 +206,7 @@ def analyze(source: MeshSource, where: str, closed: bool = True, rescale: bool =
                     raise RangeError(where, f"the open mesh is {'too small' if exponent > 0 else 'too large'} to "
                                      "integrate without under- or overflow (its size is "
                                      f"{float((hi - lo).max()):.3g})", "scale it into a unit nearer its size")
-                moments = _open_moments(source, sums, unbalanced, lo, hi)
+                moments = _open_moments(source, sums, unbalanced, lo, hi, picked)
                 boundary = unbalanced.edges
     bounds = Bounds(lo.astype(np.float64), hi.astype(np.float64))
     if moments is None:
@@ -236,13 +236,20 @@ def _all_keys(source: MeshSource, fast, indexed: bool) -> tuple[np.ndarray, bool
 
 
 def _split_groups(source: MeshSource, fast, forward: ForwardBuckets,
-                  indexed: bool) -> tuple[Unbalanced, np.ndarray, bool] | None:
-    """``unbalanced_groups`` and ``doubtful_edges`` of every side's key, and whether they all
-    pair up, for a mesh the forward keys did not prove closed: one more pass deals the other
-    half of the keys (``backward_block``) to buckets beside the forward ones, and the kernel
-    scans the two together bucket by bucket (``split_groups``), without making the forward
-    keys again or moving the keys together. None when a bucket overflows (the caller then makes
-    every key in order)."""
+                  indexed: bool) -> tuple[Unbalanced, np.ndarray, bool, list | None] | None:
+    """``unbalanced_groups`` and ``doubtful_edges`` of every side's key, whether they all pair
+    up, and the net boundary's sides when they were picked on the way (else None), for a mesh
+    the forward keys did not prove closed.
+
+    First by the backward sides' prints (``_printed_groups``); where they prove nothing, one
+    more pass deals the other half of the keys (``backward_block``) to buckets beside the
+    forward ones, and the kernel scans the two together bucket by bucket (``split_groups``),
+    without making the forward keys again or moving the keys together. None when a bucket
+    overflows (the caller then makes every key in order)."""
+    if forward.whole:
+        found = _printed_groups(source, fast, forward)
+        if found is not None:
+            return found
     backward = Buckets.like(forward)
     backward.populate(forward.backward)
     item: Any
@@ -260,8 +267,37 @@ def _split_groups(source: MeshSource, fast, forward: ForwardBuckets,
     total = int(forward.fill.sum() + backward.fill.sum())
     unbalanced = Unbalanced(np.frombuffer(ids, dtype=np.uint64).copy(), size, sides, total)
     if doubtful is None:
-        return unbalanced, np.zeros(0, dtype=np.uint64), False
-    return unbalanced, np.frombuffer(doubtful, dtype=np.uint64).copy(), total > 0 and not doubtful
+        return unbalanced, np.zeros(0, dtype=np.uint64), False, None
+    return unbalanced, np.frombuffer(doubtful, dtype=np.uint64).copy(), total > 0 and not doubtful, None
+
+
+#: The open road by prints takes meshes whose unbalanced print groups hold at most this share
+#: of the sides. Their sides are kept while the pass runs, 56 bytes each: at most 1.75 bytes a
+#: side of the mesh, less than the 4 the road by every key's backward keys take (8 bytes for
+#: each of half the sides), so the road never needs more memory than that one.
+PRINTED_SHARE = 1 / 32
+
+
+def _printed_groups(source: MeshSource, fast,
+                    forward: ForwardBuckets) -> tuple[Unbalanced, np.ndarray, bool, list] | None:
+    """``_split_groups``' answers for an open mesh from the first pass's backward prints and
+    one more pass, which also picks the net boundary's sides (no pass of backward keys, none
+    to pick the sides after): the kernel groups the forward keys and the backward prints by
+    print id (``print_groups``), and ``sides_of_prints`` picks the sides of the unbalanced
+    print groups, finds the unbalanced edges among them from their keys and checks them
+    against the whole mesh's balance. None, for the road by backward keys, when the prints
+    prove nothing (no unbalanced print group, too many sides in them, or a check that fails)."""
+    prints, _, count, doubtful = fast.print_groups(forward.keys, forward.fill, forward.prints, forward.print_fill,
+                                                   forward.cap, forward.shift)
+    total = int(forward.fill.sum()) + forward.backward
+    if doubtful is not None or not prints or count > PRINTED_SHARE * total:
+        return None
+    found = sides_of_prints(source.read_blocks(), np.frombuffer(prints, dtype=np.uint64).copy(),
+                            forward.shift - 32, count, forward.balance, total)
+    if found is None:
+        return None
+    unbalanced, picked = found
+    return unbalanced, np.zeros(0, dtype=np.uint64), False, picked
 
 
 def _keys_in_order(source: MeshSource) -> np.ndarray:
@@ -307,14 +343,18 @@ def _compiled_block(fast, block, size: int, single: bool, sums: MomentSums | Non
     balance = backward = 0
     if buckets is not None and not buckets.overflow:
         before = buckets.fill.copy()            # to undo the block's keys if numpy takes it
-        box, finite, totals, magnitude, weighted, written, balance, backward = fast.forward_block(
-            block, *sums.origin, buckets.keys, buckets.fill, buckets.cap, buckets.shift)
+        printed = buckets.print_fill.copy()
+        prints = (buckets.prints, buckets.print_fill) if buckets.whole else ()
+        box, finite, totals, magnitude, weighted, written, balance, backward, whole = fast.forward_block(
+            block, *sums.origin, buckets.keys, buckets.fill, buckets.cap, buckets.shift, *prints)
+        buckets.whole = whole
     else:
         box, finite, totals, magnitude, weighted, written = fast.block(block, *sums.origin, keys, filled)
     box = np.array(box)
     if not finite:
         if buckets is not None and not buckets.overflow:
             buckets.fill[:] = before
+            buckets.print_fill[:] = printed
         return None
     if not box.all():
         box = _numpy_box(block)
@@ -357,7 +397,7 @@ def _exponent(extent: float) -> int:
 
 
 def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: Unbalanced,
-                  lo: np.ndarray, hi: np.ndarray) -> Moments:
+                  lo: np.ndarray, hi: np.ndarray, picked: list | None = None) -> Moments:
     """An open surface's moments in the world-origin convention.
 
     An open surface bounds no solid: its divergence-theorem sums depend on the origin of the
@@ -367,7 +407,7 @@ def _open_moments(source: MeshSource, sums: MomentSums, unbalanced: Unbalanced,
     added to the result's), so that a part far from the origin keeps its accuracy whatever the
     number of boundary edges (a soup of loose faces is all boundary).
     """
-    terms = boundary_terms(source.read_blocks, unbalanced, sums.origin, lo, hi)
+    terms = boundary_terms(source.read_blocks, unbalanced, sums.origin, lo, hi, picked)
     return sums.moments(terms.sums, terms.error)
 
 

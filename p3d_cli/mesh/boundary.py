@@ -32,6 +32,7 @@ from p3d_cli.mesh.boundary_terms import InexactLocal, Locals, WorldCross, combin
 from p3d_cli.mesh.closed import (_lex_less, column_edge_keys, key_groups, side_keys, sides_of_edges)
 from p3d_cli.mesh.columns import columns
 from p3d_cli.mesh.kernels import compiled, sort, takes
+from p3d_cli.mesh.splitmix import mix
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
 #: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).
@@ -261,11 +262,13 @@ class _Members:
     lookup, and a binary search for the rest. (A binary search of every edge took 0.5 s of a
     1M-face mesh with 1 % of its faces missing, 30,000 ids: three times the whole analysis.)"""
 
-    def __init__(self, ids: np.ndarray) -> None:
+    def __init__(self, ids: np.ndarray, width: int = 63) -> None:
         self.ids = ids
+        #: The ids' width in bits: 63 for edge ids, more or less for other ids (print ids).
+        self.width = width
         # About 32 slots an id (at most 2^24): 97 % of the other edges miss the table.
         bits = min(24, max(8, (32 * ids.size).bit_length()))
-        self.shift = np.uint64(63 - bits)
+        self.shift = np.uint64(width - bits)
         self.table = np.zeros(1 << bits, dtype=bool)
         self.table[(ids >> self.shift).astype(np.intp)] = True
         #: The table packed 8 slots a byte, for the compiled ``pick_sides``.
@@ -275,7 +278,7 @@ class _Members:
         """An index of the ids by their top bits, for the compiled ``pick_sides``: ``starts[j]``
         is the first id at or above ``j << shift``, about one id a slot; and ``shift``."""
         bits = max(1, int(self.ids.size).bit_length())
-        shift = 63 - bits
+        shift = self.width - bits
         bounds = np.arange((1 << bits) + 1, dtype=np.uint64) << np.uint64(shift)
         return np.searchsorted(self.ids, bounds).astype(np.int64), shift
 
@@ -292,6 +295,77 @@ class _Members:
         at = np.minimum(np.searchsorted(ids, candidates), ids.size - 1)
         hit[maybe] = ids[at] == candidates
         return hit
+
+
+def sides_of_prints(source_blocks, prints: np.ndarray, low: int, count: int, balance: int,
+                    total: int) -> tuple[Unbalanced, list[np.ndarray]] | None:
+    """``unbalanced_groups`` of every side's key and ``unbalanced_sides``' sides, block by
+    block, from one pass that picks the sides whose print id (``key >> low``) is in ``prints``
+    (the compiled ``print_groups``' answers: ``count`` sides) with their keys.
+
+    Every edge's sides share a print id, so the picked sides hold whole edge groups; their keys
+    sorted give the unbalanced edges among them exactly. Those are all the mesh's when the
+    balance of the picked sides, ``Σ ±mix(key | 1)`` (+ forward, - backward) mod 2**64, is the
+    whole mesh's ``balance``: an unbalanced edge left out (two of them cancelling in one print
+    group) would be missing from it but for a 64-bit coincidence, as in the closed test
+    (``p3d_cli.mesh.kernels.ForwardBuckets``). Returns None, for the caller's other road, when it
+    is not, when no edge is unbalanced, or when a block is not one the kernels read.
+
+    Returns
+    -------
+    unbalanced : Unbalanced
+        As ``unbalanced_groups`` of every side's key (``total`` sides).
+    sides : list of (m, 6) float64
+        Each block's sides whose edge is unbalanced, as the compiled ``unbalanced_sides`` picks
+        them (start, end; the same order).
+    """
+    kernels = compiled()
+    if kernels is None or prints.size == 0:
+        return None
+    members = _Members(prints, 64 - low)
+    index = members.starts()
+    picked: list[np.ndarray] = []
+    keys: list[np.ndarray] = []
+    out = np.empty((0, 6))
+    made = np.empty(0, dtype=np.uint64)
+    found = 0
+    for block in source_blocks:
+        if not takes(block):
+            return None
+        if out.shape[0] < 3 * len(block):
+            out, made = np.empty((3 * len(block), 6)), np.empty(3 * len(block), dtype=np.uint64)
+        n = kernels.pick_sides(block, prints, members.bits, int(members.shift), *index, out, low, made)
+        found += n
+        if found > count:
+            return None
+        picked.append(out[:n].copy())
+        keys.append(made[:n].copy())
+    every = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
+    if every.size != count:
+        return None
+    g = mix(every | np.uint64(1))
+    forward = (every & np.uint64(1)).astype(bool)
+    if (int(g[forward].sum(dtype=np.uint64)) - int(g[~forward].sum(dtype=np.uint64)) - balance) % (1 << 64):
+        return None
+    ordered = every.copy()
+    sort(ordered)
+    ids, size, sides, doubtful = kernels.groups(ordered)
+    if doubtful is not None or not ids:
+        return None
+    unbalanced = Unbalanced(np.frombuffer(ids, dtype=np.uint64).copy(), size, sides, total)
+    if sides == count:                      # every picked side is on an unbalanced edge
+        return unbalanced, picked
+    hit = _Members(unbalanced.ids)(every >> np.uint64(1))
+    ends = np.cumsum([k.size for k in keys])
+    return unbalanced, [p[h] for p, h in zip(picked, np.split(hit, ends[:-1]))]
+
+
+def block_sides(picked: list[np.ndarray]):
+    """``unbalanced_sides``' chunks of sides already picked block by block (``sides_of_prints``)."""
+    for sides in picked:
+        for first in range(0, sides.shape[0], SIDE_BLOCK):
+            chunk = sides[first:first + SIDE_BLOCK]
+            yield np.ascontiguousarray(chunk[:, :3].T), np.ascontiguousarray(chunk[:, 3:].T)
 
 
 def boundary_volume(source_blocks, unbalanced: Unbalanced, origin: np.ndarray) -> tuple[Fraction, float]:
@@ -312,7 +386,7 @@ def sides_volume(sides, origin: np.ndarray) -> tuple[Fraction, float]:
 
 
 def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
-                   lo: np.ndarray, hi: np.ndarray) -> BoundaryTerms:
+                   lo: np.ndarray, hi: np.ndarray, picked: list[np.ndarray] | None = None) -> BoundaryTerms:
     """``Σ T(0, o, u, v)`` over the net boundary, any number of sides, ~1 µs a side.
 
     Parameters
@@ -326,6 +400,9 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
         The local origin ``o`` of the moment sums.
     lo, hi : (3,)
         Bounds of the mesh's coordinates.
+    picked : list of (m, 6) arrays, optional
+        The net boundary's sides already picked block by block (``sides_of_prints``), instead
+        of one more pass.
     """
     frame = frame_origin(lo, hi)
     reach = float(np.maximum(np.abs(np.asarray(hi, dtype=np.float64) - frame),
@@ -337,7 +414,9 @@ def boundary_terms(source_blocks, unbalanced: Unbalanced, origin: np.ndarray,
     scale = math.frexp(reach)[1] if reach > 0 else 0          # 2**scale > reach
     local = Locals()
     try:
-        for u, v in unbalanced_sides(source_blocks(), unbalanced.ids, unbalanced.most):
+        sides = (block_sides(picked) if picked is not None
+                 else unbalanced_sides(source_blocks(), unbalanced.ids, unbalanced.most))
+        for u, v in sides:
             local.add(u, v, frame, scale)
     except InexactLocal:
         sums = _exact_terms(source_blocks, unbalanced, origin)

@@ -75,6 +75,11 @@ def key_buffer(count: int) -> np.ndarray:
         _set_madvise_hugepage(before)
 
 
+def print_buffer(count: int) -> np.ndarray:
+    """An uninitialised ``(count,)`` uint32 array, in ordinary pages (``key_buffer``)."""
+    return key_buffer((count + 1) // 2).view(np.uint32)[:count]
+
+
 class Buckets:
     """Edge keys dealt by the compiled pass to buckets of their top bits as they are made, so
     that sorting them needs no pass over all of them (a bucket is sorted in cache, then moved
@@ -101,6 +106,7 @@ class Buckets:
         buckets = 1 << bits
         mean = count / buckets
         self.cap = int(math.ceil(mean + 8 * math.sqrt(2 * mean) + 64))
+        self.cap += self.cap % 2            # even: a bucket of 4-byte prints is whole 8-byte words
         self.keys = key_buffer(buckets * self.cap)
         self.fill = np.zeros(buckets, dtype=np.int64)
         self.overflow = False
@@ -120,12 +126,17 @@ class Buckets:
         """Make the pages of the slots that every bucket fills with ``count`` hashed keys (the
         mean less eight standard deviations, as ``cap`` adds them) in one call a bucket, not
         one page fault a page: no more memory, less system time (Linux; nothing elsewhere)."""
-        import math
-
         kernels = KERNELS
         if kernels is not None:
-            mean = count / self.fill.size
-            kernels.populate(self.keys, self.fill, self.cap, self.shift, max(0, int(mean - 8 * math.sqrt(2 * mean))))
+            kernels.populate(self.keys, self.fill, self.cap, self.shift, self._sure(count))
+
+    def _sure(self, count: int) -> int:
+        """The slots every bucket fills with ``count`` hashed keys: the mean less eight
+        standard deviations, as ``cap`` adds them."""
+        import math
+
+        mean = count / self.fill.size
+        return max(0, int(mean - 8 * math.sqrt(2 * mean)))
 
     def add(self, block_keys: np.ndarray) -> None:
         """Deal keys made by the numpy code (a block the compiled pass left to it)."""
@@ -151,7 +162,9 @@ class ForwardBuckets(Buckets):
     """The closed test of ``p3d props`` on half the keys (issue 32): the compiled pass
     (``forward_block``) deals to buckets only the keys of the sides that run from the smaller
     corner hash to the larger (bit 0 set), and sums ``g = mix(key | 1)`` over those minus
-    ``g`` over the others (``balance``, mod 2**64) and counts the others (``backward``).
+    ``g`` over the others (``balance``, mod 2**64) and counts the others (``backward``); of the
+    others it keeps 32 bits each, the *prints* (the key's bits below its bucket's), in buckets
+    of their own, for the open road.
 
     The keys pair up (``p3d_cli.mesh.closed.keys_pair_up``: every edge once each way) exactly
     when no kept key is there twice, the two directions are equally many and the balance is
@@ -159,9 +172,10 @@ class ForwardBuckets(Buckets):
     used unequally often in the two directions, and adds ``g(edge)`` times that nonzero
     difference to the balance, which the other such edges cancel only by a 64-bit coincidence
     (as two edges' keys must coincide to fool the sort). ``closed`` False says nothing more:
-    the caller then deals the other half of the keys beside these (``Buckets.like``, the
-    kernel's ``backward_block``) and scans the two together for the open-mesh road
-    (``split_groups``; ``p3d_cli.mesh.analysis``).
+    the caller then groups these keys with the prints (``print_groups``) and picks the sides
+    of the groups found unbalanced in one more pass; where that proves nothing, it deals the
+    other half of the keys beside these (``Buckets.like``, the kernel's ``backward_block``) and
+    scans the two together (``split_groups``; ``p3d_cli.mesh.analysis``).
     """
 
     def __init__(self, sides: int) -> None:
@@ -169,6 +183,18 @@ class ForwardBuckets(Buckets):
         self.balance = 0
         self.backward = 0
         self.populate((sides + 1) // 2)
+        #: The backward sides' prints (``forward_block``): the 32 bits of each key below its
+        #: bucket's bits, dealt to buckets of the same shift and room (4 bytes a side, not 8),
+        #: for the open road (``p3d_cli.mesh.analysis``). ``whole`` is cleared when a print
+        #: was lost (a full bucket, or a block the numpy code took) or the shift leaves no
+        #: 32 bits below the buckets'.
+        self.prints = print_buffer(self.keys.size)
+        self.print_fill = np.zeros_like(self.fill)
+        self.whole = self.shift >= 33
+        if KERNELS is not None:
+            # The prints' pages too: a bucket of ``cap`` prints is ``cap / 2`` words of the
+            # buffer under them (``cap`` is even).
+            KERNELS.populate(self.prints.base, self.fill, self.cap // 2, self.shift, self._sure(sides // 2) // 2)
 
     def add(self, block_keys: np.ndarray) -> None:
         """Deal the forward keys of a block the compiled pass left to the numpy code, and add
@@ -178,6 +204,7 @@ class ForwardBuckets(Buckets):
         self.balance = (self.balance + int(g[forward].sum(dtype=np.uint64))
                         - int(g[~forward].sum(dtype=np.uint64))) % (1 << 64)
         self.backward += int(block_keys.size - forward.sum())
+        self.whole = False                  # its backward sides' prints are not dealt
         super().add(block_keys[forward])
 
     def closed(self) -> bool:

@@ -92,7 +92,7 @@ def test_compiled_forward_keys_are_numpys(n):
     triangles = rng.normal(size=(n, 3, 3))
     triangles[::7, 1] = triangles[::7, 0]                # some sides whose ends are alike
     fast, slow = kernels.ForwardBuckets(3 * n), kernels.ForwardBuckets(3 * n)
-    *_, written, balance, backward = KERNELS.forward_block(triangles, 0.0, 0.0, 0.0, fast.keys, fast.fill,
+    *_, written, balance, backward, whole = KERNELS.forward_block(triangles, 0.0, 0.0, 0.0, fast.keys, fast.fill,
                                                            fast.cap, fast.shift)
     slow.add(column_edge_keys(columns(triangles)))
     assert written == int(fast.fill.sum()) == int(slow.fill.sum())
