@@ -178,6 +178,13 @@ class ForwardBuckets(Buckets):
     scans the two together (``split_groups``; ``p3d_cli.mesh.analysis``).
     """
 
+    #: The prints are kept where the keys take at most this many buckets (meshes up to about
+    #: 1.4M faces). Every closed mesh pays for them (the stores, and fresh pages: 4 bytes a
+    #: backward side): about 1 % of ``p3d props``' CPU time at 1M faces and 32 buckets, but
+    #: 10 % at 4M faces (128 buckets) and 13 % at 16M (512: twice as many places written at
+    #: once, 96 MB more pages), more than the pass they spare an open mesh is worth there.
+    PRINT_BUCKETS = 32
+
     def __init__(self, sides: int) -> None:
         super().__init__((sides + 1) // 2)      # the count of a bucket: a Poisson count of keys
         self.balance = 0
@@ -185,13 +192,13 @@ class ForwardBuckets(Buckets):
         self.populate((sides + 1) // 2)
         #: The backward sides' prints (``forward_block``): the 32 bits of each key below its
         #: bucket's bits, dealt to buckets of the same shift and room (4 bytes a side, not 8),
-        #: for the open road (``p3d_cli.mesh.analysis``). ``whole`` is cleared when a print
-        #: was lost (a full bucket, or a block the numpy code took) or the shift leaves no
-        #: 32 bits below the buckets'.
-        self.prints = print_buffer(self.keys.size)
+        #: for the open road (``p3d_cli.mesh.analysis``). ``whole`` says they are all there:
+        #: false for meshes with more than ``PRINT_BUCKETS`` buckets (none are kept), and
+        #: cleared when one was lost (a full bucket, or a block the numpy code took).
+        self.whole = self.fill.size <= self.PRINT_BUCKETS
+        self.prints = print_buffer(self.keys.size if self.whole else 0)
         self.print_fill = np.zeros_like(self.fill)
-        self.whole = self.shift >= 33
-        if KERNELS is not None:
+        if KERNELS is not None and self.whole:
             # The prints' pages too: a bucket of ``cap`` prints is ``cap / 2`` words of the
             # buffer under them (``cap`` is even).
             KERNELS.populate(self.prints.base, self.fill, self.cap // 2, self.shift, self._sure(sides // 2) // 2)

@@ -348,3 +348,17 @@ def test_real_meshes_with_holes_by_prints(real_meshes, name, tmp_path, monkeypat
             road_by_keys(m)
             assert_same(printed, analyze(source, "x"))
         assert_same_analysis(source)
+
+
+def test_meshes_of_many_buckets_keep_no_prints(monkeypatch):
+    """Past ``PRINT_BUCKETS`` buckets (about 1.4M faces) no prints are kept or dealt, and an
+    open mesh takes the road by every key, with the same result."""
+    large = kernels.ForwardBuckets(3 * 2_000_000)
+    assert large.fill.size > large.PRINT_BUCKETS and large.whole is False and large.prints.size == 0
+    source = array_source("stl-binary", np.ascontiguousarray(np.delete(BIG, np.s_[::100], axis=0)), "float32")
+    printed = analyze(source, "x")
+    monkeypatch.setattr(kernels.ForwardBuckets, "PRINT_BUCKETS", 0)
+    calls = []
+    monkeypatch.setattr(analysis, "_printed_groups", lambda *args: calls.append(1))
+    assert_same(printed, analyze(source, "x"))
+    assert calls == []
