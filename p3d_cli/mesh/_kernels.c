@@ -1992,7 +1992,8 @@ static PyMethodDef methods[] = {
     {"populate", py_populate, METH_VARARGS,
      "populate(keys, fill, cap, shift, sure) -> whether each bucket's first `sure` slots' pages were made at once"},
     {"pick_sides", py_pick_sides, METH_VARARGS,
-     "pick_sides(block, ids, table, shift, starts, start_shift, out) -> sides written: those whose edge id is in ids"},
+     "pick_sides(block, ids, table, shift, starts, start_shift, out[, low, keys]) -> sides written: those whose edge "
+     "id (key >> low) is in ids"},
     {"ear_holds", py_ear_holds, METH_VARARGS,
      "ear_holds(plane, order, alive, sign, bound, u, v, w, first, last) -> 1, 0 or -1 (undecided): whether a "
      "corner lies in the ear"},

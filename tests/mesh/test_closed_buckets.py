@@ -167,8 +167,9 @@ def test_adversarial_meshes_same_verdicts(name, triangles):
 
 def test_a_closed_mesh_never_moves_its_keys(monkeypatch):
     """A closed mesh's keys are never sorted together (that move touched every key's page a
-    second time); nor are an open one's: the other half of its keys is dealt beside the
-    forward ones and the two are scanned bucket by bucket (``split_groups``)."""
+    second time); nor are an open one's: they are grouped with the backward sides' prints
+    bucket by bucket (``print_groups``; or with the other half of the keys dealt beside them,
+    ``split_groups``)."""
     calls = []
     original = kernels.Buckets.sorted_keys
 
@@ -197,14 +198,14 @@ def test_split_groups_are_the_groups_of_every_key(keys):
     assert split == KERNELS.groups(np.sort(keys))
 
 
-@pytest.mark.parametrize("case", ["holes", "doubtful only", "closed", "holes and doubtful", "soup", "misoriented"])
-def test_split_groups_of_many_keys_are_the_groups_of_every_key(case):
-    """Buckets of tens of thousands of keys, where ``split_groups`` sorts only the sub-buckets
-    whose two directions' uses differ: the same answers as ``groups`` of every key sorted when
-    a few edges are used once (holes), when no edge is unbalanced but some are used twice each
-    way (the doubtful ids, from every bucket sorted whole), when every edge pairs up, when both,
-    when most edges are used once (a soup: buckets sorted whole) and when edges are used twice
-    the same way."""
+#: The cases of ``many_keys``.
+MANY = ["holes", "doubtful only", "closed", "holes and doubtful", "soup", "misoriented"]
+
+
+def many_keys(case: str) -> np.ndarray:
+    """Side keys of 300,000 hashed edges, each used once each way but: some once (holes), some
+    twice each way (doubtful), both, none, every edge once in one direction (a soup), or some
+    twice the same way (misoriented)."""
     rng = np.random.default_rng(len(case))
     edges = np.unique(rng.integers(0, 2**63, 300_000, dtype=np.uint64))
     forward = np.ones(edges.size, dtype=np.int64)
@@ -222,6 +223,18 @@ def test_split_groups_of_many_keys_are_the_groups_of_every_key(case):
     keys = np.concatenate([np.repeat((edges << np.uint64(1)) | np.uint64(1), forward),
                            np.repeat(edges << np.uint64(1), backward)])
     rng.shuffle(keys)
+    return keys
+
+
+@pytest.mark.parametrize("case", MANY)
+def test_split_groups_of_many_keys_are_the_groups_of_every_key(case):
+    """Buckets of tens of thousands of keys, where ``split_groups`` sorts only the sub-buckets
+    whose two directions' uses differ: the same answers as ``groups`` of every key sorted when
+    a few edges are used once (holes), when no edge is unbalanced but some are used twice each
+    way (the doubtful ids, from every bucket sorted whole), when every edge pairs up, when both,
+    when most edges are used once (a soup: buckets sorted whole) and when edges are used twice
+    the same way."""
+    keys = many_keys(case)
     forward_buckets = dealt(keys)
     backward_buckets = kernels.Buckets.like(forward_buckets)
     backward_buckets.add(keys[(keys & np.uint64(1)) == 0])

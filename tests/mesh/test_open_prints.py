@@ -19,7 +19,7 @@ from p3d_cli.mesh import analysis, boundary, kernels
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.closed import column_edge_keys
 from p3d_cli.mesh.columns import columns
-from test_closed_buckets import BIG, dealt
+from test_closed_buckets import BIG, MANY, dealt, many_keys
 from test_kernels import assert_same_analysis, bits
 
 KERNELS = kernels.KERNELS
@@ -97,35 +97,13 @@ def test_print_buckets_that_do_not_fit_are_refused():
                              fast.shift)
 
 
-def keys_of(case: str) -> np.ndarray:
-    """Side keys of 300,000 hashed edges used once each way but for ``case``."""
-    rng = np.random.default_rng(len(case))
-    edges = np.unique(rng.integers(0, 2**63, 300_000, dtype=np.uint64))
-    forward = np.ones(edges.size, dtype=np.int64)
-    backward = np.ones(edges.size, dtype=np.int64)
-    some = rng.choice(edges.size, 3000, replace=False)
-    if case in ("holes", "holes and doubtful"):
-        forward[some[:1000]], backward[some[1000:2000]] = 0, 0
-    if case in ("doubtful only", "holes and doubtful"):
-        forward[some[2000:2010]] = backward[some[2000:2010]] = 2
-    if case == "soup":
-        forward = rng.integers(0, 2, edges.size)
-        backward = 1 - forward
-    if case == "misoriented":
-        forward[some[:500]], backward[some[:500]] = 2, 0
-    keys = np.concatenate([np.repeat((edges << np.uint64(1)) | np.uint64(1), forward),
-                           np.repeat(edges << np.uint64(1), backward)])
-    rng.shuffle(keys)
-    return keys
-
-
-@pytest.mark.parametrize("case", ["holes", "doubtful only", "closed", "holes and doubtful", "soup", "misoriented"])
+@pytest.mark.parametrize("case", MANY)
 def test_print_groups_are_the_groups_of_the_print_ids(case):
     """``print_groups`` of the forward keys and the backward prints gives ``groups`` of every
     side's print id (``key >> (shift - 32)``, its direction kept): ids, net boundary, sides and
     doubtful ids alike; and where no two edges share a print id, its ids are the print ids of
     the edges ``groups`` of the full keys finds unbalanced."""
-    keys = keys_of(case)
+    keys = many_keys(case)
     buckets = dealt(keys)
     deal_prints(buckets, keys[(keys & np.uint64(1)) == 0])
     low = np.uint64(buckets.shift - 32)
@@ -195,6 +173,20 @@ def open_variants():
     yield "holes and a face and its flip", np.concatenate([t[2:], t[10:11], flipped[10:11]])
 
 
+def roads_taken(monkeypatch) -> list:
+    """Spy on the road by prints: the list gets each call's answer (None: the other road)."""
+    taken = []
+    original = analysis._printed_groups
+
+    def spy(*args):
+        found = original(*args)
+        taken.append(found)
+        return found
+
+    monkeypatch.setattr(analysis, "_printed_groups", spy)
+    return taken
+
+
 def road_by_keys(monkeypatch):
     """Switch the road by prints off (the road by every key, as before it)."""
     monkeypatch.setattr(analysis, "_printed_groups", lambda *args: None)
@@ -217,17 +209,10 @@ def test_open_meshes_by_prints_as_by_every_key(name, triangles, monkeypatch):
     key (its ``Unbalanced``, its sides in the same blocks and order, so the same terms), and the
     numpy code's."""
     source = array_source("stl-binary", np.ascontiguousarray(triangles), "float32")
-    taken = []
-    original = analysis._printed_groups
-
-    def spy(*args):
-        found = original(*args)
-        taken.append(found is not None)
-        return found
-
-    monkeypatch.setattr(analysis, "_printed_groups", spy)
-    printed = analyze(source, "x")
-    assert taken == [True] and printed.closed is False
+    with monkeypatch.context() as m:
+        taken = roads_taken(m)
+        printed = analyze(source, "x")
+    assert len(taken) == 1 and taken[0] is not None and printed.closed is False
     with monkeypatch.context() as m:
         road_by_keys(m)
         assert_same(printed, analyze(source, "x"))
@@ -309,10 +294,9 @@ def test_a_soup_takes_the_road_by_every_key(monkeypatch):
     not kept in memory: the road by every key takes the mesh, as before."""
     triangles = np.random.default_rng(2).normal(size=(30_000, 3, 3)).astype(np.float32)
     source = array_source("stl-binary", triangles, "float32")
-    taken = []
-    original = analysis._printed_groups
-    monkeypatch.setattr(analysis, "_printed_groups", lambda *args: taken.append(original(*args)))
-    result = analyze(source, "x")
+    with monkeypatch.context() as m:
+        taken = roads_taken(m)
+        result = analyze(source, "x")
     assert taken == [None] and result.bounding is False
     assert_same_analysis(source)
 
@@ -338,12 +322,10 @@ def test_real_meshes_with_holes_by_prints(real_meshes, name, tmp_path, monkeypat
     trimesh.Trimesh(vertices, faces, process=False).export(path)
     for source in (array_source("stl-binary", np.ascontiguousarray(vertices[faces]), "float32"),
                    load_mesh(str(path))):
-        taken = []
-        original = analysis._printed_groups
         with monkeypatch.context() as m:
-            m.setattr(analysis, "_printed_groups", lambda *args: taken.append(original(*args)) or taken[-1])
+            taken = roads_taken(m)
             printed = analyze(source, "x")
-        assert taken and taken[0] is not None and printed.closed is False and printed.bounding is False
+        assert len(taken) == 1 and taken[0] is not None and printed.closed is False and printed.bounding is False
         with monkeypatch.context() as m:
             road_by_keys(m)
             assert_same(printed, analyze(source, "x"))
