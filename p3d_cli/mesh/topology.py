@@ -47,7 +47,8 @@ import math
 
 import numpy as np
 
-from p3d_cli.mesh.boundary import SIDE_BLOCK, boundary_volume, sides_volume, unbalanced_of
+from p3d_cli.mesh.boundary import boundary_volume, sides_volume
+from p3d_cli.mesh.boundary_sides import SIDE_BLOCK, unbalanced_of
 from p3d_cli.mesh.closed import corner_hashes
 from p3d_cli.mesh.edges import Edges, group_edges, lone_sides, next_corner
 from p3d_cli.mesh.faces import duplicate_candidates, duplicate_faces, repeated_vertex_faces, zero_area_faces
@@ -329,7 +330,7 @@ def _volume(blocks, corners, edges: Edges, ids: np.ndarray) -> float:
     plus the net boundary's exact volume term when some does not (``p3d_cli.mesh.boundary``).
 
     The edges whose two directions are not used equally often are found from the exact
-    edges at hand; their sides are those ``boundary.unbalanced_sides`` reads for ``p3d props``
+    edges at hand; their sides are those ``boundary_sides.unbalanced_sides`` reads for ``p3d props``
     (the sides of the unbalanced edge keys), and their exact term is the same number. A soup,
     where ``props`` reads every side instead, takes ``props``' own road."""
     groups = _problem_groups(edges)

@@ -23,10 +23,10 @@ from helpers.meshes import write_ascii_stl
 from helpers.exact import exact_moments
 import p3d_cli as p3d
 from p3d_cli.io.source import array_source
-from p3d_cli.mesh import boundary, boundary_terms as terms_module, kernels
+from p3d_cli.mesh import boundary, boundary_sides, boundary_terms as terms_module, kernels
 from p3d_cli.mesh.analysis import analyze
-from p3d_cli.mesh.boundary import (boundary_of, boundary_sums, boundary_terms, boundary_volume,
-                                   unbalanced_groups, unbalanced_of)
+from p3d_cli.mesh.boundary import boundary_of, boundary_sums, boundary_terms, boundary_volume
+from p3d_cli.mesh.boundary_sides import unbalanced_groups, unbalanced_of
 from p3d_cli.mesh.closed import column_edge_keys
 from p3d_cli.geometry.expansions import ExactSum, cascaded_sums, two_product, two_sum
 from p3d_cli.mesh.columns import columns
@@ -182,7 +182,7 @@ def test_soup_and_membership_paths_give_the_same_terms():
     lo, hi = t.reshape(-1, 3).min(axis=0), t.reshape(-1, 3).max(axis=0)
     o = 0.5 * (lo + hi)
     every = boundary_terms(lambda: iter([t]), groups, o, lo, hi)
-    some = boundary_terms(lambda: iter([t]), boundary.Unbalanced(groups.ids, groups.edges, 1, 10**9), o, lo, hi)
+    some = boundary_terms(lambda: iter([t]), boundary_sides.Unbalanced(groups.ids, groups.edges, 1, 10**9), o, lo, hi)
     exact = oracle_terms(t, o)
     assert every.sums[0] == some.sums[0] == exact[0]
     for a, b, want, ea, eb in zip(every.sums, some.sums, exact, every.error, some.error):
@@ -204,9 +204,9 @@ def test_compiled_sides_are_the_numpy_ones_bit_for_bit(monkeypatch, dtype, holes
     blocks = [t[:100], t[100:101], t[101:]]
     ids = unbalanced_of(lambda: iter(blocks)).ids
     assert ids.size > (16 if holes > 1 else 0)
-    compiled = list(boundary.unbalanced_sides(iter(blocks), ids))
+    compiled = list(boundary_sides.unbalanced_sides(iter(blocks), ids))
     monkeypatch.setattr(kernels, "KERNELS", None)
-    numpy_sides = list(boundary.unbalanced_sides(iter(blocks), ids))
+    numpy_sides = list(boundary_sides.unbalanced_sides(iter(blocks), ids))
     assert len(compiled) == len(numpy_sides)
     for (u, v), (u2, v2) in zip(compiled, numpy_sides):
         assert u.flags.c_contiguous and v.flags.c_contiguous

@@ -288,7 +288,7 @@ def test_side_keys_are_numpys(degenerate):
 @pytest.mark.parametrize("case", ["closed", "holes", "collisions", "soup", "none"])
 def test_groups_are_numpys(case):
     """``unbalanced_groups`` and ``doubtful_edges`` from the one compiled scan."""
-    from p3d_cli.mesh.boundary import unbalanced_groups
+    from p3d_cli.mesh.boundary_sides import unbalanced_groups
     from p3d_cli.mesh.closed import doubtful_edges
 
     rng = np.random.default_rng(5)

@@ -3,7 +3,7 @@ side's key (its *print*) beside the forward keys; an open mesh's unbalanced edge
 grouping the forward keys and the prints by print id (``print_groups``), picking the sides of
 the unbalanced print groups in one more pass with their keys (``pick_sides(..., low, keys)``),
 grouping those exactly and checking them against the whole mesh's balance
-(``boundary.sides_of_prints``). Checked against the road by every key (the backward keys
+(``boundary_sides.sides_of_prints``). Checked against the road by every key (the backward keys
 dealt in a pass of their own, ``split_groups``, then ``unbalanced_sides``), against ``groups``
 of the print ids, and against the numpy code; and the balance check is shown to catch a print
 group lost to a coincidence."""
@@ -15,7 +15,7 @@ import pytest
 
 from helpers.kernels import needs_kernels
 from p3d_cli.io.source import array_source
-from p3d_cli.mesh import analysis, boundary, kernels
+from p3d_cli.mesh import boundary_sides, kernels, open_groups
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.closed import column_edge_keys
 from p3d_cli.mesh.columns import columns
@@ -146,7 +146,7 @@ def test_pick_sides_by_print_ids_gives_the_sides_and_their_keys(low):
     keys = column_edge_keys(cols)                    # slot-major, as the sides are picked
     rng = np.random.default_rng(low)
     chosen = np.unique(keys[rng.choice(keys.size, 200, replace=False)] >> np.uint64(low))
-    members = boundary._Members(chosen, 64 - low)
+    members = boundary_sides.Members(chosen, 64 - low)
     out, made = np.empty((3 * len(block), 6)), np.empty(3 * len(block), dtype=np.uint64)
     n = KERNELS.pick_sides(block, chosen, members.bits, int(members.shift), *members.starts(), out, low, made)
     hit = np.isin(keys >> np.uint64(low), chosen)
@@ -176,20 +176,20 @@ def open_variants():
 def roads_taken(monkeypatch) -> list:
     """Spy on the road by prints: the list gets each call's answer (None: the other road)."""
     taken = []
-    original = analysis._printed_groups
+    original = open_groups.printed_groups
 
     def spy(*args):
         found = original(*args)
         taken.append(found)
         return found
 
-    monkeypatch.setattr(analysis, "_printed_groups", spy)
+    monkeypatch.setattr(open_groups, "printed_groups", spy)
     return taken
 
 
 def road_by_keys(monkeypatch):
     """Switch the road by prints off (the road by every key, as before it)."""
-    monkeypatch.setattr(analysis, "_printed_groups", lambda *args: None)
+    monkeypatch.setattr(open_groups, "printed_groups", lambda *args: None)
 
 
 def assert_same(a, b):
@@ -225,32 +225,32 @@ def test_the_sides_picked_are_those_of_unbalanced_sides(monkeypatch):
     triangles = np.delete(BIG, np.s_[::50], axis=0)
     blocks = [triangles[i:i + 4000] for i in range(0, len(triangles), 4000)]
     keys = np.concatenate([column_edge_keys(columns(b)) for b in blocks])
-    unbalanced = boundary.unbalanced_groups(np.sort(keys))
+    unbalanced = boundary_sides.unbalanced_groups(np.sort(keys))
     buckets = kernels.ForwardBuckets(keys.size)
     for b in blocks:
         KERNELS.forward_block(b, 0.0, 0.0, 0.0, buckets.keys, buckets.fill, buckets.cap, buckets.shift,
                               buckets.prints, buckets.print_fill)
     forward = keys[(keys & np.uint64(1)) == 1]
-    g = boundary.mix(keys | np.uint64(1))
+    g = boundary_sides.mix(keys | np.uint64(1))
     balance = (int(g[(keys & np.uint64(1)) == 1].sum(dtype=np.uint64))
                - int(g[(keys & np.uint64(1)) == 0].sum(dtype=np.uint64))) % (1 << 64)
     prints, _, count, doubtful = KERNELS.print_groups(buckets.keys, buckets.fill, buckets.prints, buckets.print_fill,
                                                       buckets.cap, buckets.shift)
     assert doubtful is None
-    found = boundary.sides_of_prints(iter(blocks), np.frombuffer(prints, dtype=np.uint64).copy(),
+    found = boundary_sides.sides_of_prints(iter(blocks), np.frombuffer(prints, dtype=np.uint64).copy(),
                                      buckets.shift - 32, count, balance, keys.size)
     assert found is not None
     got, picked = found
     assert np.array_equal(got.ids, unbalanced.ids)
     assert (got.edges, got.sides, got.total) == (unbalanced.edges, unbalanced.sides, unbalanced.total)
     assert forward.size + int(buckets.print_fill.sum()) == keys.size
-    chunks = list(boundary.unbalanced_sides(iter(blocks), unbalanced.ids))
-    again = list(boundary.block_sides(picked))
+    chunks = list(boundary_sides.unbalanced_sides(iter(blocks), unbalanced.ids))
+    again = list(boundary_sides.block_sides(picked))
     assert len(chunks) == len(again)
     for (u, v), (x, y) in zip(chunks, again):
         assert np.array_equal(u, x) and np.array_equal(v, y)
     # a balance that is not the mesh's: an unbalanced edge would be missing; nothing is answered
-    assert boundary.sides_of_prints(iter(blocks), np.frombuffer(prints, dtype=np.uint64).copy(),
+    assert boundary_sides.sides_of_prints(iter(blocks), np.frombuffer(prints, dtype=np.uint64).copy(),
                                     buckets.shift - 32, count, balance ^ 1, keys.size) is None
 
 
@@ -260,7 +260,7 @@ def test_a_print_group_lost_is_caught_by_the_balance(monkeypatch):
     nothing and the mesh takes the road by every key, with the same result."""
     source = array_source("stl-binary", np.ascontiguousarray(np.delete(BIG, np.s_[::100], axis=0)), "float32")
     answers = []
-    original = boundary.sides_of_prints
+    original = boundary_sides.sides_of_prints
 
     def dropped(blocks, prints, low, count, balance, total):
         blocks = list(blocks)
@@ -270,7 +270,7 @@ def test_a_print_group_lost_is_caught_by_the_balance(monkeypatch):
         answers.append(found)
         return found
 
-    monkeypatch.setattr(analysis, "sides_of_prints", dropped)
+    monkeypatch.setattr(open_groups, "sides_of_prints", dropped)
     split = []
     split_groups = KERNELS.split_groups
 
@@ -285,7 +285,7 @@ def test_a_print_group_lost_is_caught_by_the_balance(monkeypatch):
     monkeypatch.setattr(kernels, "KERNELS", Spy())
     result = analyze(source, "x")
     assert answers == [None] and split == [1]
-    monkeypatch.setattr(analysis, "sides_of_prints", original)
+    monkeypatch.setattr(open_groups, "sides_of_prints", original)
     assert_same(result, analyze(source, "x"))
 
 
@@ -341,6 +341,6 @@ def test_meshes_of_many_buckets_keep_no_prints(monkeypatch):
     printed = analyze(source, "x")
     monkeypatch.setattr(kernels.ForwardBuckets, "PRINT_BUCKETS", 0)
     calls = []
-    monkeypatch.setattr(analysis, "_printed_groups", lambda *args: calls.append(1))
+    monkeypatch.setattr(open_groups, "printed_groups", lambda *args: calls.append(1))
     assert_same(printed, analyze(source, "x"))
     assert calls == []

@@ -215,7 +215,8 @@ def test_real_meshes_match_reference_topology(real_meshes, reference):
 def test_open_volume_from_the_exact_edges_is_the_hashed_roads(seed, kind):
     """The volume of a mesh with unbalanced edges takes its boundary term from the exact edges
     ``topology`` found; it is the number the edge keys' road (``p3d props``') gives, bit for bit."""
-    from p3d_cli.mesh.boundary import boundary_volume, unbalanced_of
+    from p3d_cli.mesh.boundary import boundary_volume
+    from p3d_cli.mesh.boundary_sides import unbalanced_of
     from p3d_cli.mesh.vertices import group_corners
 
     rng = np.random.default_rng(seed)
