@@ -81,6 +81,12 @@ static inline uint64_t edge_hash(uint64_t start, uint64_t end) {
     return mix(lo * GOLDEN + hi);
 }
 
+/* The key of the side start -> end (distinct hashes): its edge hash with bit 0 the direction
+ * (1: from the smaller hash), as p3d_cli.mesh.closed makes it. */
+static inline uint64_t side_key(uint64_t start, uint64_t end) {
+    return (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
+}
+
 /* A block of triangles: base pointer, byte strides (triangle, corner, axis), float32 or not;
  * or, indexed, the corners vertices[faces[t][v]]: base the vertices, st the row stride, sa
  * the axis stride, and the (k, 3) faces at ibase with strides (ist, isv), int32 or int64. */
@@ -843,7 +849,7 @@ static PyObject *py_side_keys(PyObject *self, PyObject *args) {
                     keys[at] = 0;
                     continue;
                 }
-                keys[at] = (edge_hash(start, end) & ~(uint64_t)1) | (uint64_t)(start < end);
+                keys[at] = side_key(start, end);
             }
         }
     }
@@ -2908,7 +2914,7 @@ static PyObject *py_pick_sides(PyObject *self, PyObject *args) {
             if (keys_out) {
                 uint64_t hc[3];
                 corner_hashes(p[0], hc);
-                keys_out[written] = (edge_hash(hc[v], hc[w]) & ~(uint64_t)1) | (uint64_t)(hc[v] < hc[w]);
+                keys_out[written] = side_key(hc[v], hc[w]);
             }
             written++;
         }

@@ -14,8 +14,7 @@ import numpy as np
 
 from p3d_cli.mesh.closed import column_edge_keys, key_groups, side_keys
 from p3d_cli.mesh.columns import columns
-from p3d_cli.mesh.kernels import compiled, sort, takes
-from p3d_cli.mesh.splitmix import mix
+from p3d_cli.mesh.kernels import compiled, key_balance, sort, takes
 
 #: Sides handled per vectorised step of the boundary terms: the temporaries (~30 rows of this
 #: many floats) stay in cache; 2**15 was 1.7x slower, 2**13 the same (a 1M-face soup).
@@ -101,9 +100,7 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
             if out.shape[0] < 3 * len(block):
                 out = np.empty((3 * len(block), 6))
             sides = out[:kernels.pick_sides(block, ids, members.bits, int(members.shift), *index, out)]
-            for first in range(0, sides.shape[0], SIDE_BLOCK):
-                chunk = sides[first:first + SIDE_BLOCK]
-                yield np.ascontiguousarray(chunk[:, :3].T), np.ascontiguousarray(chunk[:, 3:].T)
+            yield from _chunks(sides[:, :3], sides[:, 3:])
             continue
         cols = columns(block)
         if cols.shape[2] == 0:
@@ -121,18 +118,21 @@ def unbalanced_sides(source_blocks, unbalanced: np.ndarray, every: bool = False)
             slot, face = np.divmod(position, cols.shape[2])
             start = cols[slot, :, face] + 0.0
             end = cols[(slot + 1) % 3, :, face] + 0.0
-            for first in range(0, start.shape[0], SIDE_BLOCK):
-                at = slice(first, first + SIDE_BLOCK)
-                yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)
+            yield from _chunks(start, end)
             continue
         corners = np.moveaxis(cols, 1, 2) + 0.0            # (slot, face, axis), as keys
         start, end = corners, corners[[1, 2, 0]]
         if keep is not None:
             start, end = start[keep], end[keep]
-        start, end = start.reshape(-1, 3), end.reshape(-1, 3)
-        for first in range(0, start.shape[0], SIDE_BLOCK):
-            at = slice(first, first + SIDE_BLOCK)
-            yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)
+        yield from _chunks(start.reshape(-1, 3), end.reshape(-1, 3))
+
+
+def _chunks(start: np.ndarray, end: np.ndarray):
+    """Sides given as ``(m, 3)`` start and end points, as ``(3, k)`` columns, ``SIDE_BLOCK`` at
+    most at a time (each a contiguous copy)."""
+    for first in range(0, start.shape[0], SIDE_BLOCK):
+        at = slice(first, first + SIDE_BLOCK)
+        yield np.ascontiguousarray(start[at].T), np.ascontiguousarray(end[at].T)
 
 
 class Members:
@@ -223,9 +223,7 @@ def sides_of_prints(source_blocks, prints: np.ndarray, low: int, count: int, bal
     every = np.concatenate(keys) if keys else np.zeros(0, dtype=np.uint64)
     if every.size != count:
         return None
-    g = mix(every | np.uint64(1))
-    forward = (every & np.uint64(1)).astype(bool)
-    if (int(g[forward].sum(dtype=np.uint64)) - int(g[~forward].sum(dtype=np.uint64)) - balance) % (1 << 64):
+    if key_balance(every) != balance:
         return None
     ordered = every.copy()
     sort(ordered)
@@ -243,6 +241,4 @@ def sides_of_prints(source_blocks, prints: np.ndarray, low: int, count: int, bal
 def block_sides(picked: list[np.ndarray]):
     """``unbalanced_sides``' chunks of sides already picked block by block (``sides_of_prints``)."""
     for sides in picked:
-        for first in range(0, sides.shape[0], SIDE_BLOCK):
-            chunk = sides[first:first + SIDE_BLOCK]
-            yield np.ascontiguousarray(chunk[:, :3].T), np.ascontiguousarray(chunk[:, 3:].T)
+        yield from _chunks(sides[:, :3], sides[:, 3:])

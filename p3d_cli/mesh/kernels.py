@@ -75,6 +75,14 @@ def key_buffer(count: int) -> np.ndarray:
         _set_madvise_hugepage(before)
 
 
+def key_balance(keys: np.ndarray) -> int:
+    """The balance of side keys: ``g = mix(key | 1)`` summed over the forward keys (bit 0 set)
+    less over the others, mod 2**64 (``ForwardBuckets``; ``forward_block`` sums the same)."""
+    g = mix(keys | np.uint64(1))
+    forward = (keys & np.uint64(1)).astype(bool)
+    return (int(g[forward].sum(dtype=np.uint64)) - int(g[~forward].sum(dtype=np.uint64))) % (1 << 64)
+
+
 def print_buffer(count: int) -> np.ndarray:
     """An uninitialised ``(count,)`` uint32 array, in ordinary pages (``key_buffer``)."""
     return key_buffer((count + 1) // 2).view(np.uint32)[:count]
@@ -207,9 +215,7 @@ class ForwardBuckets(Buckets):
         """Deal the forward keys of a block the compiled pass left to the numpy code, and add
         its sides to the balance."""
         forward = (block_keys & np.uint64(1)).astype(bool)
-        g = mix(block_keys | np.uint64(1))
-        self.balance = (self.balance + int(g[forward].sum(dtype=np.uint64))
-                        - int(g[~forward].sum(dtype=np.uint64))) % (1 << 64)
+        self.balance = (self.balance + key_balance(block_keys)) % (1 << 64)
         self.backward += int(block_keys.size - forward.sum())
         self.whole = False                  # its backward sides' prints are not dealt
         super().add(block_keys[forward])

@@ -42,7 +42,7 @@ def all_keys(source: MeshSource, fast, indexed: bool) -> tuple[np.ndarray, bool]
 
 
 def open_groups(source: MeshSource, fast, forward: ForwardBuckets,
-                  indexed: bool) -> tuple[Unbalanced, np.ndarray, bool, list | None] | None:
+                indexed: bool) -> tuple[Unbalanced, np.ndarray, bool, list | None] | None:
     """``unbalanced_groups`` and ``doubtful_edges`` of every side's key, whether they all pair
     up, and the net boundary's sides when they were picked on the way (else None), for a mesh
     the forward keys did not prove closed.
@@ -85,7 +85,7 @@ PRINTED_SHARE = 1 / 32
 
 
 def printed_groups(source: MeshSource, fast,
-                    forward: ForwardBuckets) -> tuple[Unbalanced, np.ndarray, bool, list] | None:
+                   forward: ForwardBuckets) -> tuple[Unbalanced, np.ndarray, bool, list] | None:
     """``open_groups``' answers for an open mesh from the first pass's backward prints and
     one more pass, which also picks the net boundary's sides (no pass of backward keys, none
     to pick the sides after): the kernel groups the forward keys and the backward prints by

@@ -19,6 +19,7 @@ from p3d_cli.mesh import boundary_sides, kernels, open_groups
 from p3d_cli.mesh.analysis import analyze
 from p3d_cli.mesh.closed import column_edge_keys
 from p3d_cli.mesh.columns import columns
+from p3d_cli.mesh.splitmix import mix
 from test_closed_buckets import BIG, MANY, dealt, many_keys
 from test_kernels import assert_same_analysis, bits
 
@@ -231,7 +232,7 @@ def test_the_sides_picked_are_those_of_unbalanced_sides(monkeypatch):
         KERNELS.forward_block(b, 0.0, 0.0, 0.0, buckets.keys, buckets.fill, buckets.cap, buckets.shift,
                               buckets.prints, buckets.print_fill)
     forward = keys[(keys & np.uint64(1)) == 1]
-    g = boundary_sides.mix(keys | np.uint64(1))
+    g = mix(keys | np.uint64(1))
     balance = (int(g[(keys & np.uint64(1)) == 1].sum(dtype=np.uint64))
                - int(g[(keys & np.uint64(1)) == 0].sum(dtype=np.uint64))) % (1 << 64)
     prints, _, count, doubtful = KERNELS.print_groups(buckets.keys, buckets.fill, buckets.prints, buckets.print_fill,
